@@ -1,0 +1,162 @@
+"""Exceptions raised by drake_mh.
+
+Every exception a user can trigger with bad input derives from :class:`DrakeMhError`
+and says what was wrong and how to fix it. Exceptions carry the offending data as
+attributes so that programs can react without parsing messages.
+
+Mixins with the matching builtin (``ValueError``, ``LookupError``, ``FileNotFoundError``)
+keep ``except ValueError`` style code working.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+
+def _names(names: Iterable[str]) -> str:
+    names = list(names)
+    return ", ".join(names) if names else "(none)"
+
+
+class DrakeMhError(Exception):
+    """Base class of every error raised by drake_mh on purpose."""
+
+
+# --- robots -------------------------------------------------------------------------
+
+
+class UnknownRobot(DrakeMhError, LookupError):
+    """A robot name is neither a bundled model nor a path to a URDF file.
+
+    Attributes:
+        name: the name that was asked for.
+        available: the bundled robot names.
+    """
+
+    def __init__(self, name: str, available: Iterable[str]):
+        self.name = name
+        self.available = sorted(available)
+        super().__init__(
+            f"unknown robot {name!r}: bundled robots are {_names(self.available)}; "
+            "or pass the path of a .urdf file"
+        )
+
+    def __str__(self) -> str:  # LookupError would quote the message otherwise
+        return self.args[0]
+
+
+class InvalidURDF(DrakeMhError, ValueError):
+    """A URDF file could not be read or Drake rejected it.
+
+    Attributes:
+        source: path (or ``"<string>"``) of the model.
+        reason: what went wrong, as reported by the reader or Drake.
+    """
+
+    def __init__(self, source: str, reason: str):
+        self.source = source
+        self.reason = reason
+        super().__init__(f"cannot load URDF {source}: {reason}")
+
+
+class UnsupportedModel(DrakeMhError, ValueError):
+    """The model loads but is not a kind of robot drake_mh supports (e.g. floating base)."""
+
+
+class FrameNotFound(DrakeMhError, LookupError):
+    """A frame (link) name does not exist in the robot model.
+
+    Attributes:
+        frame: the requested name.
+        available: the frame names that do exist.
+    """
+
+    def __init__(self, frame: str, available: Iterable[str], what: str = "frame"):
+        self.frame = frame
+        self.available = sorted(available)
+        super().__init__(
+            f"{what} {frame!r} not found in the model; available {what}s: {_names(self.available)}"
+        )
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+
+class InvalidConfiguration(DrakeMhError, ValueError):
+    """A joint configuration (or velocity, acceleration) has the wrong shape or non-finite values.
+
+    Attributes:
+        name: the argument name (``q``, ``Q``, ``v`` ...).
+        expected: a description of the expected shape.
+        got: the received shape.
+    """
+
+    def __init__(self, message: str, name: str = "q", expected: str = "", got: object = None):
+        self.name = name
+        self.expected = expected
+        self.got = got
+        super().__init__(message)
+
+
+class InvalidDHTable(DrakeMhError, ValueError):
+    """A Denavit-Hartenberg table is inconsistent (column lengths, limits, values)."""
+
+
+class InvalidLimits(DrakeMhError, ValueError):
+    """Joint limits are inconsistent (lower > upper, negative velocity limits, NaN)."""
+
+
+class MissingLimits(DrakeMhError, LookupError):
+    """A quantity needs limits that the robot model does not declare (e.g. effort limits)."""
+
+
+# --- scenes ---------------------------------------------------------------------------
+
+
+class SceneError(DrakeMhError, ValueError):
+    """An obstacle or scene request is invalid (bad size, duplicate or unknown name)."""
+
+
+class UnknownObstacle(DrakeMhError, LookupError):
+    """An obstacle name is not in the scene.
+
+    Attributes:
+        name: the requested name.
+        available: the obstacle names in the scene.
+    """
+
+    def __init__(self, name: str, available: Iterable[str]):
+        self.name = name
+        self.available = sorted(available)
+        super().__init__(f"no obstacle named {name!r}; obstacles in the scene: {_names(self.available)}")
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+
+class UnsupportedGeometry(DrakeMhError, ValueError):
+    """A collision shape cannot be handled by the requested computation."""
+
+
+# --- optimizers and methods -------------------------------------------------------------
+
+
+class UnknownMethod(DrakeMhError, LookupError):
+    """A method (optimizer, IK solver, retimer ...) name is not known.
+
+    Attributes:
+        name: the requested name.
+        available: the valid names.
+    """
+
+    def __init__(self, name: str, available: Iterable[str], what: str = "method"):
+        self.name = name
+        self.available = sorted(available)
+        super().__init__(f"unknown {what} {name!r}; available: {_names(self.available)}")
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+
+class InvalidArgument(DrakeMhError, ValueError):
+    """An argument value is out of its valid range or of the wrong type."""
