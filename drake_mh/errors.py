@@ -160,3 +160,52 @@ class UnknownMethod(DrakeMhError, LookupError):
 
 class InvalidArgument(DrakeMhError, ValueError):
     """An argument value is out of its valid range or of the wrong type."""
+
+
+# --- studies and reports ----------------------------------------------------------------
+
+
+class UnknownStudy(DrakeMhError, LookupError):
+    """A study name is neither a script in the studies folder nor a path to a ``.py`` file.
+
+    Attributes:
+        name: the requested name.
+        available: the study names found in the studies folder.
+    """
+
+    def __init__(self, name: str, available: Iterable[str], folder: str = "studies/"):
+        self.name = name
+        self.available = sorted(available)
+        super().__init__(
+            f"unknown study {name!r}; studies in {folder}: {_names(self.available)}; "
+            "or pass the path of a study .py file"
+        )
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+
+class InvalidStudy(DrakeMhError, ValueError):
+    """A study declaration is inconsistent (grid, fields, missing ``Study`` object ...)."""
+
+
+class ResultsMismatch(DrakeMhError, ValueError):
+    """A results folder was made by a different study, seed, quick flag or grid.
+
+    Attributes:
+        folder: the results folder.
+        differences: ``{setting: (in_folder, requested)}``.
+    """
+
+    def __init__(self, folder: str, differences: dict):
+        self.folder = folder
+        self.differences = dict(differences)
+        diff = "; ".join(f"{k}: folder has {a!r}, requested {b!r}" for k, (a, b) in differences.items())
+        super().__init__(
+            f"results folder {folder} was made with other settings ({diff}); "
+            "pass another --out or delete the folder to start over"
+        )
+
+
+class NoResults(DrakeMhError, FileNotFoundError):
+    """A folder holds no study results (``records.jsonl``) to report on."""
