@@ -209,3 +209,14 @@ class ResultsMismatch(DrakeMhError, ValueError):
 
 class NoResults(DrakeMhError, FileNotFoundError):
     """A folder holds no study results (``records.jsonl``) to report on."""
+
+
+# --- optimizer protocol (drake_mh.optim) ----------------------------------------------------
+
+
+class AskTellError(DrakeMhError, RuntimeError):
+    """The ask/tell protocol was misused (ask twice, tell without ask, tell after the end)."""
+
+
+class InvalidObjective(DrakeMhError, ValueError):
+    """An objective returned something other than one float per row of the population ``(P,)``."""
