@@ -1,0 +1,123 @@
+"""Reading a results folder into what the report needs: metadata, records, fields, metrics."""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from drake_mh.study.spec import Fields
+from drake_mh.study.store import RecordStore
+
+
+def as_float(value: Any) -> float:
+    """Returns ``value`` as a float, NaN for anything non-numeric (None, str, missing)."""
+    if isinstance(value, bool):
+        return float(value)
+    if isinstance(value, (int, float)):
+        return float(value)
+    return math.nan
+
+
+def is_success(record: dict[str, Any], fields: Fields) -> bool:
+    """A case succeeded when it did not raise and its success field is true."""
+    return record.get("status") == "ok" and bool(record.get(fields.success, False))
+
+
+@dataclass
+class ReportData:
+    """Everything loaded from a results folder.
+
+    Attributes:
+        folder: results folder.
+        meta: ``study.json`` contents (``{}`` if missing).
+        records: records in grid order where known.
+        fields: report fields.
+        methods: method names in order of first appearance.
+        instance_keys: keys that define paired blocks.
+        summary: the study's ``summary.md`` text ('' if none).
+    """
+
+    folder: Path
+    meta: dict[str, Any]
+    records: list[dict[str, Any]]
+    fields: Fields
+    methods: list[str]
+    instance_keys: tuple[str, ...]
+    summary: str = ""
+    store: RecordStore = field(repr=False, default=None)
+
+    @classmethod
+    def load(cls, folder: str | os.PathLike) -> ReportData:
+        """Loads a results folder.
+
+        Raises:
+            NoResults: no ``records.jsonl`` in the folder.
+        """
+        store = RecordStore(folder)
+        records = store.records()
+        meta = store.read_meta() or {}
+        fields = Fields.from_dict(meta.get("fields", {}))
+        records.sort(key=lambda r: r.get("key", ""))
+        grid_keys = meta.get("grid_keys") or []
+        if fields.instance is not None:
+            instance_keys = tuple(fields.instance)
+        elif meta.get("instance_keys") is not None:
+            instance_keys = tuple(meta["instance_keys"])
+        else:
+            instance_keys = tuple(k for k in grid_keys if k != fields.method)
+        methods: list[str] = []
+        for record in records:
+            name = method_of(record, fields)
+            if name not in methods:
+                methods.append(name)
+        summary_path = Path(folder) / "summary.md"
+        summary = summary_path.read_text(encoding="utf-8") if summary_path.is_file() else ""
+        return cls(
+            folder=Path(folder),
+            meta=meta,
+            records=records,
+            fields=fields,
+            methods=methods,
+            instance_keys=instance_keys,
+            summary=summary,
+            store=store,
+        )
+
+    @property
+    def name(self) -> str:
+        """Study name (folder name if unknown)."""
+        return self.meta.get("name") or self.folder.name
+
+    def by_method(self) -> dict[str, list[dict[str, Any]]]:
+        """Groups records by method (order of :attr:`methods`)."""
+        groups: dict[str, list[dict[str, Any]]] = {m: [] for m in self.methods}
+        for record in self.records:
+            groups[method_of(record, self.fields)].append(record)
+        return groups
+
+    def values(self, records: list[dict[str, Any]], name: str, ok_only: bool = True) -> np.ndarray:
+        """Returns the finite values of field ``name`` as a ``(n,)`` float array."""
+        out = [as_float(r.get(name)) for r in records if (r.get("status") == "ok" or not ok_only)]
+        array = np.asarray(out, dtype=float)
+        return array[np.isfinite(array)]
+
+    def has_field(self, name: str) -> bool:
+        """True when some successful-run record has a numeric value for ``name``."""
+        return any(
+            r.get("status") == "ok" and isinstance(r.get(name), (int, float)) for r in self.records
+        )
+
+    def errors(self) -> list[dict[str, Any]]:
+        """Records of cases that raised."""
+        return [r for r in self.records if r.get("status") == "error"]
+
+
+def method_of(record: dict[str, Any], fields: Fields) -> str:
+    """The record's method name (``"(all)"`` when the study has no method field)."""
+    value = record.get(fields.method)
+    return "(all)" if value is None else str(value)

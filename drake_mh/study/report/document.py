@@ -1,0 +1,139 @@
+"""A report as a list of blocks, rendered to markdown (``report.md``) and to one
+self-contained HTML page (``index.html``: figures as base64 PNG, animations in
+``<iframe srcdoc>``, inline CSS, no external resource)."""
+
+from __future__ import annotations
+
+import base64
+import html
+from dataclasses import dataclass, field
+
+from drake_mh.study.report.plots import FigureFile
+from drake_mh.study.report.tables import Table
+
+
+@dataclass(frozen=True)
+class Heading:
+    """Section title."""
+
+    text: str
+    level: int = 2
+
+
+@dataclass(frozen=True)
+class Paragraph:
+    """Plain text paragraph (``**bold**`` not interpreted)."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class Preformatted:
+    """Text shown verbatim (e.g. the study's own markdown summary)."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class Animation:
+    """An HTML page (Meshcat static HTML) embedded in the page, linked from markdown.
+
+    Attributes:
+        path: path relative to the results folder.
+        title: caption.
+        page: the page's HTML text, or ``None`` to only link it.
+    """
+
+    path: str
+    title: str
+    page: str | None
+
+
+@dataclass
+class Document:
+    """Ordered report blocks."""
+
+    title: str
+    blocks: list = field(default_factory=list)
+
+    def add(self, block) -> None:
+        """Appends a block (Heading, Paragraph, Preformatted, Table, FigureFile, Animation)."""
+        self.blocks.append(block)
+
+
+def _md_cell(text: str) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def to_markdown(doc: Document) -> str:
+    """Renders the document as markdown; figures link to ``figures/<name>.png``."""
+    lines = [f"# {doc.title}", ""]
+    for block in doc.blocks:
+        if isinstance(block, Heading):
+            lines += ["#" * block.level + " " + block.text, ""]
+        elif isinstance(block, Paragraph):
+            lines += [block.text, ""]
+        elif isinstance(block, Preformatted):
+            lines += [block.text.rstrip(), ""]
+        elif isinstance(block, Table):
+            lines.append("| " + " | ".join(_md_cell(h) for h in block.headers) + " |")
+            lines.append("|" + "|".join("---" for _ in block.headers) + "|")
+            for row in block.rows:
+                lines.append("| " + " | ".join(_md_cell(c) for c in row) + " |")
+            lines.append("")
+            if block.caption:
+                lines += [f"*{block.caption}*", ""]
+        elif isinstance(block, FigureFile):
+            lines += [f"![{block.caption}](figures/{block.name}.png)", "", f"*{block.caption}*", ""]
+        elif isinstance(block, Animation):
+            lines += [f"[{block.title}]({block.path})", ""]
+    return "\n".join(lines).rstrip() + "\n"
+
+
+_CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:2em auto;max-width:1200px;padding:0 1em;color:#222}
+h1{font-size:1.6em}h2{font-size:1.25em;margin-top:1.6em;border-bottom:1px solid #ddd}h3{font-size:1.05em}
+table{border-collapse:collapse;margin:.5em 0;font-size:.9em}
+th,td{border:1px solid #ccc;padding:.25em .6em;text-align:right}th{background:#f3f3f3}
+td:first-child,th:first-child{text-align:left}
+.caption{color:#555;font-size:.85em;font-style:italic;margin:.2em 0 1em}
+img{max-width:100%;height:auto}pre{background:#f7f7f7;padding:.8em;overflow-x:auto;font-size:.85em}
+iframe{width:100%;height:520px;border:1px solid #ccc}
+"""
+
+
+def to_html(doc: Document) -> str:
+    """Renders the document as one self-contained HTML page."""
+    esc = html.escape
+    parts = [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
+        f"<title>{esc(doc.title)}</title><style>{_CSS}</style></head><body>",
+        f"<h1>{esc(doc.title)}</h1>",
+    ]
+    for block in doc.blocks:
+        if isinstance(block, Heading):
+            level = min(6, max(2, block.level))
+            parts.append(f"<h{level}>{esc(block.text)}</h{level}>")
+        elif isinstance(block, Paragraph):
+            parts.append(f"<p>{esc(block.text)}</p>")
+        elif isinstance(block, Preformatted):
+            parts.append(f"<pre>{esc(block.text)}</pre>")
+        elif isinstance(block, Table):
+            head = "".join(f"<th>{esc(str(h))}</th>" for h in block.headers)
+            body = "".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in row) + "</tr>" for row in block.rows)
+            parts.append(f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
+            if block.caption:
+                parts.append(f'<p class="caption">{esc(block.caption)}</p>')
+        elif isinstance(block, FigureFile):
+            data = base64.b64encode(block.png).decode("ascii")
+            parts.append(f'<figure><img alt="{esc(block.caption)}" src="data:image/png;base64,{data}">')
+            parts.append(f'<figcaption class="caption">{esc(block.caption)}</figcaption></figure>')
+        elif isinstance(block, Animation):
+            parts.append(f"<h3>{esc(block.title)}</h3>")
+            if block.page is not None:
+                parts.append(f'<iframe title="{esc(block.title)}" srcdoc="{esc(block.page, quote=True)}"></iframe>')
+            parts.append(f'<p class="caption">file: <a href="{esc(block.path)}">{esc(block.path)}</a></p>')
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"
