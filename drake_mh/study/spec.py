@@ -33,6 +33,8 @@ class Fields:
         instance: fields identifying a block (problem instance × replicate) for paired
             statistics; ``None`` means every grid key except ``method``.
         lower_is_better: orientation of ``error``.
+        rank: whether the method values are competing methods to rank (Friedman / Wilcoxon);
+            ``False`` e.g. when the "method" field is a robot in a verification study.
     """
 
     method: str = "method"
@@ -42,6 +44,7 @@ class Fields:
     nfe: str = "nfe"
     instance: tuple[str, ...] | None = None
     lower_is_better: bool = True
+    rank: bool = True
 
     def to_dict(self) -> dict:
         """Returns the fields as a JSON-friendly dict."""
@@ -53,12 +56,13 @@ class Fields:
             "nfe": self.nfe,
             "instance": None if self.instance is None else list(self.instance),
             "lower_is_better": self.lower_is_better,
+            "rank": self.rank,
         }
 
     @classmethod
     def from_dict(cls, data: Mapping) -> Fields:
         """Inverse of :meth:`to_dict` (unknown keys ignored)."""
-        kwargs = {k: data[k] for k in ("method", "success", "time", "error", "nfe", "lower_is_better") if k in data}
+        kwargs = {k: data[k] for k in ("method", "success", "time", "error", "nfe", "lower_is_better", "rank") if k in data}
         if data.get("instance") is not None:
             kwargs["instance"] = tuple(data["instance"])
         return cls(**kwargs)

@@ -112,9 +112,10 @@ def build_document(data: ReportData) -> Document:
         doc.add(Preformatted(data.summary))
     doc.add(Heading("Methods"))
     doc.add(method_table(data))
-    doc.add(Heading("Statistics"))
-    for block in _stats_blocks(rank_stats(data), data):
-        doc.add(block)
+    if data.fields.rank:
+        doc.add(Heading("Statistics"))
+        for block in _stats_blocks(rank_stats(data), data):
+            doc.add(block)
     figures = [f for f in (convergence_figure(data), box_figure(data), trajectory_figure(data)) if f is not None]
     if figures:
         doc.add(Heading("Figures"))

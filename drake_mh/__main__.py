@@ -1,0 +1,12 @@
+"""``python -m drake_mh [COMMAND ...]``: the ``drake-mh`` command line.
+
+Without arguments it prints the robot catalogue with the FK/Jacobian/distance smoke test
+and the list of commands (``python -m drake_mh demo`` runs the demo).
+"""
+
+import sys
+
+from drake_mh.cli import main
+
+if __name__ == "__main__":
+    sys.exit(main())
