@@ -1,0 +1,443 @@
+"""Robots as Drake models: :class:`Robot` and :func:`load_robot`.
+
+A :class:`Robot` wraps a Drake ``MultibodyPlant`` + ``SceneGraph`` diagram built from a URDF.
+Drake is the single source of truth: forward kinematics, Jacobians, inverse dynamics and
+(through :class:`drake_mh.scene.Scene`) signed distances all come from it. The batched kernel
+:attr:`Robot.batch` is compiled from the same plant (see :mod:`drake_mh.kinematics`).
+
+Conventions:
+    * ``q`` is a joint configuration ``(nq,)`` in [rad] (revolute) or [m] (prismatic),
+      ordered as Drake's generalized positions (``joint_names`` gives the order).
+    * ``X_WE`` is the pose of the end-effector frame E in the world W as a ``(4, 4)``
+      homogeneous matrix.
+    * Jacobians are ``(6, nq)`` with angular rows first, then translational (Drake's order),
+      expressed in W, for the origin of E.
+
+Only fixed-base arms made of revolute, continuous, prismatic and fixed joints are supported.
+A URDF whose root link is not welded to ``world`` is welded at its origin (a floating base
+would add quaternion coordinates that the rest of the library does not handle).
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from drake_mh.errors import (
+    FrameNotFound,
+    InvalidArgument,
+    InvalidConfiguration,
+    InvalidLimits,
+    InvalidURDF,
+    UnknownRobot,
+    UnsupportedModel,
+)
+
+logger = logging.getLogger(__name__)
+
+URDF_DIR = Path(__file__).resolve().parent / "urdf"
+"""Folder of the bundled robot models (``urdf/`` at the repository root links here)."""
+
+DRAKE_MH_NS = "https://github.com/drake-mh/ns"
+"""XML namespace of drake_mh's own URDF attributes (e.g. ``drake_mh:jerk``); Drake ignores it."""
+
+_SUPPORTED_JOINTS = {"revolute", "continuous", "prismatic", "fixed"}
+
+
+def available_robots() -> list[str]:
+    """Names of the bundled robot models (the ``*.urdf`` files in ``urdf/``)."""
+    return sorted(p.stem for p in URDF_DIR.glob("*.urdf"))
+
+
+def load_robot(name_or_path: str | Path, ee_frame: str | None = None) -> Robot:
+    """Load a bundled robot by name, or any URDF file by path.
+
+    Args:
+        name_or_path: a bundled name (see :func:`available_robots`, e.g. ``"panda"``) or the
+            path of a ``.urdf`` file.
+        ee_frame: name of the end-effector frame; default: the unique tip link of the chain.
+
+    Returns:
+        The loaded :class:`Robot`.
+
+    Raises:
+        UnknownRobot: the name is neither bundled nor an existing file.
+        InvalidURDF: the file cannot be read or parsed.
+        FrameNotFound: ``ee_frame`` is not a frame of the model.
+    """
+    text = str(name_or_path)
+    path = Path(text).expanduser()
+    if text in available_robots():
+        path = URDF_DIR / f"{text}.urdf"
+    elif not (path.suffix.lower() == ".urdf" or path.exists()):
+        raise UnknownRobot(text, available_robots())
+    if not path.is_file():
+        raise InvalidURDF(str(path), "no such file (give an existing .urdf path or a bundled name: "
+                          + ", ".join(available_robots()) + ")")
+    try:
+        urdf_text = path.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InvalidURDF(str(path), f"cannot read the file ({exc})") from exc
+    return Robot(urdf_text, ee_frame=ee_frame, source=str(path), name=path.stem)
+
+
+class Robot:
+    """A fixed-base robot arm backed by a Drake ``MultibodyPlant`` + ``SceneGraph``.
+
+    Not thread-safe: the queries reuse one Drake context. Use one ``Robot`` per thread or
+    process (it pickles by its URDF text, so process pools receive a fresh copy).
+
+    Attributes:
+        name: model name.
+        source: where the URDF came from (path or ``"<string>"``).
+        urdf: the URDF text.
+        plant, scene_graph, diagram: the Drake systems.
+        nq: number of joints (generalized positions).
+        joint_names: ``(nq,)`` names in the order of ``q``.
+        lower, upper: ``(nq,)`` position limits [rad or m]; continuous joints get ∓π.
+        continuous: ``(nq,)`` bool, joints without position limits in the URDF.
+        velocity_limits, acceleration_limits, jerk_limits, effort_limits: ``(nq,)`` symmetric
+            magnitudes [rad/s, rad/s², rad/s³, N·m]; ``inf`` where the model declares none.
+        ee_frame_name: name of the end-effector frame.
+    """
+
+    def __init__(self, urdf: str, ee_frame: str | None = None, source: str = "<string>",
+                 name: str | None = None):
+        # local import keeps `import drake_mh` cheap
+        from pydrake.multibody.parsing import Parser
+        from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+        from pydrake.systems.framework import DiagramBuilder
+
+        root = _parse_xml(urdf, source)
+        self.urdf = urdf
+        self.source = source
+        self.name = name or root.get("name") or "robot"
+        extra = _read_extra_limits(root, source)
+
+        builder = DiagramBuilder()
+        plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
+        try:
+            models = Parser(plant).AddModelsFromString(urdf, "urdf")
+        except Exception as exc:  # Drake raises RuntimeError/ValueError with a parser message
+            raise InvalidURDF(source, str(exc).strip().splitlines()[-1]) from exc
+        _weld_root_links(plant, models, root)
+        plant.Finalize()
+        # a geometry source for obstacles added at run time by drake_mh.scene.Scene
+        self.obstacle_source_id = scene_graph.RegisterSource("drake_mh.obstacles")
+        self.plant = plant
+        self.scene_graph = scene_graph
+        self.diagram = builder.Build()
+        self.diagram_context = self.diagram.CreateDefaultContext()
+        self.plant_context = plant.GetMyMutableContextFromRoot(self.diagram_context)
+        if plant.num_positions() != plant.num_velocities():
+            raise UnsupportedModel(
+                f"{source}: {plant.num_positions()} positions but {plant.num_velocities()} "
+                "velocities (floating or ball joints); only fixed-base arms are supported")
+        self.nq = plant.num_positions()
+        if self.nq == 0:
+            raise UnsupportedModel(f"{source}: the model has no movable joint")
+
+        self._joints = _ordered_joints(plant)
+        self.joint_names = [j.name() for j in self._joints]
+        lower = np.array(plant.GetPositionLowerLimits(), dtype=float)
+        upper = np.array(plant.GetPositionUpperLimits(), dtype=float)
+        self.continuous = ~(np.isfinite(lower) & np.isfinite(upper))
+        self.lower = np.where(np.isfinite(lower), lower, -np.pi)
+        self.upper = np.where(np.isfinite(upper), upper, np.pi)
+        self.velocity_limits = np.array(plant.GetVelocityUpperLimits(), dtype=float)
+        self.acceleration_limits = np.array(plant.GetAccelerationUpperLimits(), dtype=float)
+        self.jerk_limits = np.array([extra["jerk"].get(n, np.inf) for n in self.joint_names])
+        self.effort_limits = self._effort_limits(extra["effort"])
+        for what, arr in (("velocity", self.velocity_limits), ("acceleration", self.acceleration_limits),
+                          ("jerk", self.jerk_limits), ("effort", self.effort_limits)):
+            if np.any(arr <= 0):
+                bad = [n for n, v in zip(self.joint_names, arr) if v <= 0]
+                raise InvalidLimits(f"{source}: {what} limits must be positive; joints {bad}")
+
+        self._frames = {f.name(): f for f in _all_frames(plant)}
+        self.ee_frame_name = ee_frame if ee_frame is not None else _default_ee(plant, source)
+        if self.ee_frame_name not in self._frames:
+            raise FrameNotFound(self.ee_frame_name, self._frames)
+        self.ee_frame = self._frames[self.ee_frame_name]
+
+    # --- construction helpers -------------------------------------------------------------
+
+    @classmethod
+    def from_dh(cls, a, alpha, d, offset=None, lower=None, upper=None, *, name: str = "dh_robot",
+                ee_frame: str | None = None, **dh_kwargs) -> Robot:
+        """Build a robot from a Denavit-Hartenberg table (framework paper eqs. (1)-(2)).
+
+        Args:
+            a, alpha, d, offset, lower, upper: DH columns, one entry per joint [m, rad].
+            name: model name.
+            ee_frame: end-effector frame; default the generated ``ee`` link.
+            **dh_kwargs: passed to :func:`drake_mh.dh.dh_to_urdf` (``convention``, limits ...).
+
+        Raises:
+            InvalidDHTable, InvalidLimits: the table is inconsistent.
+        """
+        from drake_mh.dh import dh_to_urdf
+
+        urdf = dh_to_urdf(a, alpha, d, offset, lower, upper, name=name, **dh_kwargs)
+        return cls(urdf, ee_frame=ee_frame, source=f"<DH table {name}>", name=name)
+
+    def __reduce__(self):
+        return (Robot, (self.urdf, self.ee_frame_name, self.source, self.name))
+
+    def __repr__(self) -> str:
+        return f"Robot({self.name!r}, nq={self.nq}, ee={self.ee_frame_name!r})"
+
+    def _effort_limits(self, urdf_effort: dict[str, float]) -> np.ndarray:
+        """Effort limits per joint: Drake's actuators first, else the URDF ``<limit effort>``."""
+        from pydrake.multibody.tree import JointActuatorIndex
+
+        limits = np.array([urdf_effort.get(n, np.inf) for n in self.joint_names])
+        upper = self.plant.GetEffortUpperLimits()
+        for i in range(self.plant.num_actuators()):
+            actuator = self.plant.get_joint_actuator(JointActuatorIndex(i))
+            joint = actuator.joint()
+            if joint.num_velocities() == 1:
+                limits[joint.velocity_start()] = upper[actuator.input_start()]
+        return limits
+
+    # --- input checks -----------------------------------------------------------------------
+
+    def check_q(self, q, name: str = "q") -> np.ndarray:
+        """Return ``q`` as a float array ``(nq,)``, or raise :class:`InvalidConfiguration`."""
+        try:
+            arr = np.asarray(q, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InvalidConfiguration(f"{name} must be numeric, got {q!r}", name) from exc
+        if arr.shape != (self.nq,):
+            raise InvalidConfiguration(
+                f"{name} must have shape ({self.nq},) for {self.name} (joints {self.joint_names}), "
+                f"got shape {arr.shape}", name, f"({self.nq},)", arr.shape)
+        if not np.all(np.isfinite(arr)):
+            bad = [self.joint_names[i] for i in np.flatnonzero(~np.isfinite(arr))]
+            raise InvalidConfiguration(f"{name} contains NaN or inf at joints {bad}", name)
+        return arr
+
+    def check_Q(self, Q, name: str = "Q") -> np.ndarray:
+        """Return a batch as a C-contiguous float array ``(N, nq)`` or raise."""
+        try:
+            arr = np.ascontiguousarray(Q, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InvalidConfiguration(f"{name} must be numeric", name) from exc
+        if arr.ndim == 1 and arr.shape[0] == self.nq:
+            arr = arr[None, :]
+        if arr.ndim != 2 or arr.shape[1] != self.nq:
+            raise InvalidConfiguration(
+                f"{name} must have shape (N, {self.nq}) for {self.name}, got {arr.shape}",
+                name, f"(N, {self.nq})", arr.shape)
+        if not np.all(np.isfinite(arr)):
+            rows = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))[:5].tolist()
+            raise InvalidConfiguration(f"{name} contains NaN or inf (rows {rows}...)", name)
+        return arr
+
+    def within_limits(self, q, tol: float = 0.0) -> bool:
+        """Whether ``q`` respects the position limits (continuous joints always do)."""
+        q = self.check_q(q)
+        ok = (q >= self.lower - tol) & (q <= self.upper + tol)
+        return bool(np.all(ok | self.continuous))
+
+    def random_configurations(self, n: int, rng: np.random.Generator | int | None = None) -> np.ndarray:
+        """``(n, nq)`` configurations drawn uniformly within ``[lower, upper]``."""
+        rng = np.random.default_rng(rng)
+        return rng.uniform(self.lower, self.upper, size=(int(n), self.nq))
+
+    @property
+    def home(self) -> np.ndarray:
+        """Mid-range configuration ``(nq,)``."""
+        return 0.5 * (self.lower + self.upper)
+
+    # --- Drake queries --------------------------------------------------------------------------
+
+    def _set(self, q) -> None:
+        self.plant.SetPositions(self.plant_context, self.check_q(q))
+
+    def frame_names(self) -> list[str]:
+        """Names of every frame of the model (usable as ``ee_frame``)."""
+        return sorted(self._frames)
+
+    def link_names(self) -> list[str]:
+        """Names of the bodies (links), world excluded, in Drake's index order."""
+        from pydrake.multibody.tree import BodyIndex
+
+        return [self.plant.get_body(BodyIndex(i)).name() for i in range(1, self.plant.num_bodies())]
+
+    def fk(self, q, frame: str | None = None) -> np.ndarray:
+        """Pose ``X_WF (4, 4)`` of the end effector (or ``frame``) at ``q``."""
+        self._set(q)
+        return self._frame(frame).CalcPoseInWorld(self.plant_context).GetAsMatrix4()
+
+    def link_poses(self, q) -> dict[str, np.ndarray]:
+        """Poses ``X_WB (4, 4)`` of every link at ``q``, keyed by link name."""
+        from pydrake.multibody.tree import BodyIndex
+
+        self._set(q)
+        out = {}
+        for i in range(1, self.plant.num_bodies()):
+            body = self.plant.get_body(BodyIndex(i))
+            out[body.name()] = self.plant.EvalBodyPoseInWorld(self.plant_context, body).GetAsMatrix4()
+        return out
+
+    def jacobian(self, q, frame: str | None = None) -> np.ndarray:
+        """Geometric Jacobian ``(6, nq)`` of the frame origin: rows ``[ω_W; v_W]`` (Drake's order)."""
+        from pydrake.multibody.tree import JacobianWrtVariable
+
+        self._set(q)
+        return self.plant.CalcJacobianSpatialVelocity(
+            self.plant_context, JacobianWrtVariable.kQDot, self._frame(frame), np.zeros(3),
+            self.plant.world_frame(), self.plant.world_frame())
+
+    def manipulability(self, q, translational: bool = True) -> float:
+        """Yoshikawa's manipulability ``μ = sqrt(det(J Jᵀ))`` (ESM paper eq. (3)).
+
+        Args:
+            q: configuration ``(nq,)``.
+            translational: use the ``3 x nq`` translational Jacobian (as the ESM paper does for
+                position tracking); ``False`` uses the full ``6 x nq`` Jacobian.
+        """
+        J = self.jacobian(q)
+        J = J[3:] if translational else J
+        return float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
+
+    def inverse_dynamics(self, q, v, a) -> np.ndarray:
+        """Joint torques ``τ = M(q) a + C(q, v) v + g(q)`` [N·m], gravity **included**.
+
+        Drake's ``CalcInverseDynamics`` omits gravity unless it is given the force elements'
+        contribution, so it is computed first with ``CalcForceElementsContribution``.
+        """
+        from pydrake.multibody.tree import MultibodyForces
+
+        q = self.check_q(q, "q")
+        v = self.check_q(v, "v")
+        a = self.check_q(a, "a")
+        self.plant.SetPositions(self.plant_context, q)
+        self.plant.SetVelocities(self.plant_context, v)
+        forces = MultibodyForces(self.plant)
+        self.plant.CalcForceElementsContribution(self.plant_context, forces)
+        return self.plant.CalcInverseDynamics(self.plant_context, a, forces)
+
+    def gravity_torques(self, q) -> np.ndarray:
+        """Static holding torques ``g(q)`` [N·m] (inverse dynamics at rest)."""
+        zeros = np.zeros(self.nq)
+        return self.inverse_dynamics(q, zeros, zeros)
+
+    def _frame(self, frame: str | None):
+        if frame is None:
+            return self.ee_frame
+        if frame not in self._frames:
+            raise FrameNotFound(frame, self._frames)
+        return self._frames[frame]
+
+    # --- batched kernel ----------------------------------------------------------------------
+
+    @functools.cached_property
+    def batch(self):
+        """:class:`drake_mh.kinematics.BatchKinematics` compiled from this plant."""
+        from drake_mh.kinematics import BatchKinematics
+
+        return BatchKinematics(self)
+
+
+# --- URDF helpers -------------------------------------------------------------------------------
+
+
+def _parse_xml(urdf: str, source: str) -> ET.Element:
+    """Parse and sanity-check the URDF before Drake sees it (Drake may abort on some input)."""
+    if not isinstance(urdf, str) or not urdf.strip():
+        raise InvalidURDF(source, "the URDF text is empty")
+    try:
+        root = ET.fromstring(urdf)
+    except ET.ParseError as exc:
+        raise InvalidURDF(source, f"malformed XML ({exc})") from exc
+    if root.tag != "robot":
+        raise InvalidURDF(source, f"the root element is <{root.tag}>, expected <robot>")
+    links = {link.get("name") for link in root.findall("link")}
+    if not links:
+        raise InvalidURDF(source, "the model has no <link>")
+    for joint in root.findall("joint"):
+        jname, jtype = joint.get("name"), joint.get("type")
+        if jtype not in _SUPPORTED_JOINTS:
+            raise UnsupportedModel(
+                f"{source}: joint {jname!r} has type {jtype!r}; supported types are "
+                f"{sorted(_SUPPORTED_JOINTS)}")
+        limit = joint.find("limit")
+        if limit is not None and jtype in ("revolute", "prismatic"):
+            try:
+                lo = float(limit.get("lower", "nan"))
+                hi = float(limit.get("upper", "nan"))
+            except ValueError as exc:
+                raise InvalidURDF(source, f"joint {jname!r}: non-numeric <limit> ({exc})") from exc
+            if lo > hi:
+                raise InvalidLimits(
+                    f"{source}: joint {jname!r} has lower limit {lo} > upper limit {hi}; swap them")
+    return root
+
+
+def _read_extra_limits(root: ET.Element, source: str) -> dict[str, dict[str, float]]:
+    """Jerk limits (``drake_mh:jerk``) and raw ``<limit effort>`` per joint from the URDF."""
+    jerk_key = f"{{{DRAKE_MH_NS}}}jerk"
+    jerk, effort = {}, {}
+    for joint in root.findall("joint"):
+        limit = joint.find("limit")
+        if limit is None:
+            continue
+        try:
+            if limit.get(jerk_key) is not None:
+                jerk[joint.get("name")] = float(limit.get(jerk_key))
+            if limit.get("effort") is not None and float(limit.get("effort")) > 0:
+                effort[joint.get("name")] = float(limit.get("effort"))
+        except ValueError as exc:
+            raise InvalidURDF(source, f"joint {joint.get('name')!r}: non-numeric limit ({exc})") from exc
+    return {"jerk": jerk, "effort": effort}
+
+
+def _weld_root_links(plant, models, root: ET.Element) -> None:
+    """Weld every root link that is not attached to ``world`` at the world origin."""
+    children = {j.find("child").get("link") for j in root.findall("joint") if j.find("child") is not None}
+    for link in root.findall("link"):
+        name = link.get("name")
+        if name == "world" or name in children:
+            continue
+        for model in models:
+            if plant.HasBodyNamed(name, model):
+                logger.info("welding root link %r to the world (fixed base)", name)
+                plant.WeldFrames(plant.world_frame(), plant.GetBodyByName(name, model).body_frame())
+
+
+def _ordered_joints(plant) -> list:
+    """Single-DOF joints sorted by their position index."""
+    from pydrake.multibody.tree import JointIndex
+
+    joints = [plant.get_joint(JointIndex(i)) for i in range(plant.num_joints())]
+    moving = [j for j in joints if j.num_positions() > 0]
+    for j in moving:
+        if j.num_positions() != 1 or j.type_name() not in ("revolute", "prismatic"):
+            raise UnsupportedModel(f"joint {j.name()!r} of type {j.type_name()!r} is not supported")
+    return sorted(moving, key=lambda j: j.position_start())
+
+
+def _all_frames(plant) -> list:
+    from pydrake.multibody.tree import FrameIndex
+
+    return [plant.get_frame(FrameIndex(i)) for i in range(plant.num_frames())]
+
+
+def _default_ee(plant, source: str) -> str:
+    """The unique leaf link of the kinematic tree (a link that is no joint's parent)."""
+    from pydrake.multibody.tree import BodyIndex, JointIndex
+
+    parents = {plant.get_joint(JointIndex(i)).parent_body().index() for i in range(plant.num_joints())}
+    leaves = [plant.get_body(BodyIndex(i)).name() for i in range(1, plant.num_bodies())
+              if BodyIndex(i) not in parents]
+    if len(leaves) != 1:
+        raise InvalidArgument(
+            f"{source}: cannot choose the end effector, the model has {len(leaves)} tip links "
+            f"({', '.join(leaves)}); pass ee_frame=<one of them>")
+    return leaves[0]

@@ -1,0 +1,292 @@
+"""Obstacles around a robot, with exact distances from Drake and batched conservative ones.
+
+A :class:`Scene` owns its own Drake context of the robot's diagram. Obstacles (spheres, boxes,
+cylinders with a pose and an optional linear velocity) are registered *in that context* as
+anchored geometry of the robot's obstacle source, so they are added, moved and removed
+without rebuilding the diagram. Exact signed distances robot-link vs obstacle — and, if
+asked, robot self-distances (Drake already filters adjacent links) — come from
+``QueryObject.ComputeSignedDistancePairwiseClosestPoints``.
+
+For populations, :meth:`Scene.batch_min_distance` uses the robot's
+:class:`drake_mh.spheres.SphereModel` and the obstacles' closed-form signed distances:
+it never reports more clearance than Drake and is at most ``sphere_model.bound`` pessimistic.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from drake_mh.errors import SceneError, UnknownObstacle
+from drake_mh.shapes import Box, Capsule, Cylinder, Sphere, as_shape
+from drake_mh.spheres import DEFAULT_TOLERANCE, SphereModel
+
+__all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule"]
+
+
+def _vector3(value, what: str) -> np.ndarray:
+    arr = np.asarray(value, dtype=float).reshape(-1)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise SceneError(f"{what} must be 3 finite numbers, got {value!r}")
+    return arr
+
+
+def _rotation(rpy) -> np.ndarray:
+    from pydrake.math import RollPitchYaw
+
+    return RollPitchYaw(_vector3(rpy, "rpy [rad]")).ToRotationMatrix().matrix()
+
+
+@dataclass(frozen=True, eq=False)
+class Obstacle:
+    """An obstacle: a shape at pose ``X_WO`` moving with linear ``velocity_W`` [m/s]."""
+
+    name: str
+    shape: Sphere | Box | Cylinder | Capsule
+    X_WO: np.ndarray
+    velocity_W: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    @property
+    def position(self) -> np.ndarray:
+        """``p_WO (3,)`` [m]."""
+        return self.X_WO[:3, 3].copy()
+
+
+@dataclass(frozen=True)
+class DistancePair:
+    """Signed distance between a robot link and an obstacle (or another link).
+
+    Attributes:
+        distance: signed distance [m] (negative: penetration depth).
+        link: the robot link.
+        other: the obstacle name, or the other link for self-distances.
+        is_self: whether ``other`` is a robot link.
+        p_W_link: closest point on the link, in W [m].
+        p_W_other: closest point on the other geometry, in W [m].
+        nhat_W: unit normal pointing from ``other`` towards the link, in W.
+    """
+
+    distance: float
+    link: str
+    other: str
+    is_self: bool
+    p_W_link: np.ndarray
+    p_W_other: np.ndarray
+    nhat_W: np.ndarray
+
+
+class Scene:
+    """Obstacles around a :class:`drake_mh.robot.Robot` and distance queries.
+
+    Args:
+        robot: the robot.
+        self_collision: also report robot link vs link distances (adjacent links excluded by
+            Drake; add more pairs with ``ignore_link_pairs``).
+        ignore_link_pairs: extra ``(link_a, link_b)`` pairs to exclude from self-distances.
+        sphere_tolerance: covering tolerance of the sphere model [m].
+    """
+
+    def __init__(self, robot, self_collision: bool = False, ignore_link_pairs=(),
+                 sphere_tolerance: float = DEFAULT_TOLERANCE):
+        from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, Role
+
+        self.robot = robot
+        self.self_collision = bool(self_collision)
+        self._sphere_tolerance = sphere_tolerance
+        self._context = robot.diagram.CreateDefaultContext()
+        self._plant_context = robot.plant.GetMyMutableContextFromRoot(self._context)
+        self._sg_context = robot.scene_graph.GetMyMutableContextFromRoot(self._context)
+        self._obstacles: dict[str, Obstacle] = {}
+        self._ids: dict[str, object] = {}
+        inspector = robot.scene_graph.model_inspector()
+        self._robot_ids = [g for g in inspector.GetAllGeometryIds(Role.kProximity)
+                           if inspector.GetFrameId(g) != inspector.world_frame_id()]
+        manager = robot.scene_graph.collision_filter_manager(self._sg_context)
+        if not self.self_collision:
+            manager.Apply(CollisionFilterDeclaration().ExcludeWithin(GeometrySet(self._robot_ids)))
+        else:
+            for a, b in ignore_link_pairs:
+                ga, gb = (self._link_geometries(link) for link in (a, b))
+                manager.Apply(CollisionFilterDeclaration().ExcludeBetween(GeometrySet(ga), GeometrySet(gb)))
+
+    def _link_geometries(self, link: str) -> list:
+        from drake_mh.errors import FrameNotFound
+
+        if not self.robot.plant.HasBodyNamed(link):
+            raise FrameNotFound(link, self.robot.link_names(), what="link")
+        body = self.robot.plant.GetBodyByName(link)
+        frame_id = self.robot.plant.GetBodyFrameIdOrThrow(body.index())
+        inspector = self.robot.scene_graph.model_inspector()
+        return [g for g in self._robot_ids if inspector.GetFrameId(g) == frame_id]
+
+    # --- obstacles ----------------------------------------------------------------------
+
+    @property
+    def obstacles(self) -> dict[str, Obstacle]:
+        """The obstacles by name (a copy)."""
+        return dict(self._obstacles)
+
+    def add(self, name: str, shape, position, rpy=(0.0, 0.0, 0.0), velocity=(0.0, 0.0, 0.0)) -> Obstacle:
+        """Add an obstacle.
+
+        Args:
+            name: unique name.
+            shape: :class:`Sphere`, :class:`Box`, :class:`Cylinder` or :class:`Capsule`.
+            position: ``p_WO (3,)`` [m].
+            rpy: roll-pitch-yaw of the obstacle frame [rad].
+            velocity: linear velocity ``(3,)`` [m/s] used by :meth:`step` and by velocity-aware
+                planners (ESM).
+
+        Raises:
+            SceneError: duplicate name, bad shape or numbers.
+        """
+        if not isinstance(name, str) or not name:
+            raise SceneError(f"obstacle name must be a non-empty string, got {name!r}")
+        if name in self._obstacles:
+            raise SceneError(f"an obstacle named {name!r} already exists; use move() or another name")
+        shape = as_shape(shape)
+        X_WO = np.eye(4)
+        X_WO[:3, :3] = _rotation(rpy)
+        X_WO[:3, 3] = _vector3(position, "position [m]")
+        self._ids[name] = self._register(name, shape, X_WO)
+        obstacle = Obstacle(name, shape, X_WO, _vector3(velocity, "velocity [m/s]"))
+        self._obstacles[name] = obstacle
+        return obstacle
+
+    def _register(self, name: str, shape, X_WO: np.ndarray):
+        """Register ``shape`` at ``X_WO`` as anchored proximity geometry in this scene's context."""
+        from pydrake.geometry import GeometryInstance, ProximityProperties
+        from pydrake.math import RigidTransform, RotationMatrix
+
+        instance = GeometryInstance(RigidTransform(RotationMatrix(X_WO[:3, :3]), X_WO[:3, 3]),
+                                    shape.to_drake(), f"obstacle::{name}")
+        instance.set_proximity_properties(ProximityProperties())
+        sg = self.robot.scene_graph
+        return sg.RegisterGeometry(self._sg_context, self.robot.obstacle_source_id, sg.world_frame_id(), instance)
+
+    def _get(self, name: str) -> Obstacle:
+        if name not in self._obstacles:
+            raise UnknownObstacle(name, self._obstacles)
+        return self._obstacles[name]
+
+    def move(self, name: str, position=None, rpy=None, velocity=None) -> Obstacle:
+        """Move an obstacle (and/or change its velocity) without rebuilding the diagram."""
+        old = self._get(name)
+        X_WO = old.X_WO.copy()
+        if position is not None:
+            X_WO[:3, 3] = _vector3(position, "position [m]")
+        if rpy is not None:
+            X_WO[:3, :3] = _rotation(rpy)
+        vel = old.velocity_W if velocity is None else _vector3(velocity, "velocity [m/s]")
+        # SceneGraph.ChangeShape(context, ..., X_FG) keeps the old pose for queries (Drake 1.51),
+        # so the anchored geometry is re-registered at the new pose instead.
+        sg = self.robot.scene_graph
+        sg.RemoveGeometry(self._sg_context, self.robot.obstacle_source_id, self._ids[name])
+        self._ids[name] = self._register(name, old.shape, X_WO)
+        new = Obstacle(name, old.shape, X_WO, vel)
+        self._obstacles[name] = new
+        return new
+
+    def remove(self, name: str) -> None:
+        """Remove an obstacle."""
+        self._get(name)
+        self.robot.scene_graph.RemoveGeometry(self._sg_context, self.robot.obstacle_source_id, self._ids[name])
+        del self._obstacles[name]
+        del self._ids[name]
+
+    def step(self, dt: float) -> None:
+        """Advance every moving obstacle by ``velocity · dt`` [s]."""
+        for name, obstacle in list(self._obstacles.items()):
+            if np.any(obstacle.velocity_W != 0):
+                self.move(name, position=obstacle.position + obstacle.velocity_W * float(dt))
+
+    # --- exact distances (Drake) ------------------------------------------------------------
+
+    def distances(self, q, max_distance: float = np.inf) -> list[DistancePair]:
+        """Exact signed distances of every link-obstacle (and self) pair within ``max_distance``.
+
+        Returns:
+            Pairs sorted by distance (closest first).
+        """
+        q = self.robot.check_q(q)
+        self.robot.plant.SetPositions(self._plant_context, q)
+        query = self.robot.scene_graph.get_query_output_port().Eval(self._sg_context)
+        inspector = query.inspector()
+        plant = self.robot.plant
+        names = {gid: name for name, gid in self._ids.items()}
+        out = []
+        for pair in query.ComputeSignedDistancePairwiseClosestPoints(float(max_distance)):
+            ids = [pair.id_A, pair.id_B]
+            points = [query.GetPoseInWorld(pair.id_A) @ pair.p_ACa, query.GetPoseInWorld(pair.id_B) @ pair.p_BCb]
+            nhat = np.asarray(pair.nhat_BA_W)  # from B towards A
+            if pair.id_A in names:  # make the robot side first
+                ids.reverse()
+                points.reverse()
+                nhat = -nhat
+            link = plant.GetBodyFromFrameId(inspector.GetFrameId(ids[0])).name()
+            if ids[1] in names:
+                other, is_self = names[ids[1]], False
+            else:
+                other, is_self = plant.GetBodyFromFrameId(inspector.GetFrameId(ids[1])).name(), True
+            out.append(DistancePair(float(pair.distance), link, other, is_self,
+                                    np.asarray(points[0]), np.asarray(points[1]), nhat))
+        out.sort(key=lambda p: p.distance)
+        return out
+
+    def min_distance(self, q) -> float:
+        """Smallest exact signed distance [m] over all pairs; ``inf`` if there is none."""
+        pairs = self.distances(q)
+        return pairs[0].distance if pairs else np.inf
+
+    def in_collision(self, q, margin: float = 0.0) -> bool:
+        """Whether some pair is closer than ``margin`` [m] (exact, Drake)."""
+        return self.min_distance(q) < margin
+
+    def exact_min_distance(self, Q) -> np.ndarray:
+        """:meth:`min_distance` for each row of ``Q (N, nq)`` (a loop over Drake; for checks)."""
+        Q = self.robot.check_Q(Q)
+        return np.array([self.min_distance(q) for q in Q])
+
+    # --- batched conservative distances (sphere model) ----------------------------------------
+
+    @functools.cached_property
+    def sphere_model(self) -> SphereModel:
+        """The robot's :class:`SphereModel` (built on first use)."""
+        return SphereModel.from_robot(self.robot, self._sphere_tolerance)
+
+    @functools.cached_property
+    def _compiled_spheres(self):
+        model = self.sphere_model
+        return self.robot.batch.compile_points(list(model.links), model.centres_B)
+
+    def sphere_centres(self, Q) -> np.ndarray:
+        """World positions ``(N, S, 3)`` of the sphere model's centres."""
+        return self.robot.batch.points(Q, *self._compiled_spheres)
+
+    def batch_obstacle_distances(self, Q) -> np.ndarray:
+        """Conservative clearance ``(N, K)`` of the robot to each of the K obstacles [m]."""
+        centres_W = self.sphere_centres(Q)
+        radii = self.sphere_model.radii
+        out = np.empty((centres_W.shape[0], len(self._obstacles)))
+        for k, obstacle in enumerate(self._obstacles.values()):
+            R, p = obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3]
+            centres_O = (centres_W - p) @ R
+            out[:, k] = (obstacle.shape.signed_distance(centres_O) - radii).min(axis=1)
+        return out
+
+    def batch_min_distance(self, Q) -> np.ndarray:
+        """Conservative minimum clearance ``(N,)`` to the obstacles [m] (``inf`` if none).
+
+        Never more than Drake's exact distance, at most ``sphere_model.bound`` less. Robot
+        self-distances are not included (use :meth:`distances` with ``self_collision``).
+        """
+        if not self._obstacles:
+            Q = self.robot.check_Q(Q)
+            return np.full(Q.shape[0], np.inf)
+        return self.batch_obstacle_distances(Q).min(axis=1)
+
+    def __repr__(self) -> str:
+        return f"Scene({self.robot.name!r}, obstacles={list(self._obstacles)})"
+
