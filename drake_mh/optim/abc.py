@@ -1,0 +1,140 @@
+"""Artificial bee colony.
+
+Sources: D. Karaboga, "An idea based on honey bee swarm for numerical optimization",
+Tech. Rep. TR06, Erciyes University, 2005; D. Karaboga & B. Basturk, "A powerful and
+efficient algorithm for numerical function optimization: artificial bee colony (ABC)
+algorithm", J. Global Optimization 39:459-471, 2007; eqs. (1)-(3) of the ABC paper.
+
+A colony of ``pop_size`` bees: half employed, half onlookers; ``SN = pop_size // 2`` food
+sources. One cycle (equation numbers of the ABC paper)::
+
+    employed:  v_ij = x_ij + phi_ij (x_ij - x_kj), k != i random, one random j,
+               phi ~ U(-1, 1); greedy selection; trial_i += 1 if not improved       (1)
+    onlooker:  source i chosen with p_i = fit_i / sum fit, fit = 1 / (1 + f) for f >= 0,
+               1 + |f| otherwise; same move and greedy selection                     (2)
+    scout:     the source with the largest trial count > limit is replaced by a
+               U(lower, upper) point (at most one scout per cycle)                   (3)
+
+``limit`` defaults to ``SN * D`` (Karaboga & Basturk 2007); the ABC paper uses "the number
+of employed bees" (``limit=SN``). The onlookers of a cycle are evaluated as one batch:
+when several choose the same source, the best of their candidates competes with it (the
+serial algorithm would let later onlookers start from an already improved source).
+
+Bound handling: the moved coordinate is clipped onto the box (Karaboga's code).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from drake_mh.errors import InvalidArgument
+from drake_mh.optim.base import Optimizer, batched_choice
+
+
+@dataclass(frozen=True)
+class ABCConfig:
+    """ABC hyper-parameters.
+
+    Attributes:
+        limit: abandonment limit in cycles; ``None`` means ``SN * D``.
+    """
+
+    limit: int | None = None
+
+    def __post_init__(self):
+        if self.limit is not None and (not isinstance(self.limit, (int, np.integer)) or self.limit < 1):
+            raise InvalidArgument(f"abc: limit must be an integer >= 1 or None; got {self.limit!r}")
+
+
+def abc_fitness(F: np.ndarray) -> np.ndarray:
+    """Karaboga's fitness ``1 / (1 + f)`` for ``f >= 0`` and ``1 + |f|`` otherwise."""
+    return np.where(F >= 0, 1.0 / (1.0 + np.abs(F)), 1.0 + np.abs(F))
+
+
+class ABC(Optimizer):
+    """Artificial bee colony (Karaboga 2005), default colony of 40 bees (20 sources)."""
+
+    name = "abc"
+    Config = ABCConfig
+    min_pop_size = 4
+
+    @classmethod
+    def default_pop_size(cls, dim: int) -> int:
+        return 40
+
+    def _start(self) -> None:
+        self.SN = self.pop_size // 2
+        self.limit = self.config.limit if self.config.limit is not None else self.SN * self.dim
+        self.X = None
+        self.trial = np.zeros(self.SN, dtype=np.int64)
+        self.phase = "init"
+        self._all = np.arange(self.SN)
+
+    def _neighbours(self, idx: np.ndarray) -> np.ndarray:
+        """Eq. (1) candidates for the sources ``idx (n,)``: one coordinate moved each."""
+        n = len(idx)
+        k = (idx + 1 + self.randint(self.SN - 1, n)) % self.SN                    # k != i
+        j = self.randint(self.dim, n)
+        phi = 2.0 * self.rng.random(n) - 1.0
+        V = self.X.copy() if idx is self._all else self.X[idx]
+        rows = np.arange(n)
+        vj = V[rows, j] + phi * (V[rows, j] - self.X[k, j])
+        V[rows, j] = np.clip(vj, self.lower[j], self.upper[j])
+        return V
+
+    def _ask(self) -> np.ndarray:
+        if self.phase == "init":
+            return self.initial_population(self.SN)
+        if self.phase == "employed":
+            self._idx = self._all
+        elif self.phase == "onlooker":
+            self._idx = batched_choice(self.rng, abc_fitness(self.F), self.SN)
+        else:  # scout
+            self._idx = np.array([self._scout])
+            return self.lower + self.rng.random((1, self.dim)) * self.width       # eq. (3)
+        return self._neighbours(self._idx)
+
+    def _greedy(self, idx: np.ndarray, V: np.ndarray, F: np.ndarray) -> None:
+        if idx is self._all:                           # employed bees: one candidate per source
+            better = F < self.F
+            self.X[better] = V[better]
+            self.F[better] = F[better]
+            self.trial += 1
+            self.trial[better] = 0
+            return
+        # onlookers: the best candidate per source competes with it
+        counts = np.bincount(idx, minlength=self.SN)
+        order = np.lexsort((F, idx))
+        idx, V, F = idx[order], V[order], F[order]
+        first = np.ones(len(idx), dtype=bool)
+        first[1:] = idx[1:] != idx[:-1]
+        idx, V, F = idx[first], V[first], F[first]
+        counts = counts[idx]
+        better = F < self.F[idx]
+        self.X[idx[better]] = V[better]
+        self.F[idx[better]] = F[better]
+        self.trial[idx[better]] = 0
+        self.trial[idx[~better]] += counts[~better]
+
+    def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
+        if self.phase == "init":
+            self.X, self.F = X.copy(), F.copy()
+            self.phase = "employed"
+            return
+        if self.phase == "scout":
+            i = self._idx[0]
+            self.X[i], self.F[i], self.trial[i] = X[0], F[0], 0
+            self.phase = "employed"
+            return
+        self._greedy(self._idx, X, F)
+        if self.phase == "employed":
+            self.phase = "onlooker"
+            return
+        i = int(np.argmax(self.trial))
+        if self.trial[i] > self.limit:
+            self._scout = i
+            self.phase = "scout"
+        else:
+            self.phase = "employed"
