@@ -77,16 +77,17 @@ PANDA_COLLISION = (
     (_c((0, 0, -0.18), (0, 0, -0.04), 0.06), _c((0.0825, 0.02, 0), (0.0825, 0.07, 0), 0.055)),
     # link4: +z half of the elbow housing, start of the forearm towards joint 5
     (_c((0, 0, -0.01), (0, 0, 0.06), 0.055), _c((-0.0825, 0.05, 0), (-0.0825, 0.12, 0), 0.055)),
-    # link5: forearm tube on the joint-5 axis, its flat back plate, wrist (joint-6) housing
+    # link5: forearm tube on the joint-5 axis, its back bulge and plate, wrist (joint-6) housing
     (
         _c((0, 0, -0.27), (0, 0, -0.16), 0.055),
-        _c((0, 0.06, -0.17), (0, 0.09, -0.05), 0.03),
+        _c((0, 0.05, -0.18), (0, 0.065, -0.155), 0.04),
+        _c((0, 0.08, -0.14), (0, 0.095, -0.05), 0.033),
         _c((0, -0.01, 0), (0, 0.08, 0), 0.05),
     ),
     # link6: body from the wrist axis to the joint-7 housing (at x = 0.088, axis -y)
     (_c((0, 0, 0), (0.088, 0, 0), 0.045), _c((0.088, -0.02, 0), (0.088, 0.04, 0), 0.045)),
     # link7: flange body up to the flange face (z = 0.107) and its side feature at 45 deg
-    (_c((0, 0, 0.02), (0, 0, 0.075), 0.045), _c((0.01, 0.01, 0.082), (0.045, 0.045, 0.082), 0.03)),
+    (_c((0, 0, 0.055), (0, 0, 0.075), 0.045), _c((0, 0, 0.082), (0.042, 0.042, 0.082), 0.035)),
 )
 
 PANDA_HEADER = """\
