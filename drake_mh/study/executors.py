@@ -18,6 +18,9 @@ from drake_mh.errors import InvalidArgument
 
 logger = logging.getLogger(__name__)
 
+#: how long to wait for a Dask scheduler to answer
+DASK_CONNECT_TIMEOUT = "10s"
+
 
 class SerialExecutor(Executor):
     """Runs each submitted call immediately in the calling process (``--workers 0``)."""
@@ -106,7 +109,7 @@ def open_executor(spec: str | None = None, workers: int | None = None) -> Iterat
             "the Dask executor needs dask and distributed: pip install 'drake_mh[dask]'"
         ) from exc
     try:
-        client = Client(address, timeout="10s")
+        client = Client(address, timeout=DASK_CONNECT_TIMEOUT)
     except (OSError, TimeoutError) as exc:
         raise InvalidArgument(
             f"cannot reach the Dask scheduler at {address}: {exc}; start one with "

@@ -1,0 +1,118 @@
+import json
+
+import pytest
+
+from drake_mh.errors import InvalidArgument, ResultsMismatch, UnknownStudy
+from drake_mh.study import load_study, run_study
+
+from study_toys import comparable, write_toy
+
+
+def test_runs_every_case_records_errors_and_reports(toy, tmp_path):
+    result = run_study(toy, out=tmp_path / "out", workers=0)
+    assert result.complete and result.n_cases == 24 and result.n_new == 24
+    assert result.n_errors == 2
+    raised = [r for r in result.records if r["status"] == "error"]
+    assert {r["exception_type"] for r in raised} == {"ValueError"}
+    assert all(r["exception"] == "boom on purpose" for r in raised)
+    assert "Traceback" in raised[0]["traceback"]
+    ok = [r for r in result.records if r["status"] == "ok"]
+    assert all(r["arrays"].startswith("arrays/") for r in ok)
+    assert result.summary == "toy summary: 24 records"
+    assert (tmp_path / "out" / "summary.md").read_text() == result.summary
+    assert result.report.name == "index.html" and result.report.is_file()
+
+
+def test_results_do_not_depend_on_worker_count(toy, tmp_path):
+    serial = run_study(toy, out=tmp_path / "serial", workers=0, report=False)
+    parallel = run_study(toy, out=tmp_path / "parallel", workers=2, report=False)
+    assert comparable(serial.records) == comparable(parallel.records)
+    # different study seed: different draws, same instance/method structure
+    other = run_study(toy, out=tmp_path / "other", workers=0, seed=11, report=False)
+    assert comparable(other.records) != comparable(serial.records)
+
+
+def test_instance_draws_are_shared_by_methods(toy, tmp_path):
+    result = run_study(toy, out=tmp_path / "o", workers=0, report=False)
+    by_block = {}
+    for r in result.records:
+        if r["status"] == "ok":
+            by_block.setdefault((r["inst"], r["rep"]), set()).add(r["x"])
+    assert all(len(xs) == 1 for xs in by_block.values())
+
+
+def test_resume_after_interrupt_repeats_nothing(toy, tmp_path):
+    out = tmp_path / "out"
+    seen = []
+
+    def stop_after_five(record):
+        seen.append(record["key"])
+        if len(seen) == 5:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_study(toy, out=out, workers=0, on_record=stop_after_five, report=False)
+    again = []
+    result = run_study(toy, out=out, workers=0, on_record=lambda r: again.append(r["key"]), report=False)
+    assert result.complete and result.n_new == 19
+    assert not set(seen) & set(again)
+    lines = (out / "records.jsonl").read_text().splitlines()
+    assert len(lines) == 24 and len({json.loads(line)["key"] for line in lines}) == 24
+    reference = run_study(toy, out=tmp_path / "ref", workers=0, report=False)
+    assert comparable(result.records) == comparable(reference.records)
+
+
+def test_rerun_of_finished_study_runs_nothing(toy, tmp_path):
+    run_study(toy, out=tmp_path / "o", workers=0, report=False)
+    result = run_study(toy, out=tmp_path / "o", workers=0, report=False)
+    assert result.n_new == 0 and result.complete
+
+
+def test_other_settings_in_same_folder_are_refused(toy, tmp_path):
+    run_study(toy, out=tmp_path / "o", workers=0, report=False, quick=True)
+    with pytest.raises(ResultsMismatch, match="--out"):
+        run_study(toy, out=tmp_path / "o", workers=0, report=False)
+    with pytest.raises(ResultsMismatch):
+        run_study(toy, out=tmp_path / "o", workers=0, report=False, quick=True, seed=9)
+
+
+def test_quick_grid_and_default_folder(toy, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = run_study(toy, quick=True, workers=0, report=False)
+    assert result.n_cases == 4
+    assert result.folder.as_posix() == "results/toy-quick"
+
+
+def test_load_by_name_from_studies_env(tmp_path, monkeypatch):
+    folder = tmp_path / "mystudies"
+    folder.mkdir()
+    write_toy(folder, name="toy_by_name.py")
+    monkeypatch.setenv("DRAKE_MH_STUDIES", str(folder))
+    study, source = load_study("toy_by_name")
+    assert study.name == "toy" and source.path.endswith("toy_by_name.py")
+    with pytest.raises(UnknownStudy, match="toy_by_name"):
+        load_study("no_such_study")
+
+
+def test_study_object_and_bad_arguments(toy, tmp_path):
+    study, _ = load_study(toy)
+    result = run_study(study, out=tmp_path / "o", workers=2, report=False, quick=True)
+    assert result.complete
+    with pytest.raises(InvalidArgument, match="dask://"):
+        run_study(study, out=tmp_path / "p", executor="carrier-pigeon", report=False)
+    with pytest.raises(InvalidArgument, match="workers"):
+        run_study(study, out=tmp_path / "q", workers=-2, report=False)
+
+
+def test_bad_return_value_is_recorded_not_raised(tmp_path):
+    path = tmp_path / "odd.py"
+    path.write_text(
+        "from drake_mh.study import Study\n"
+        "def run(case):\n"
+        "    return {'ok': 1} if case['i'] else {'obj': object()}\n"
+        "study = Study(name='odd', run=run, grid={'i': [0, 1]})\n"
+    )
+    result = run_study(path, out=tmp_path / "o", workers=0)
+    status = {r["i"]: r["status"] for r in result.records}
+    assert status == {0: "error", 1: "ok"}
+    assert "obj" in result.records[0]["exception"]
