@@ -13,17 +13,19 @@ the same run on one core:
 Targets (Foundation issue): >= 30x Drake's loop at N = 128 and >= 1,000,000 FK per second at
 N = 10000. Ratios are computed against the Drake loop measured in the same run.
 
-Run: ``python studies/bench_kinematics.py [--robot panda] [--quick]``.
+Run: ``drake-mh study bench_kinematics [--quick]`` or ``python studies/bench_kinematics.py [--quick]``
+(the grid lists the robots; the table is printed at the end and put into the report).
 """
 
 from __future__ import annotations
 
-import argparse
 import os
 import platform
 import time
 
 import numpy as np
+
+from drake_mh.study import Case, Fields, Study
 
 SIZES = (1, 16, 128, 1024, 10000)
 
@@ -91,30 +93,34 @@ def drake_loop(robot, Q):
         plant.CalcJacobianSpatialVelocity(ctx, JacobianWrtVariable.kQDot, ee, zero, world, world)
 
 
-def run(robot_name: str = "panda", sizes=SIZES, seed: int = 0, repeats: int = 20) -> list[dict]:
-    """Measure every method for every N; returns one row per N."""
+def measure(robot_name: str, N: int, rng: np.random.Generator, repeats: int) -> dict:
+    """Measure every method at one N (same process, back to back); returns one table row."""
     import drake_mh
 
     robot = drake_mh.load_robot(robot_name)
     kin = robot.batch
-    rng = np.random.default_rng(seed)
     anchor, R_AE, p_AE, _ = kin._frame_anchor(None)
     kin.fk_jacobian(robot.random_configurations(2, rng))  # compile (numba cache) before timing
-    rows = []
-    for N in sizes:
-        Q = robot.random_configurations(N, rng)
-        t_drake = _best_time(lambda: drake_loop(robot, Q), max(3, repeats // 4) if N < 1000 else 2)
-        t_numba = _best_time(lambda: kin.fk_jacobian(Q), repeats)
-        t_numpy = _best_time(lambda: numpy_fk_jacobian(kin.chain, Q, anchor, R_AE, p_AE), repeats)
-        t_fk = _best_time(lambda: kin.fk(Q), repeats)
-        rows.append(dict(
-            robot=robot_name, N=N,
-            drake_us=1e6 * t_drake / N, numba_us=1e6 * t_numba / N, numpy_us=1e6 * t_numpy / N,
-            fk_only_us=1e6 * t_fk / N,
-            ratio_numba=t_drake / t_numba, ratio_numpy=t_drake / t_numpy,
-            fk_per_s=N / t_fk,
-        ))
-    return rows
+    Q = robot.random_configurations(N, rng)
+    t_drake = _best_time(lambda: drake_loop(robot, Q), max(3, repeats // 4) if N < 1000 else 2)
+    t_numba = _best_time(lambda: kin.fk_jacobian(Q), repeats)
+    t_numpy = _best_time(lambda: numpy_fk_jacobian(kin.chain, Q, anchor, R_AE, p_AE), repeats)
+    t_fk = _best_time(lambda: kin.fk(Q), repeats)
+    return dict(
+        robot=robot_name, N=N,
+        drake_us=1e6 * t_drake / N, numba_us=1e6 * t_numba / N, numpy_us=1e6 * t_numpy / N,
+        fk_only_us=1e6 * t_fk / N,
+        ratio_numba=t_drake / t_numba, ratio_numpy=t_drake / t_numpy,
+        fk_per_s=N / t_fk,
+    )
+
+
+def run_case(case: Case) -> dict:
+    """One study case: all methods at one robot and N (fewer repeats in quick mode)."""
+    row = measure(case["robot"], case["N"], case.instance_rng, repeats=5 if case.quick else 20)
+    row["time"] = row["numba_us"] * 1e-6  # [s] per configuration, batched FK + Jacobian
+    row["machine"] = machine()
+    return row
 
 
 def format_table(rows: list[dict]) -> str:
@@ -134,22 +140,43 @@ def machine() -> str:
             f"Python {platform.python_version()}, numpy {np.__version__}")
 
 
-def main(argv=None) -> list[dict]:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--robot", default="panda")
-    parser.add_argument("--quick", action="store_true", help="N in {1, 128, 1024} and fewer repeats")
-    args = parser.parse_args(argv)
-    sizes = (1, 128, 1024) if args.quick else SIZES
-    rows = run(args.robot, sizes, repeats=5 if args.quick else 20)
-    print(f"{args.robot}: batched FK + Jacobian vs Drake's per-configuration loop ({machine()})")
-    print(format_table(rows))
-    by_n = {r["N"]: r for r in rows}
-    if 128 in by_n:
-        print(f"target >= 30x at N = 128: {by_n[128]['ratio_numba']:.0f}x")
-    if 10000 in by_n:
-        print(f"target >= 1,000,000 FK/s at N = 10000: {by_n[10000]['fk_per_s']:,.0f}")
-    return rows
+def summarize(records: list[dict]) -> str:
+    """The benchmark's printed table and target lines, per robot."""
+    out = []
+    robots: dict[str, list[dict]] = {}
+    for record in records:
+        if record.get("status") == "ok":
+            robots.setdefault(record["robot"], []).append(record)
+    for robot, rows in robots.items():
+        rows = sorted(rows, key=lambda r: r["N"])
+        out.append(f"{robot}: batched FK + Jacobian vs Drake's per-configuration loop ({rows[0]['machine']})")
+        out.append(format_table(rows))
+        by_n = {r["N"]: r for r in rows}
+        if 128 in by_n:
+            out.append(f"target >= 30x at N = 128: {by_n[128]['ratio_numba']:.0f}x")
+        if 10000 in by_n:
+            out.append(f"target >= 1,000,000 FK/s at N = 10000: {by_n[10000]['fk_per_s']:,.0f}")
+        out.append("")
+    return "\n".join(out).rstrip()
+
+
+study = Study(
+    name="bench_kinematics",
+    run=run_case,
+    grid={"robot": ["panda"], "N": list(SIZES)},
+    quick_grid={"robot": ["panda"], "N": [1, 128, 1024]},
+    fields=Fields(method="robot", time="time", rank=False),
+    description=(
+        "Batched FK + Jacobian (drake_mh.kinematics.BatchKinematics, numba) against Drake's "
+        "per-configuration Python loop, a vectorized-numpy version of the same recurrence, and "
+        "batched FK alone, for N configurations at once. Times are the best of several repeats "
+        "per configuration; ratios are against the Drake loop measured in the same case. Cases "
+        "run one at a time (max_workers=1) so that measurements never overlap."
+    ),
+    summarize=summarize,
+    max_workers=1,
+)
 
 
 if __name__ == "__main__":
-    main()
+    study.main()
