@@ -9,9 +9,10 @@ by a grid), so that
 
 for every configuration: the union of the spheres *contains* the geometry (the model never
 reports more clearance than Drake), and every sphere point lies within ``bound`` of the
-geometry (the model is at most ``bound`` pessimistic). ``bound`` is computed per link by
-sampling each sphere's surface against the shape's exact signed distance, and checked against
-Drake in the tests.
+geometry (the model is at most ``bound`` pessimistic). ``bound`` is computed per link
+(:func:`excess`: exact for capsules, a Lipschitz-safe sampled bound for cylinders and boxes)
+and checked against Drake in the tests. These inequalities hold for non-negative clearance;
+in penetration both are negative (every collision Drake sees, the spheres see).
 
 Covering rules (shape frame G, axis z), for a tolerance ``tol``:
 
@@ -38,7 +39,7 @@ DEFAULT_TOLERANCE = 0.01
 """Default excess radius [m] allowed when covering capsules (bound of the pessimism)."""
 
 
-def _fibonacci_directions(n: int = 400) -> np.ndarray:
+def _fibonacci_directions(n: int = 4000) -> np.ndarray:
     """``(n, 3)`` nearly uniform unit vectors (for sampling sphere surfaces)."""
     i = np.arange(n) + 0.5
     z = 1.0 - 2.0 * i / n
@@ -84,10 +85,20 @@ def cover_shape(shape, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def excess(shape, centres_G: np.ndarray, radii: np.ndarray, directions=None) -> float:
-    """Largest distance [m] from a sphere surface point to ``shape`` (sampled, >= 0)."""
+    """Upper bound [m] on the distance from any point of the spheres to ``shape``.
+
+    Exact for spheres and capsules (centres on the axis: ``max(R - r)``). For cylinders and
+    boxes the sphere surfaces are sampled along ``directions`` and, because the distance is
+    1-Lipschitz, ``R`` times the sampling's angular spacing is added, so the value is still a
+    bound.
+    """
+    if isinstance(shape, (Sphere, Capsule)):
+        return float(max(0.0, np.max(radii - shape.radius)))
     directions = _fibonacci_directions() if directions is None else directions
+    spacing = np.sqrt(4.0 * np.pi / len(directions))  # rad, >= the lattice's covering radius
     pts = centres_G[:, None, :] + radii[:, None, None] * directions[None, :, :]
-    return float(max(0.0, shape.signed_distance(pts).max()))
+    sampled = shape.signed_distance(pts).max(axis=1) + radii * spacing
+    return float(max(0.0, sampled.max()))
 
 
 @dataclass(frozen=True)
