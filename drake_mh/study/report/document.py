@@ -49,6 +49,14 @@ class Animation:
     page: str | None
 
 
+@dataclass(frozen=True)
+class Link:
+    """A link to a local file (relative path), e.g. another report."""
+
+    path: str
+    text: str
+
+
 @dataclass
 class Document:
     """Ordered report blocks."""
@@ -57,7 +65,7 @@ class Document:
     blocks: list = field(default_factory=list)
 
     def add(self, block) -> None:
-        """Appends a block (Heading, Paragraph, Preformatted, Table, FigureFile, Animation)."""
+        """Appends a block (Heading, Paragraph, Preformatted, Table, FigureFile, Animation, Link)."""
         self.blocks.append(block)
 
 
@@ -87,6 +95,8 @@ def to_markdown(doc: Document) -> str:
             lines += [f"![{block.caption}](figures/{block.name}.png)", "", f"*{block.caption}*", ""]
         elif isinstance(block, Animation):
             lines += [f"[{block.title}]({block.path})", ""]
+        elif isinstance(block, Link):
+            lines += [f"[{block.text}]({block.path})", ""]
     return "\n".join(lines).rstrip() + "\n"
 
 
@@ -135,5 +145,7 @@ def to_html(doc: Document) -> str:
             if block.page is not None:
                 parts.append(f'<iframe title="{esc(block.title)}" srcdoc="{esc(block.page, quote=True)}"></iframe>')
             parts.append(f'<p class="caption">file: <a href="{esc(block.path)}">{esc(block.path)}</a></p>')
+        elif isinstance(block, Link):
+            parts.append(f'<p><a href="{esc(block.path)}">{esc(block.text)}</a></p>')
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"

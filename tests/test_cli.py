@@ -1,0 +1,149 @@
+"""The drake-mh command line: subcommands, exit codes, one-line errors."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from drake_mh.cli import COMMAND_MODULES, build_parser, main
+
+REPO = Path(__file__).resolve().parents[1]
+TOY = '''
+from drake_mh.study import Study
+
+def run(case):
+    if case["i"] == 2:
+        raise RuntimeError("case two fails")
+    return {"success": True, "error": 0.1 * case["i"], "method": "m"}
+
+study = Study(name="clitoy", run=run, grid={"i": [0, 1, 2, 3]}, quick_grid={"i": [0, 1]})
+'''
+
+
+def _run_cli(*args, cwd=None, timeout=120):
+    env = {**os.environ, "DRAKE_MH_NO_PROGRESS": "1"}
+    return subprocess.run(
+        [sys.executable, "-m", "drake_mh", *args], capture_output=True, text=True, cwd=cwd, env=env, timeout=timeout
+    )
+
+
+@pytest.fixture
+def toy(tmp_path):
+    path = tmp_path / "clitoy.py"
+    path.write_text(TOY)
+    return path
+
+
+def test_help_lists_subcommands(capsys):
+    assert main(["--help"]) == 0
+    text = capsys.readouterr().out
+    for name in ("robots", "study", "report", "demo"):
+        assert name in text
+
+
+def test_subcommand_modules_plug_in():
+    assert "drake_mh.ik.cli" in COMMAND_MODULES and "drake_mh.viz.cli" in COMMAND_MODULES
+    parser = build_parser()  # modules that do not exist yet are skipped
+    assert parser.prog == "drake-mh"
+
+
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (["frobnicate"], "invalid choice: 'frobnicate'"),
+        (["study"], "required: name"),
+        (["study", "no_such_study"], "unknown study 'no_such_study'; studies in"),
+        (["study", "x", "--workers", "two"], "--workers"),
+        (["study", "x", "--bogus"], "unrecognized arguments: --bogus"),
+        (["robots", "no_such_robot"], "unknown robot 'no_such_robot'"),
+        (["report", "/no/such/folder"], "holds no study results"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line(argv, words, capsys):
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1, captured.err
+    assert lines[0].startswith("drake-mh: error: ") and words in lines[0]
+    assert "Traceback" not in captured.err
+
+
+def test_unknown_names_list_valid_ones(capsys):
+    assert main(["study", "no_such_study"]) == 2
+    assert "fk_accuracy" in capsys.readouterr().err
+    assert main(["robots", "no_such_robot"]) == 2
+    assert "panda" in capsys.readouterr().err
+
+
+def test_verbose_shows_the_traceback(capsys):
+    assert main(["study", "no_such_study", "--verbose"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" in err and "UnknownStudy" in err
+
+
+def test_robots_lists_bundled_models(capsys):
+    import drake_mh
+
+    assert main(["robots"]) == 0
+    out = capsys.readouterr().out
+    for name in drake_mh.available_robots():
+        assert name in out
+    assert "nq=7" in out
+
+
+def test_study_runs_records_errors_and_reports(toy, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["study", str(toy), "--workers", "0", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "4/4 cases" in text and "1 raised" in text and f"report: {out / 'index.html'}" in text
+    assert main(["study", str(toy), "--workers", "0", "--out", str(out), "--strict"]) == 1
+    assert "0 run now, 4 already done" in capsys.readouterr().out
+    assert main(["report", str(out)]) == 0
+    assert "index.html" in capsys.readouterr().out
+
+
+def test_study_quick_seed_and_mismatch(toy, tmp_path, capsys):
+    out = tmp_path / "q"
+    assert main(["study", str(toy), "--quick", "--workers", "0", "--out", str(out), "--seed", "5", "--quiet"]) == 0
+    assert capsys.readouterr().out.strip() == f"report: {out / 'index.html'}"
+    assert main(["study", str(toy), "--workers", "0", "--out", str(out)]) == 2
+    assert "another --out" in capsys.readouterr().err
+
+
+def test_study_script_runs_like_the_cli(toy, tmp_path):
+    script = toy.read_text() + "\nif __name__ == '__main__':\n    study.main()\n"
+    toy.write_text(script)
+    result = subprocess.run(
+        [sys.executable, str(toy), "--quick", "--workers", "0", "--out", str(tmp_path / "s")],
+        capture_output=True, text=True, timeout=120, env={**os.environ, "DRAKE_MH_NO_PROGRESS": "1"},
+    )
+    assert result.returncode == 0, result.stderr
+    assert "2/2 cases" in result.stdout
+    bad = subprocess.run([sys.executable, str(toy), "--workers", "-3"], capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+
+
+def test_python_m_drake_mh_and_console_script(tmp_path):
+    result = _run_cli(cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "panda" in result.stdout and "demo" in result.stdout
+    script = Path(sys.executable).with_name("drake-mh")
+    if script.exists():
+        bad = subprocess.run([str(script), "study", "nope"], capture_output=True, text=True, timeout=120)
+        assert bad.returncode == 2 and bad.stderr.startswith("drake-mh: error: unknown study")
+
+
+@pytest.mark.slow
+def test_demo_runs_end_to_end(tmp_path):
+    result = _run_cli("demo", "--workers", "2", "--out", str(tmp_path / "demo"), cwd=tmp_path, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert "demo report:" in result.stdout
+    index = tmp_path / "demo" / "index.html"
+    assert index.is_file()
+    for name in ("bench_kinematics", "fk_accuracy"):
+        assert (tmp_path / "demo" / name / "index.html").is_file()
+        assert f"{name}/index.html" in index.read_text()
