@@ -564,8 +564,9 @@ def _z_to(u):
         return np.eye(3)
     if np.allclose(u, [0, 0, -1], atol=1e-15):
         return np.diag([1.0, -1.0, -1.0])
-    for k in range(3):  # axis-aligned: a quarter turn about a coordinate axis
-        if abs(abs(u[k]) - 1) < 1e-15:
+    for k in (0, 1):  # along x or y: an exact quarter turn about y or x
+        e_k = np.eye(3)[k] * math.copysign(1.0, u[k])
+        if np.abs(u - e_k).max() < 1e-15:
             if k == 0:
                 return _ry3(math.copysign(math.pi / 2, u[0]))
             return _rx(-math.copysign(math.pi / 2, u[1]))[:3, :3]

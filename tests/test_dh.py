@@ -206,3 +206,32 @@ def test_errors_are_value_errors():
     """The exceptions keep `except ValueError` code working."""
     with pytest.raises(ValueError):
         dh_to_urdf([1], [0], [0], lower=[1], upper=[0])
+
+
+def test_capsule_poses_in_drake_match_segments():
+    """Drake places each capsule on its segment A-B, for axis-aligned and oblique axes."""
+    directions = [(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1), (1, 2, -2), (-1, 0, 1e-9)]
+    shapes = tuple(
+        Capsule((0.1, -0.2, 0.3), tuple(0.1 * np.array(u) / np.linalg.norm(u) + [0.1, -0.2, 0.3]), 0.02)
+        for u in directions
+    )
+    text = dh_to_urdf([0.2], [0], [0], links=[LinkSpec(collision=shapes)])
+    plant, scene_graph = load(text)
+    inspector = scene_graph.model_inspector()
+    frame = plant.GetBodyFrameIdOrThrow(plant.GetBodyByName("link1").index())
+    from pydrake.geometry import Role
+
+    found = []
+    for g in inspector.GetGeometries(frame, Role.kProximity):
+        X_LG = inspector.GetPoseInFrame(g).GetAsMatrix4()
+        half = inspector.GetShape(g).length() / 2
+        ends = [X_LG[:3, :3] @ [0, 0, s * half] + X_LG[:3, 3] for s in (-1, 1)]
+        found.append(ends)
+    assert len(found) == len(shapes)
+    for shape in shapes:
+        A, B = np.array(shape.p_LA), np.array(shape.p_LB)
+        assert any(
+            min(np.abs(e[0] - A).max() + np.abs(e[1] - B).max(), np.abs(e[0] - B).max() + np.abs(e[1] - A).max())
+            < 1e-12
+            for e in found
+        ), shape
