@@ -167,9 +167,7 @@ def as_bounds(bounds: Any) -> tuple[np.ndarray, np.ndarray]:
 
 def check_budget(budget: Any) -> int:
     """Returns ``budget`` as an ``int >= 1`` or raises :class:`InvalidArgument`."""
-    if isinstance(budget, bool) or not isinstance(budget, numbers.Integral):
-        if isinstance(budget, numbers.Real) and float(budget).is_integer() and budget >= 1:
-            return int(budget)
+    if isinstance(budget, bool) or not isinstance(budget, numbers.Real) or not float(budget).is_integer():
         raise InvalidArgument(
             f"budget is a number of function evaluations and must be an integer >= 1; got {budget!r}"
         )

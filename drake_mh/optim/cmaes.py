@@ -9,7 +9,7 @@ How it is wrapped:
 * The search runs in normalized coordinates ``y = (x - lower) / (upper - lower)`` in
   ``[0, 1]^D`` (CMA-ES wants comparable scales per coordinate), initial step
   ``sigma0 = 0.3`` (pycma advises about a quarter to a third of the range).
-* The initial mean is ``x0[0]`` when given (further ``x0`` rows are injected into the first
+* The initial mean is ``x0[0]`` when given (all ``x0`` rows are injected into the first
   generation with ``inject(force=True)``), else a *uniformly random point of the box*,
   not the box centre, so that CMA-ES gets no centre advantage.
 * Population size ``lambda = 4 + floor(3 ln D)`` (pycma's default) unless ``pop_size`` is given.
@@ -21,6 +21,8 @@ How it is wrapped:
 * When pycma's own termination criteria fire (``tolfun``, ``tolx``, ...), the strategy is
   restarted from a new uniformly random mean with the same ``lambda`` (independent
   restarts), so the budget is always used.
+
+D = 1 is refused (pycma 4.x fails on it with an explicit population size).
 
 Bound handling: pycma's ``BoundTransform`` (a smooth piecewise-quadratic map of the
 genotype into ``[0, 1]``); the evaluated points are always inside the box. Injected
@@ -70,6 +72,11 @@ class CMAES(Optimizer):
         return 4 + int(math.floor(3 * math.log(dim))) if dim > 1 else 4
 
     def _start(self) -> None:
+        if self.dim < 2:
+            raise InvalidArgument(
+                "cmaes needs D >= 2 (pycma 4.x fails on 1-D problems with an explicit population "
+                "size); use 'de' or 'pso' for a single variable"
+            )
         import cma  # local import: pycma takes ~0.2 s to import
 
         self._cma = cma
@@ -79,8 +86,8 @@ class CMAES(Optimizer):
         else:
             mean = self.rng.random(self.dim)
         self._new_es(mean)
-        if self.x0 is not None and len(self.x0) > 1:
-            Y0 = (self.x0[1:] - self.lower) / self.width
+        if self.x0 is not None:
+            Y0 = (self.x0[: self.pop_size] - self.lower) / self.width
             self.es.inject(list(Y0), force=True)
 
     def _new_es(self, mean: np.ndarray) -> None:
@@ -94,7 +101,7 @@ class CMAES(Optimizer):
             "maxfevals": np.inf,
             "maxiter": np.inf,
         }
-        self.es = self._cma.CMAEvolutionStrategy(np.asarray(mean, dtype=float), self.config.sigma0, opts)
+        self.es = self._cma.CMAEvolutionStrategy([float(m) for m in mean], self.config.sigma0, opts)
 
     def _ask(self) -> np.ndarray:
         Y = np.asarray(self.es.ask(), dtype=float)
