@@ -147,3 +147,24 @@ def test_demo_runs_end_to_end(tmp_path):
     for name in ("bench_kinematics", "fk_accuracy"):
         assert (tmp_path / "demo" / name / "index.html").is_file()
         assert f"{name}/index.html" in index.read_text()
+
+
+def test_progress_only_on_an_interactive_terminal(monkeypatch):
+    import argparse
+
+    from drake_mh.cli import wants_progress
+
+    class TTY:
+        def isatty(self):
+            return True
+
+    monkeypatch.delenv("CI", raising=False)
+    monkeypatch.delenv("DRAKE_MH_NO_PROGRESS", raising=False)
+    monkeypatch.setattr(sys, "stderr", TTY())
+    assert wants_progress(argparse.Namespace(quiet=False))
+    assert not wants_progress(argparse.Namespace(quiet=True))
+    monkeypatch.setenv("CI", "true")
+    assert not wants_progress(argparse.Namespace(quiet=False))
+    monkeypatch.delenv("CI")
+    monkeypatch.setattr(sys, "stderr", open(os.devnull, "w"))
+    assert not wants_progress(argparse.Namespace(quiet=False))
