@@ -24,6 +24,7 @@ numpy's per-call overhead dominates at the population sizes metaheuristics use).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -254,6 +255,15 @@ class BatchKinematics:
         out = np.empty((QT.shape[1], len(anchors), 3))
         _kernels.points(QT, *self._args, anchors, offsets, out)
         return out
+
+    @functools.cached_property
+    def _sphere_points(self):
+        model = self.robot.sphere_model
+        return self.compile_points(list(model.links), model.centres_B)
+
+    def sphere_centres(self, Q) -> np.ndarray:
+        """World positions ``(N, S, 3)`` of the centres of ``robot.sphere_model``'s spheres."""
+        return self.points(Q, *self._sphere_points)
 
     def moving_frames(self, Q) -> tuple[np.ndarray, np.ndarray]:
         """World rotations ``(N, F, 3, 3)`` and origins ``(N, F, 3)`` of every joint's moving frame.

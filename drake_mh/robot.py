@@ -335,6 +335,13 @@ class Robot:
             raise FrameNotFound(frame, self._frames)
         return self._frames[frame]
 
+    @functools.cached_property
+    def sphere_model(self):
+        """:class:`drake_mh.spheres.SphereModel` covering the collision geometry (default tolerance)."""
+        from drake_mh.spheres import SphereModel
+
+        return SphereModel.from_robot(self)
+
     # --- batched kernel ----------------------------------------------------------------------
 
     @functools.cached_property

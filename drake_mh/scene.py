@@ -253,7 +253,9 @@ class Scene:
 
     @functools.cached_property
     def sphere_model(self) -> SphereModel:
-        """The robot's :class:`SphereModel` (built on first use)."""
+        """The robot's :class:`SphereModel` (the robot's own unless another tolerance was asked)."""
+        if self._sphere_tolerance == self.robot.sphere_model.tolerance:
+            return self.robot.sphere_model
         return SphereModel.from_robot(self.robot, self._sphere_tolerance)
 
     @functools.cached_property

@@ -93,3 +93,15 @@ def test_block_boundaries():
         T = robot.batch.fk(Q)
         np.testing.assert_allclose(T[-1], robot.fk(Q[-1]), atol=TOL)
         np.testing.assert_allclose(T[0], robot.fk(Q[0]), atol=TOL)
+
+
+def test_sphere_centres_follow_their_links():
+    robot = ROBOTS["panda"]
+    model = robot.sphere_model
+    Q = robot.random_configurations(4, 5)
+    C = robot.batch.sphere_centres(Q)
+    assert C.shape == (4, model.num_spheres, 3)
+    for q, C_i in zip(Q, C):
+        poses = robot.link_poses(q)
+        expected = [poses[link][:3, :3] @ c + poses[link][:3, 3] for link, c in zip(model.links, model.centres_B)]
+        np.testing.assert_allclose(C_i, expected, atol=TOL)
