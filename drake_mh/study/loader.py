@@ -7,7 +7,6 @@ loads identically in the main process and in worker processes (local or Dask).
 from __future__ import annotations
 
 import hashlib
-import importlib.util
 import logging
 import os
 import sys

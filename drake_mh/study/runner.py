@@ -218,6 +218,35 @@ def run_study(
     )
 
 
+def _isolate(
+    suspects: list[CaseSpec],
+    task_source: StudySource | Study,
+    executor: str | None,
+    store_record: Callable[..., None],
+) -> None:
+    """Re-runs the cases that were in flight when a worker died, each alone in a fresh
+    one-worker pool, so that only the case that kills its worker is recorded as a crash."""
+    for spec in sorted(suspects, key=lambda s: s.index):
+        with open_executor(executor, 1) as (pool, _):
+            future = pool.submit(run_case_task, task_source, spec)
+            try:
+                outcome = future.result()
+            except BrokenProcessPool:
+                store_record(_crash_record(spec, WorkerDied(
+                    "the worker process died while running this case (a crash or abort in native "
+                    "code, e.g. Drake, or os._exit); run it with --workers 0 --verbose to see where"
+                )))
+                continue
+            except Exception as exc:  # noqa: BLE001
+                store_record(_crash_record(spec, exc))
+                continue
+        store_record(outcome.record, outcome.arrays, outcome.attachments)
+
+
+class WorkerDied(RuntimeError):
+    """Recorded (not raised) for a case whose worker process died."""
+
+
 def _execute(
     pending: list[CaseSpec],
     task_source: StudySource | Study,
@@ -228,6 +257,7 @@ def _execute(
 ) -> None:
     queue = list(reversed(pending))  # pop() from the end keeps grid order
     while queue:
+        suspects: list[CaseSpec] = []
         with ExitStack() as stack:
             if isinstance(executor, Executor):
                 pool, parallel = executor, (workers or default_workers())
@@ -242,10 +272,9 @@ def _execute(
             else:
                 window = parallel * _WINDOW_FACTOR
             running: dict[Future, CaseSpec] = {}
-            broken = False
             try:
                 while queue or running:
-                    while queue and len(running) < window and not broken:
+                    while queue and len(running) < window and not suspects:
                         spec = queue.pop()
                         running[pool.submit(run_case_task, task_source, spec)] = spec
                     if not running:
@@ -255,22 +284,22 @@ def _execute(
                         spec = running.pop(future)
                         try:
                             outcome = future.result()
-                        except BrokenProcessPool as exc:
-                            broken = True
-                            store_record(_crash_record(spec, exc))
+                        except BrokenProcessPool:
+                            suspects.append(spec)  # this case or a neighbour killed the worker
                             continue
                         except Exception as exc:  # noqa: BLE001 - e.g. unpicklable result, lost Dask worker
                             store_record(_crash_record(spec, exc))
                             continue
                         store_record(outcome.record, outcome.arrays, outcome.attachments)
-                    if broken and not running:
-                        logger.warning("a worker process died; restarting the worker pool")
+                    if suspects and not running:
                         break
             except BaseException:
                 for future in running:
                     future.cancel()
                 raise
-            if not broken:
-                return
-            if isinstance(executor, Executor):
-                raise RuntimeError("the executor passed to run_study broke (a worker died); pass a fresh one")
+        if not suspects:
+            return
+        if isinstance(executor, Executor):
+            raise RuntimeError("the executor passed to run_study broke (a worker died); pass a fresh one")
+        logger.warning("a worker process died; re-running the %d case(s) it was running one by one", len(suspects))
+        _isolate(suspects, task_source, executor, store_record)

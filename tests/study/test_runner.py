@@ -116,3 +116,21 @@ def test_bad_return_value_is_recorded_not_raised(tmp_path):
     status = {r["i"]: r["status"] for r in result.records}
     assert status == {0: "error", 1: "ok"}
     assert "obj" in result.records[0]["exception"]
+
+
+def test_a_case_that_kills_its_worker_is_isolated_and_recorded(tmp_path):
+    path = tmp_path / "crash.py"
+    path.write_text(
+        "import os, time\n"
+        "from drake_mh.study import Study\n"
+        "def run(case):\n"
+        "    time.sleep(0.05)\n"
+        "    if case['i'] == 3:\n"
+        "        os._exit(3)  # like a C++ abort in Drake\n"
+        "    return {'error': float(case['i'])}\n"
+        "study = Study(name='crash', run=run, grid={'i': list(range(8))})\n"
+    )
+    result = run_study(path, out=tmp_path / "o", workers=2, report=False)
+    assert result.complete
+    raised = {r["i"]: r["exception_type"] for r in result.records if r["status"] == "error"}
+    assert raised == {3: "WorkerDied"}

@@ -1,5 +1,3 @@
-import numpy as np
-
 from drake_mh.study.case import CaseSpec
 from drake_mh.study.seeding import case_id, case_key, derive_seed
 
