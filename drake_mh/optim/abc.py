@@ -50,6 +50,8 @@ class ABCConfig:
 
 def abc_fitness(F: np.ndarray) -> np.ndarray:
     """Karaboga's fitness ``1 / (1 + f)`` for ``f >= 0`` and ``1 + |f|`` otherwise."""
+    if F.min() >= 0:
+        return 1.0 / (1.0 + F)
     return np.where(F >= 0, 1.0 / (1.0 + np.abs(F)), 1.0 + np.abs(F))
 
 
@@ -75,13 +77,15 @@ class ABC(Optimizer):
     def _neighbours(self, idx: np.ndarray) -> np.ndarray:
         """Eq. (1) candidates for the sources ``idx (n,)``: one coordinate moved each."""
         n = len(idx)
-        k = (idx + 1 + self.randint(self.SN - 1, n)) % self.SN                    # k != i
-        j = self.randint(self.dim, n)
-        phi = 2.0 * self.rng.random(n) - 1.0
+        U = self.rng.random((3, n))
+        k = (idx + 1 + (U[0] * (self.SN - 1)).astype(np.intp)) % self.SN          # k != i
+        j = (U[1] * self.dim).astype(np.intp)
+        phi = 2.0 * U[2] - 1.0
         V = self.X.copy() if idx is self._all else self.X[idx]
-        rows = np.arange(n)
-        vj = V[rows, j] + phi * (V[rows, j] - self.X[k, j])
-        V[rows, j] = np.clip(vj, self.lower[j], self.upper[j])
+        rows = self._all if n == self.SN else np.arange(n)
+        xj = V[rows, j]
+        vj = xj + phi * (xj - self.X[k, j])
+        V[rows, j] = np.minimum(np.maximum(vj, self.lower[j]), self.upper[j])
         return V
 
     def _ask(self) -> np.ndarray:
@@ -99,24 +103,21 @@ class ABC(Optimizer):
     def _greedy(self, idx: np.ndarray, V: np.ndarray, F: np.ndarray) -> None:
         if idx is self._all:                           # employed bees: one candidate per source
             better = F < self.F
-            self.X[better] = V[better]
-            self.F[better] = F[better]
+            np.copyto(self.X, V, where=better[:, None])
+            np.copyto(self.F, F, where=better)
             self.trial += 1
             self.trial[better] = 0
             return
-        # onlookers: the best candidate per source competes with it
-        counts = np.bincount(idx, minlength=self.SN)
-        order = np.lexsort((F, idx))
-        idx, V, F = idx[order], V[order], F[order]
-        first = np.ones(len(idx), dtype=bool)
-        first[1:] = idx[1:] != idx[:-1]
-        idx, V, F = idx[first], V[first], F[first]
-        counts = counts[idx]
-        better = F < self.F[idx]
-        self.X[idx[better]] = V[better]
-        self.F[idx[better]] = F[better]
-        self.trial[idx[better]] = 0
-        self.trial[idx[~better]] += counts[~better]
+        # onlookers: the best candidate per source competes with it (ties: the first one)
+        best = np.full(self.SN, np.inf)
+        np.minimum.at(best, idx, F)
+        cand = np.flatnonzero((F == best[idx]) & (F < self.F[idx]))
+        src, first = np.unique(idx[cand], return_index=True) if len(cand) > 1 else (idx[cand], slice(None))
+        cand = cand[first]
+        self.trial += np.bincount(idx, minlength=self.SN)   # every onlooker visit counts ...
+        self.X[src] = V[cand]
+        self.F[src] = F[cand]
+        self.trial[src] = 0                                 # ... unless its source improved
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         if self.phase == "init":

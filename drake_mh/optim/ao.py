@@ -126,5 +126,5 @@ class AO(Optimizer):
             self.X, self.F = X, F.copy()
             return
         better = F < self.F
-        self.X[better] = X[better]
-        self.F[better] = F[better]
+        np.copyto(self.X, X, where=better[:, None])
+        np.copyto(self.F, F, where=better)

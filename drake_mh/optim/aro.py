@@ -112,5 +112,5 @@ class ARO(Optimizer):
             self.X, self.F = X.copy(), F.copy()
             return
         better = F < self.F                                                         # ESM (20)
-        self.X[better] = X[better]
-        self.F[better] = F[better]
+        np.copyto(self.X, X, where=better[:, None])
+        np.copyto(self.F, F, where=better)

@@ -434,6 +434,18 @@ class Optimizer(abc.ABC):
         """For each ``i < n`` a uniformly random index ``j != i`` (vectorized), shape ``(n,)``."""
         return (np.arange(n) + 1 + self.randint(n - 1, n)) % n
 
+    def donors(self, n: int, pool: int, k: int = 3, exclude_self: bool = True) -> np.ndarray:
+        """``(n, k)`` indices into ``range(pool)``, distinct within each row (rejection
+        sampling, vectorized); with ``exclude_self`` row ``i`` never contains ``i``."""
+        r = self.randint(pool, (n, k))
+        own = np.arange(n)[:, None] if exclude_self else None
+        while True:
+            S = np.sort(r, axis=1) if own is None else np.sort(np.concatenate([own, r], axis=1), axis=1)
+            bad = (S[:, 1:] == S[:, :-1]).any(axis=1)
+            if not bad.any():
+                return r
+            r[bad] = self.randint(pool, (int(bad.sum()), k))
+
     def randint(self, high: int, size) -> np.ndarray:
         """Uniform integers in ``[0, high)`` (``floor(u high)``; 3x faster than ``integers``)."""
         return (self.rng.random(size) * high).astype(np.intp)

@@ -111,11 +111,11 @@ class BAT(Optimizer):
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         if self.X is None:
-            self.X, self.F = X, F.copy()
+            self.X, self.F = X.copy(), F.copy()
             return
         self._t += 1
         acc = (F < self.F) & (self._accept_draw < self.A)                   # eq. (6)
-        self.X[acc] = X[acc]
-        self.F[acc] = F[acc]
+        np.copyto(self.X, X, where=acc[:, None])
+        np.copyto(self.F, F, where=acc)
         self.A[acc] *= self.config.alpha
         self.r[acc] = self.r0[acc] * (1.0 - np.exp(-self.config.gamma * self._t))

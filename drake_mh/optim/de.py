@@ -64,23 +64,12 @@ class DE(Optimizer):
     def _start(self) -> None:
         self.X = None
 
-    def _donors(self, P: int) -> np.ndarray:
-        """``(P, 3)`` indices, distinct within a row and different from the row index."""
-        i = np.arange(P)
-        r = self.randint(P, (P, 3))
-        while True:
-            bad = (r[:, 0] == i) | (r[:, 1] == i) | (r[:, 2] == i) | (r[:, 0] == r[:, 1]) \
-                | (r[:, 0] == r[:, 2]) | (r[:, 1] == r[:, 2])
-            if not bad.any():
-                return r
-            r[bad] = self.randint(P, (int(bad.sum()), 3))
-
     def _ask(self) -> np.ndarray:
         if self.X is None:
             return self.initial_population()
         c, P, D = self.config, self.pop_size, self.dim
         X = self.X
-        r = self._donors(P)
+        r = self.donors(P, P)
         V = X[r[:, 0]] + c.F * (X[r[:, 1]] - X[r[:, 2]])
         cross = self.rng.random((P, D)) <= c.CR
         cross[np.arange(P), self.randint(D, P)] = True
@@ -96,5 +85,5 @@ class DE(Optimizer):
             self.X, self.F = X.copy(), F.copy()
             return
         better = F <= self.F
-        self.X[better] = X[better]
-        self.F[better] = F[better]
+        np.copyto(self.X, X, where=better[:, None])
+        np.copyto(self.F, F, where=better)

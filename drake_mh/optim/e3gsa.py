@@ -89,8 +89,7 @@ class E3GSA(GSA):
         n_jump = math.ceil(c.p_explore * (1.0 - self.progress()) * N)
         if n_jump > 0:
             worst = np.argsort(self.F, kind="stable")[N - n_jump:]
-            # three distinct donors per jumping agent (vectorized: sort random keys)
-            donors = np.argsort(self.rng.random((n_jump, N)), axis=1)[:, :3]
+            donors = self.donors(n_jump, N, exclude_self=False)   # three distinct agents each
             Xn[worst] = self.X[donors[:, 0]] + c.F * (self.X[donors[:, 1]] - self.X[donors[:, 2]])
             self.V[worst] = 0.0
         return self.reinit(Xn)

@@ -134,7 +134,7 @@ class GA(Optimizer):
                 e = 1.0 / (c.eta_m + 1.0)
                 delta = np.where(u < 0.5, (2.0 * u) ** e - 1.0, 1.0 - (2.0 * (1.0 - u)) ** e)
                 R = np.clip(body + delta * self.width, self.lower, self.upper)
-            body[mask] = R[mask]
+            np.copyto(body, R, where=mask)
         changed = np.zeros(N, dtype=bool)
         changed[k:] = True
         changed[1:] |= mask.any(axis=1)

@@ -102,14 +102,27 @@ class GSA(Optimizer):
         M = masses(self.F)
         k = int(round(N * (c.final_fraction + (1.0 - tau) * (1.0 - c.final_fraction))))
         k = min(max(k, 1), N)
-        kbest = np.argsort(self.F, kind="stable")[:k] if k < N else np.arange(N)
-        Xc = self.X - self.X[kbest[0]]                   # relative coordinates: less cancellation
-        Xk = Xc[kbest]
+        Xc = self.X - self.X[int(np.argmin(self.F))]      # relative coordinates: less cancellation
         sq = np.einsum("nd,nd->n", Xc, Xc)
-        R2 = sq[:, None] + sq[kbest][None, :] - 2.0 * (Xc @ Xk.T)      # |x_i - x_j|^2 (N, k)
-        R = np.sqrt(np.maximum(R2, 0.0, out=R2), out=R2)
-        W = self.rng.random((N, k)) * (G * M[kbest]) / (R + _EPS)
-        W[kbest, np.arange(k)] = 0.0                                    # j != i
+        W = self.rng.random((N, k))
+        if k < N:
+            kbest = np.argsort(self.F, kind="stable")[:k]
+            Xk, sqk, Mk = Xc[kbest], sq[kbest], M[kbest]
+        else:                                               # every agent attracts (early phase)
+            kbest, Xk, sqk, Mk = None, Xc, sq, M
+        R = Xc @ Xk.T                                       # |x_i - x_j|^2 = |x_i|^2 + |x_j|^2 - 2 x_i.x_j
+        R *= -2.0
+        R += sq[:, None]
+        R += sqk
+        np.maximum(R, 0.0, out=R)
+        np.sqrt(R, out=R)
+        R += _EPS
+        W *= G * Mk
+        W /= R
+        if kbest is None:
+            np.fill_diagonal(W, 0.0)                        # j != i
+        else:
+            W[kbest, np.arange(k)] = 0.0
         # a_i = sum_j W_ij (x_j - x_i) = (W Xk)_i - (sum_j W_ij) x_i
         return W @ Xk - W.sum(axis=1)[:, None] * Xc
 

@@ -96,8 +96,8 @@ class PSO(Optimizer):
             return
         self.Xc = X
         better = F < self.Pf
-        self.Pb[better] = X[better]
-        self.Pf[better] = F[better]
+        np.copyto(self.Pb, X, where=better[:, None])
+        np.copyto(self.Pf, F, where=better)
 
     def population(self):
         """Personal bests ``(P, D)`` and their values ``(P,)``."""
