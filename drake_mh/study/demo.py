@@ -60,7 +60,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     """``drake-mh demo``."""
     from drake_mh.cli import _smoke
     from drake_mh.study.commands import run_and_print
-    from drake_mh.study.report.document import Document, Heading, Link, Paragraph, Preformatted, to_html, to_markdown
+    from drake_mh.study.report.document import Document, Heading, Link, Markdown, Paragraph, to_html, to_markdown
     from drake_mh.study.store import write_atomic
 
     if args.workers is not None and args.workers < 0:
@@ -90,7 +90,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         results.append(result)
         doc.add(Heading(name))
         if result.summary.strip():
-            doc.add(Preformatted(result.summary))
+            doc.add(Markdown(result.summary))
         line = f"{len(result.records)}/{result.n_cases} cases"
         line += f", {result.n_errors} raised" if result.n_errors else ""
         doc.add(Paragraph(line + "."))

@@ -94,6 +94,7 @@ def _meta(study: Study, specs: list[CaseSpec], quick: bool, seed: int, source: A
         "grid_keys": list(specs[0].params),
         "instance_keys": list(study.instance_keys(quick)),
         "n_cases": len(specs),
+        "methods": list(dict.fromkeys(str(s.params.get(study.fields.method, "(all)")) for s in specs)),
         "cases_digest": digest,
         "fields": study.fields.to_dict(),
         "source": getattr(source, "path", None) or study.source_file,

@@ -131,3 +131,18 @@ def test_meshcat_static_html_is_embedded_offline(tmp_path):
     index = write_report(tmp_path).read_text()
     assert index.count("<iframe") == 2
     assert external_resources(index) == []
+
+
+def test_study_markdown_summary_renders_as_html_tables():
+    from drake_mh.study.report.document import Document, Heading, Markdown, Paragraph, Preformatted, Table, markdown_blocks, to_html
+
+    text = "### Ranks\n\nsome words\nmore words\n\n| a | b |\n|---|---|\n| 1 | x \\| y |\n\n```\ncode | here\n```\n"
+    blocks = markdown_blocks(text)
+    assert blocks[0] == Heading("Ranks", 3)
+    assert blocks[1] == Paragraph("some words more words")
+    assert blocks[2] == Table(["a", "b"], [["1", "x | y"]])
+    assert blocks[3] == Preformatted("code | here")
+    doc = Document("t")
+    doc.add(Markdown(text))
+    page = to_html(doc)
+    assert "<table>" in page and "<td>x | y</td>" in page and "<h3>Ranks</h3>" in page

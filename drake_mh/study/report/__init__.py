@@ -11,7 +11,7 @@ import os
 from pathlib import Path
 
 from drake_mh.study.report.data import ReportData, method_of
-from drake_mh.study.report.document import Animation, Document, Heading, Paragraph, Preformatted, to_html, to_markdown
+from drake_mh.study.report.document import Animation, Document, Heading, Markdown, Paragraph, to_html, to_markdown
 from drake_mh.study.report.plots import FigureFile, box_figure, convergence_figure, trajectory_figure
 from drake_mh.study.report.stats import RankStats, rank_stats
 from drake_mh.study.report.tables import Table, failures_table, fmt, method_table
@@ -109,7 +109,7 @@ def build_document(data: ReportData) -> Document:
     )
     if data.summary.strip():
         doc.add(Heading("Summary"))
-        doc.add(Preformatted(data.summary))
+        doc.add(Markdown(data.summary))
     doc.add(Heading("Methods"))
     doc.add(method_table(data))
     if data.fields.rank:

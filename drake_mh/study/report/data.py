@@ -70,7 +70,7 @@ class ReportData:
             instance_keys = tuple(meta["instance_keys"])
         else:
             instance_keys = tuple(k for k in grid_keys if k != fields.method)
-        methods: list[str] = []
+        methods: list[str] = [m for m in meta.get("methods", []) if any(method_of(r, fields) == m for r in records)]
         for record in records:
             name = method_of(record, fields)
             if name not in methods:

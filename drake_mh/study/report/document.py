@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import base64
 import html
+import re
 from dataclasses import dataclass, field
 
 from drake_mh.study.report.plots import FigureFile
@@ -50,6 +51,14 @@ class Animation:
 
 
 @dataclass(frozen=True)
+class Markdown:
+    """Markdown text from a study (its summary): verbatim in ``report.md``; in HTML, headings,
+    pipe tables, fenced code and paragraphs are rendered (inline markup shown as is)."""
+
+    text: str
+
+
+@dataclass(frozen=True)
 class Link:
     """A link to a local file (relative path), e.g. another report."""
 
@@ -81,7 +90,7 @@ def to_markdown(doc: Document) -> str:
             lines += ["#" * block.level + " " + block.text, ""]
         elif isinstance(block, Paragraph):
             lines += [block.text, ""]
-        elif isinstance(block, Preformatted):
+        elif isinstance(block, (Preformatted, Markdown)):
             lines += [block.text.rstrip(), ""]
         elif isinstance(block, Table):
             lines.append("| " + " | ".join(_md_cell(h) for h in block.headers) + " |")
@@ -112,9 +121,64 @@ iframe{width:100%;height:520px;border:1px solid #ccc}
 """
 
 
+def _split_row(line: str) -> list[str]:
+    cells = re.split(r"(?<!\\)\|", line.strip().strip("|"))
+    return [c.strip().replace("\\|", "|") for c in cells]
+
+
+def markdown_blocks(text: str) -> list:
+    """Parses the markdown subset studies write: ``#`` headings, pipe tables (a row of
+    ``---`` after the header), fenced code and paragraphs; returns report blocks."""
+    blocks: list = []
+    lines = text.splitlines()
+    i = 0
+    paragraph: list[str] = []
+
+    def flush() -> None:
+        if paragraph:
+            blocks.append(Paragraph(" ".join(paragraph)))
+            paragraph.clear()
+
+    while i < len(lines):
+        line = lines[i]
+        stripped = line.strip()
+        if stripped.startswith("```"):
+            flush()
+            code = []
+            i += 1
+            while i < len(lines) and not lines[i].strip().startswith("```"):
+                code.append(lines[i])
+                i += 1
+            blocks.append(Preformatted("\n".join(code)))
+        elif re.match(r"^#{1,6}\s", stripped):
+            flush()
+            hashes = len(stripped) - len(stripped.lstrip("#"))
+            blocks.append(Heading(stripped[hashes:].strip(), level=min(6, max(3, hashes))))
+        elif stripped.startswith("|") and i + 1 < len(lines) and re.match(r"^\|?\s*:?-{3,}", lines[i + 1].strip()):
+            flush()
+            headers = _split_row(stripped)
+            rows = []
+            i += 2
+            while i < len(lines) and lines[i].strip().startswith("|"):
+                rows.append(_split_row(lines[i]))
+                i += 1
+            blocks.append(Table(headers, rows))
+            continue
+        elif not stripped:
+            flush()
+        else:
+            paragraph.append(stripped)
+        i += 1
+    flush()
+    return blocks
+
+
 def to_html(doc: Document) -> str:
     """Renders the document as one self-contained HTML page."""
     esc = html.escape
+    blocks = []
+    for block in doc.blocks:
+        blocks.extend(markdown_blocks(block.text) if isinstance(block, Markdown) else [block])
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
@@ -122,7 +186,7 @@ def to_html(doc: Document) -> str:
         f"<title>{esc(doc.title)}</title><style>{_CSS}</style></head><body>",
         f"<h1>{esc(doc.title)}</h1>",
     ]
-    for block in doc.blocks:
+    for block in blocks:
         if isinstance(block, Heading):
             level = min(6, max(2, block.level))
             parts.append(f"<h{level}>{esc(block.text)}</h{level}>")
