@@ -420,7 +420,8 @@ class Optimizer(abc.ABC):
         """Mirrors out-of-box components back into the box (repeatedly, so any distance works)."""
         Y = np.mod(X - self.lower, 2.0 * self.width)
         Y = np.where(Y > self.width, 2.0 * self.width - Y, Y)
-        return self.lower + Y
+        R = np.minimum(np.maximum(self.lower + Y, self.lower), self.upper)
+        return np.where((X < self.lower) | (X > self.upper), R, X)   # inside: untouched
 
     def reinit(self, X: np.ndarray) -> np.ndarray:
         """Replaces out-of-box components by uniform random values in their range (in place)."""

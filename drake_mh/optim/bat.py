@@ -20,6 +20,8 @@ Choices, and defects of the popular demo code that are *not* copied:
   ``Qmin + (Qmin - Qmax) rand`` sign error (a negative frequency) is not reproduced.
 * Loudness ``A_i`` and pulse rate ``r_i`` are updated per bat by eq. (6) whenever a move
   is accepted (the demo never updates them). ``t`` counts generations.
+* A move is accepted when it improves the bat's *own* value (Yang's reference code); the
+  paper's pseudocode compares with the global best f(x*), which rejects almost every move.
 * Eq. (5) has an absolute step ``eps <A>``; since the box may be ``[-100, 100]`` or
   ``[-1, 1]``, the step is scaled by ``local_scale`` times the box width.
 * Velocities are clamped to the box width (no clamp in the paper; avoids overflow).
