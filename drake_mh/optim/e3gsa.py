@@ -84,11 +84,18 @@ class E3GSA(GSA):
         c, N, D = self.config, self.pop_size, self.dim
         a = self.acceleration()
         R = self.rng.random((3, N, D))
-        self.V = R[0] * self.V + c.c1 * R[1] * a + c.c2 * R[2] * (self.best_x - self.X)
-        Xn = self.X + self.V
+        V = self.V
+        V *= R[0]                                        # w v, w ~ U(0, 1)
+        R[1] *= c.c1
+        R[1] *= a
+        V += R[1]                                        # + c1 r1 a
+        R[2] *= c.c2
+        R[2] *= self.best_x - self.X
+        V += R[2]                                        # + c2 r2 (g - x)
+        Xn = self.X + V
         n_jump = math.ceil(c.p_explore * (1.0 - self.progress()) * N)
         if n_jump > 0:
-            worst = np.argsort(self.F, kind="stable")[N - n_jump:]
+            worst = np.argpartition(self.F, N - n_jump)[N - n_jump:] if n_jump < N else np.arange(N)
             donors = self.donors(n_jump, N, exclude_self=False)   # three distinct agents each
             Xn[worst] = self.X[donors[:, 0]] + c.F * (self.X[donors[:, 1]] - self.X[donors[:, 2]])
             self.V[worst] = 0.0
