@@ -45,6 +45,7 @@ __all__ = [
     "TestFunction",
     "cec2017",
     "make",
+    "official_cec2017_data",
     "random_rotation",
     "random_shift",
 ]
@@ -275,6 +276,12 @@ def _opfunu_data_dir() -> Path | None:
 
     d = Path(_op.__file__).parent / "cec_based" / "data_2017"
     return d if d.is_dir() else None
+
+
+def official_cec2017_data(dim: int) -> bool:
+    """Whether the organisers' CEC 2017 data files for dimension ``dim`` are installed."""
+    folder = _opfunu_data_dir()
+    return folder is not None and (folder / f"M_1_D{dim}.txt").is_file()
 
 
 def cec2017(number: int, dim: int, data: str = "auto", seed: int = 0) -> TestFunction:
