@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
@@ -51,6 +52,32 @@ class GSAConfig:
             raise InvalidArgument("gsa: G0 must be > 0 and alpha >= 0")
         if not (0 < self.final_fraction <= 1):
             raise InvalidArgument("gsa: final_fraction must be in (0, 1]")
+
+
+@numba.njit(cache=True)
+def _acceleration_kernel(X, attractors, M, W, G, eps):
+    """Eqs. (7)-(10): ``a_i = sum_j W_ij G M_j (x_j - x_i) / (|x_j - x_i| + eps)``, j != i.
+
+    ``attractors (k,)`` are the Kbest agents (column j of ``W (N, k)`` belongs to agent
+    ``attractors[j]``). A compiled double loop: for N = 50 it costs a few microseconds where
+    the equivalent numpy expression costs tens (per-call overhead).
+    """
+    N, D = X.shape
+    a = np.zeros((N, D))
+    diff = np.empty(D)
+    for i in range(N):
+        for jj in range(attractors.shape[0]):
+            j = attractors[jj]
+            if j == i:
+                continue
+            r2 = 0.0
+            for d in range(D):
+                diff[d] = X[j, d] - X[i, d]
+                r2 += diff[d] * diff[d]
+            w = W[i, jj] * G * M[j] / (np.sqrt(r2) + eps)
+            for d in range(D):
+                a[i, d] += w * diff[d]
+    return a
 
 
 def masses(F: np.ndarray) -> np.ndarray:
@@ -102,29 +129,9 @@ class GSA(Optimizer):
         M = masses(self.F)
         k = int(round(N * (c.final_fraction + (1.0 - tau) * (1.0 - c.final_fraction))))
         k = min(max(k, 1), N)
-        Xc = self.X - self.X[int(np.argmin(self.F))]      # relative coordinates: less cancellation
-        sq = np.einsum("nd,nd->n", Xc, Xc)
         W = self.rng.random((N, k))
-        if k < N:
-            kbest = np.argsort(self.F, kind="stable")[:k]
-            Xk, sqk, Mk = Xc[kbest], sq[kbest], M[kbest]
-        else:                                               # every agent attracts (early phase)
-            kbest, Xk, sqk, Mk = None, Xc, sq, M
-        R = Xc @ Xk.T                                       # |x_i - x_j|^2 = |x_i|^2 + |x_j|^2 - 2 x_i.x_j
-        R *= -2.0
-        R += sq[:, None]
-        R += sqk
-        np.maximum(R, 0.0, out=R)
-        np.sqrt(R, out=R)
-        R += _EPS
-        W *= G * Mk
-        W /= R
-        if kbest is None:
-            np.fill_diagonal(W, 0.0)                        # j != i
-        else:
-            W[kbest, np.arange(k)] = 0.0
-        # a_i = sum_j W_ij (x_j - x_i) = (W Xk)_i - (sum_j W_ij) x_i
-        return W @ Xk - W.sum(axis=1)[:, None] * Xc
+        attractors = np.argsort(self.F, kind="stable")[:k] if k < N else np.arange(N)
+        return _acceleration_kernel(self.X, attractors, M, W, G, _EPS)
 
     def _ask(self) -> np.ndarray:
         if self.X is None:
