@@ -220,3 +220,26 @@ class AskTellError(DrakeMhError, RuntimeError):
 
 class InvalidObjective(DrakeMhError, ValueError):
     """An objective returned something other than one float per row of the population ``(P,)``."""
+
+
+# --- visualisation (drake_mh.viz) --------------------------------------------------------------
+
+
+class InvalidTrajectory(DrakeMhError, ValueError):
+    """Sampled trajectory data are inconsistent: times not increasing, ``len(t) != len(Q)`` ...
+
+    Attributes:
+        name: the offending argument (``t``, ``Q``, ``trajectory`` ...).
+        expected: the expected shape or kind, if known.
+        got: what was received, if known.
+    """
+
+    def __init__(self, message: str, name: str = "t", expected: object = None, got: object = None):
+        self.name = name
+        self.expected = expected
+        self.got = got
+        super().__init__(message)
+
+
+class VisualizationError(DrakeMhError, RuntimeError):
+    """The Meshcat viewer cannot do what was asked (server cannot start, wrong thread ...)."""

@@ -1,0 +1,110 @@
+"""The Meshcat server shared by every view: started once, bound to localhost only.
+
+Drake's ``Meshcat`` is a websocket + http server (no browser is needed to use it). Starting one
+takes a port, and Drake requires every call on an instance to come from the thread that created
+it (a call from another thread ends the process with ``SystemExit``). So drake_mh keeps **one
+instance per thread that uses it** — in practice one per process, created on first use in the
+main thread — and refuses, with a clear error, an instance used from the wrong thread. Drake
+also aborts the process when an instance is *destroyed* by another thread than its creator: a
+:class:`~drake_mh.viz.View` made in a worker thread must not outlive that thread.
+
+Unlike ``pydrake.geometry.StartMeshcat()`` (which listens on every interface by default), the
+server here listens on ``localhost`` only; to view it from another machine, forward the port
+(``ssh -L 7000:localhost:7000 host``).
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+import threading
+import weakref
+
+from drake_mh.errors import InvalidArgument, VisualizationError
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["get_meshcat", "close_meshcat", "meshcat_url", "check_thread"]
+
+DEFAULT_HOST = "localhost"
+"""Interface the server listens on; never ``*`` (all interfaces)."""
+
+_local = threading.local()
+_owner: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # meshcat -> creating thread id
+
+
+def get_meshcat(port: int | None = None, *, announce: bool = True):
+    """The Meshcat server of the calling thread, started on first use.
+
+    Args:
+        port: http port; ``None`` (default) takes the first free port from 7000 to 7999,
+            ``0`` an arbitrary free port. Once the server runs, ``None`` or its own port
+            returns it; another port raises (call :func:`close_meshcat` first).
+        announce: print the URL to stdout when the server starts.
+
+    Returns:
+        A ``pydrake.geometry.Meshcat`` listening on ``localhost``.
+
+    Raises:
+        InvalidArgument: ``port`` is not ``None``, 0 or 1024-65535, or differs from the
+            running server's port.
+        VisualizationError: the server cannot start (e.g. the port is taken).
+    """
+    if port is not None:
+        if isinstance(port, bool) or not isinstance(port, int) or not (port == 0 or 1024 <= port <= 65535):
+            raise InvalidArgument(f"port must be None (first free from 7000), 0 (any free port) or "
+                                  f"1024-65535, got {port!r}")
+    meshcat = getattr(_local, "meshcat", None)
+    if meshcat is not None:
+        if port not in (None, 0) and port != meshcat.port():
+            raise InvalidArgument(
+                f"a Meshcat server already runs at {meshcat.web_url()} in this thread; use it "
+                f"(port=None) or call drake_mh.viz.close_meshcat() before asking for port {port}")
+        return meshcat
+    from pydrake.geometry import Meshcat, MeshcatParams
+
+    params = MeshcatParams()
+    params.host = DEFAULT_HOST
+    params.port = port
+    try:
+        meshcat = Meshcat(params)
+    except (RuntimeError, SystemExit) as exc:  # Drake throws when no port can be bound
+        where = f"port {port}" if port else "any port from 7000 to 7999"
+        raise VisualizationError(
+            f"cannot start Meshcat on localhost ({where}): {exc}; free the port, pass another "
+            "port, or reuse the running server with drake_mh.viz.get_meshcat()") from exc
+    _local.meshcat = meshcat
+    _owner[meshcat] = threading.get_ident()
+    logger.info("Meshcat listening at %s", meshcat.web_url())
+    if announce:
+        print(f"drake_mh.viz: Meshcat at {meshcat.web_url()} (open it in a browser)", file=sys.stdout)
+    return meshcat
+
+
+def meshcat_url(meshcat=None) -> str:
+    """URL (``http://localhost:PORT``) of ``meshcat`` or of this thread's server (started if needed)."""
+    return (meshcat if meshcat is not None else get_meshcat()).web_url()
+
+
+def close_meshcat() -> None:
+    """Forget this thread's server; it stops (freeing its port) once no view refers to it.
+
+    The next :func:`get_meshcat` starts a new server.
+    """
+    meshcat = getattr(_local, "meshcat", None)
+    if meshcat is not None:
+        _owner.pop(meshcat, None)
+        del _local.meshcat
+
+
+def check_thread(meshcat) -> None:
+    """Raise :class:`VisualizationError` if ``meshcat`` was created by another thread.
+
+    Drake would otherwise end the process (``SystemExit``) on the first call.
+    """
+    owner = _owner.get(meshcat)
+    if owner is not None and owner != threading.get_ident():
+        raise VisualizationError(
+            "this Meshcat server was started by another thread and Drake only accepts calls from "
+            "that thread; create the view in the thread that uses it (drake_mh.viz.get_meshcat() "
+            "gives each thread its own server) or use a process pool")

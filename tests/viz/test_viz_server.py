@@ -1,0 +1,86 @@
+"""The shared Meshcat server: localhost only, reused, clear errors, thread ownership."""
+
+from __future__ import annotations
+
+import threading
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+from drake_mh.errors import InvalidArgument, VisualizationError
+from drake_mh.viz import View, close_meshcat, get_meshcat, meshcat_url
+
+
+def test_server_is_reused_and_on_localhost(meshcat):
+    assert get_meshcat() is meshcat
+    assert get_meshcat(port=meshcat.port()) is meshcat
+    assert meshcat_url() == meshcat.web_url() == f"http://localhost:{meshcat.port()}"
+
+
+def test_server_serves_the_viewer_offline(meshcat):
+    with urllib.request.urlopen(meshcat.web_url(), timeout=10) as response:
+        page = response.read()
+    assert response.status == 200
+    assert b"meshcat" in page.lower()
+
+
+def _listening_addresses(port: int) -> list[str]:
+    """Local addresses (hex, as in /proc/net/tcp*) of the sockets listening on ``port``."""
+    out = []
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        path = Path(table)
+        if not path.exists():
+            continue
+        for line in path.read_text().splitlines()[1:]:
+            fields = line.split()
+            address, state = fields[1], fields[3]
+            host, hex_port = address.rsplit(":", 1)
+            if state == "0A" and int(hex_port, 16) == port:  # 0A = LISTEN
+                out.append(host)
+    return out
+
+
+def test_server_listens_on_loopback_only(meshcat):
+    if not Path("/proc/net/tcp").exists():
+        pytest.skip("needs Linux /proc/net/tcp to list listening sockets")
+    hosts = _listening_addresses(meshcat.port())
+    assert hosts, "the Meshcat port is not listening"
+    loopback = {"0100007F", "00000000000000000000000001000000"}  # 127.0.0.1, ::1
+    assert set(hosts) <= loopback, f"Meshcat listens on {hosts}, not only on loopback"
+
+
+@pytest.mark.parametrize("port", [-1, 80, 70000, 1.5, "7000", True])
+def test_bad_port_is_refused(meshcat, port):
+    with pytest.raises(InvalidArgument, match="port"):
+        get_meshcat(port=port)
+
+
+def test_other_port_than_the_running_server_is_refused(meshcat):
+    other = 65000 if meshcat.port() != 65000 else 65001
+    with pytest.raises(InvalidArgument, match="already runs"):
+        get_meshcat(port=other)
+
+
+def test_use_from_another_thread_raises_instead_of_exiting(meshcat, planar2r):
+    found = {}
+
+    def worker():
+        # Drake also aborts if a server is destroyed by another thread than its creator, so
+        # nothing created here may outlive the thread: keep only plain values.
+        try:
+            View(planar2r, meshcat=meshcat)
+        except VisualizationError as exc:
+            found["error"] = str(exc)
+        own = get_meshcat(port=0, announce=False)  # the thread's own server works
+        view = View(planar2r, meshcat=own)
+        found["own_is_shared"] = own is meshcat
+        found["drawn"] = own.HasPath(view.link_paths()["link1"])
+        del view, own
+        close_meshcat()
+
+    thread = threading.Thread(target=worker)
+    thread.start()
+    thread.join(timeout=60)
+    assert "another thread" in found["error"]
+    assert found["own_is_shared"] is False and found["drawn"] is True
