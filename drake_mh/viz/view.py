@@ -82,6 +82,7 @@ class View:
         self.geometry = RobotGeometry(robot, role)
         self._ghosts: dict[str, str] = {}
         self._scene = None
+        self._scene_names: set[str] = set()
         if clear:
             self.clear()
         self.geometry.draw(self.meshcat, self.robot_path)
@@ -112,6 +113,7 @@ class View:
         self.meshcat.DeleteRecording()
         self.meshcat.PublishRecording()  # an empty animation replaces the published one
         self._ghosts.clear()
+        self._scene_names = set()
 
     def set_q(self, q) -> View:
         """Pose the robot at ``q (nq,)``; returns the view (calls chain)."""
@@ -174,8 +176,29 @@ class View:
             path = self.obstacle_path(name)
             self.meshcat.SetObject(path, obstacle.shape.to_drake(), c)
             self.meshcat.SetTransform(path, _transform(obstacle.X_WO, f"obstacle {name!r} pose"))
-        self._scene = scene
+        self._scene, self._scene_names = scene, set(scene.obstacles)
         return list(scene.obstacles)
+
+    def update_obstacles(self, scene=None, colour=COLOURS["obstacle"]) -> None:
+        """Move the drawn obstacles to the scene's current poses (live views: cheap, no redraw).
+
+        Obstacles added to the scene since are drawn, removed ones deleted.
+
+        Args:
+            scene: the scene; default the one last given to :meth:`add_obstacles`.
+        """
+        scene = scene if scene is not None else self._scene
+        if scene is None:
+            raise InvalidArgument("no scene drawn yet: call add_obstacles(scene) first or pass the scene")
+        drawn = self._scene_names
+        current = scene.obstacles
+        for name in set(drawn) - set(current):
+            self.meshcat.Delete(self.obstacle_path(name))
+        for name, obstacle in current.items():
+            if name not in drawn:
+                self.meshcat.SetObject(self.obstacle_path(name), obstacle.shape.to_drake(), rgba(colour, "colour"))
+            self.meshcat.SetTransform(self.obstacle_path(name), _transform(obstacle.X_WO, f"obstacle {name!r} pose"))
+        self._scene, self._scene_names = scene, set(current)
 
     def obstacle_path(self, name: str) -> str:
         """Meshcat path of an obstacle."""

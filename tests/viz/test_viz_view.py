@@ -123,3 +123,17 @@ def test_drawing_errors(view, panda, scene):
         View(panda, meshcat=view.meshcat, role="visual")
     with pytest.raises(InvalidArgument, match="scene"):
         show(panda, panda.home, distances=True, meshcat=view.meshcat)
+
+
+def test_update_obstacles_follows_the_scene(view, panda, scene):
+    with pytest.raises(InvalidArgument, match="add_obstacles"):
+        view.update_obstacles()
+    view.add_obstacles(scene)
+    scene.step(2.0)  # the ball moves by 2 s x (0, -0.1, 0) m/s
+    scene.remove("box")
+    scene.add("wall", drake_mh.Box((0.05, 1.0, 1.0)), [0.8, 0.0, 0.5])
+    view.update_obstacles()
+    assert not view.meshcat.HasPath(view.obstacle_path("box"))
+    assert view.meshcat.HasPath(view.obstacle_path("wall"))
+    X = viz_html.transforms(view.html())
+    np.testing.assert_allclose(X[view.obstacle_path("ball")][:3, 3], [0.45, 0.05, 0.55], atol=1e-12)
