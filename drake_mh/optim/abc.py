@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
@@ -76,17 +77,8 @@ class ABC(Optimizer):
 
     def _neighbours(self, idx: np.ndarray) -> np.ndarray:
         """Eq. (1) candidates for the sources ``idx (n,)``: one coordinate moved each."""
-        n = len(idx)
-        U = self.rng.random((3, n))
-        k = (idx + 1 + (U[0] * (self.SN - 1)).astype(np.intp)) % self.SN          # k != i
-        j = (U[1] * self.dim).astype(np.intp)
-        phi = 2.0 * U[2] - 1.0
-        V = self.X.copy() if idx is self._all else self.X[idx]
-        rows = self._all if n == self.SN else np.arange(n)
-        xj = V[rows, j]
-        vj = xj + phi * (xj - self.X[k, j])
-        V[rows, j] = np.minimum(np.maximum(vj, self.lower[j]), self.upper[j])
-        return V
+        U = self.rng.random((3, len(idx)))
+        return _neighbours_kernel(self.X, idx, U, self.lower, self.upper)
 
     def _ask(self) -> np.ndarray:
         if self.phase == "init":
@@ -101,23 +93,7 @@ class ABC(Optimizer):
         return self._neighbours(self._idx)
 
     def _greedy(self, idx: np.ndarray, V: np.ndarray, F: np.ndarray) -> None:
-        if idx is self._all:                           # employed bees: one candidate per source
-            better = F < self.F
-            np.copyto(self.X, V, where=better[:, None])
-            np.copyto(self.F, F, where=better)
-            self.trial += 1
-            self.trial[better] = 0
-            return
-        # onlookers: the best candidate per source competes with it (ties: the first one)
-        best = np.full(self.SN, np.inf)
-        np.minimum.at(best, idx, F)
-        cand = np.flatnonzero((F == best[idx]) & (F < self.F[idx]))
-        src, first = np.unique(idx[cand], return_index=True) if len(cand) > 1 else (idx[cand], slice(None))
-        cand = cand[first]
-        self.trial += np.bincount(idx, minlength=self.SN)   # every onlooker visit counts ...
-        self.X[src] = V[cand]
-        self.F[src] = F[cand]
-        self.trial[src] = 0                                 # ... unless its source improved
+        _greedy_kernel(self.X, self.F, self.trial, idx, V, F, idx is self._all)
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         if self.phase == "init":
@@ -139,3 +115,61 @@ class ABC(Optimizer):
             self.phase = "scout"
         else:
             self.phase = "employed"
+
+
+@numba.njit(cache=True)
+def _neighbours_kernel(X, idx, U, lower, upper):
+    """Eq. (1): ``v_ij = x_ij + phi (x_ij - x_kj)`` for one random j and k != i per source.
+
+    ``U (3, n)`` holds the uniform draws for k, j and phi of each candidate; the moved
+    coordinate is clipped to the box (the usual ABC bound handling).
+    """
+    SN, D = X.shape
+    n = idx.shape[0]
+    V = np.empty((n, D))
+    for r in range(n):
+        i = idx[r]
+        k = (i + 1 + int(U[0, r] * (SN - 1))) % SN
+        j = int(U[1, r] * D)
+        phi = 2.0 * U[2, r] - 1.0
+        for d in range(D):
+            V[r, d] = X[i, d]
+        v = X[i, j] + phi * (X[i, j] - X[k, j])
+        V[r, j] = min(max(v, lower[j]), upper[j])
+    return V
+
+
+@numba.njit(cache=True)
+def _greedy_kernel(X, FX, trial, idx, V, F, employed):
+    """Greedy selection of Steps 4 and 6, in place on the sources ``X, FX`` and ``trial``.
+
+    Employed bees bring one candidate per source. Onlookers may pick a source several times:
+    every visit counts in ``trial``, and the best of its candidates (the first on ties)
+    competes with the source, resetting its trial counter if it wins.
+    """
+    SN, D = X.shape
+    if employed:
+        for s in range(SN):
+            if F[s] < FX[s]:
+                for d in range(D):
+                    X[s, d] = V[s, d]
+                FX[s] = F[s]
+                trial[s] = 0
+            else:
+                trial[s] += 1
+        return
+    best = np.full(SN, np.inf)
+    pick = np.full(SN, -1)
+    for r in range(idx.shape[0]):
+        s = idx[r]
+        trial[s] += 1
+        if F[r] < best[s]:
+            best[s] = F[r]
+            pick[s] = r
+    for s in range(SN):
+        r = pick[s]
+        if r >= 0 and F[r] < FX[s]:
+            for d in range(D):
+                X[s, d] = V[r, d]
+            FX[s] = F[r]
+            trial[s] = 0

@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
@@ -84,15 +85,7 @@ class E3GSA(GSA):
         c, N, D = self.config, self.pop_size, self.dim
         a = self.acceleration()
         R = self.rng.random((3, N, D))
-        V = self.V
-        V *= R[0]                                        # w v, w ~ U(0, 1)
-        R[1] *= c.c1
-        R[1] *= a
-        V += R[1]                                        # + c1 r1 a
-        R[2] *= c.c2
-        R[2] *= self.best_x - self.X
-        V += R[2]                                        # + c2 r2 (g - x)
-        Xn = self.X + V
+        Xn = _velocity_step(self.X, self.V, a, self.best_x, R, c.c1, c.c2)
         n_jump = math.ceil(c.p_explore * (1.0 - self.progress()) * N)
         if n_jump > 0:
             worst = np.argpartition(self.F, N - n_jump)[N - n_jump:] if n_jump < N else np.arange(N)
@@ -100,3 +93,16 @@ class E3GSA(GSA):
             Xn[worst] = self.X[donors[:, 0]] + c.F * (self.X[donors[:, 1]] - self.X[donors[:, 2]])
             self.V[worst] = 0.0
         return self.reinit(Xn)
+
+
+@numba.njit(cache=True)
+def _velocity_step(X, V, a, g, R, c1, c2):
+    """``v <- r0 v + c1 r1 a + c2 r2 (g - x)`` in place on V; returns ``x + v`` (step 2)."""
+    N, D = X.shape
+    Xn = np.empty((N, D))
+    for i in range(N):
+        for d in range(D):
+            v = R[0, i, d] * V[i, d] + c1 * R[1, i, d] * a[i, d] + c2 * R[2, i, d] * (g[d] - X[i, d])
+            V[i, d] = v
+            Xn[i, d] = X[i, d] + v
+    return Xn

@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
@@ -92,17 +93,9 @@ class GA(Optimizer):
     # -- operators ----------------------------------------------------------------------
 
     def _blend(self, M: np.ndarray, Dd: np.ndarray) -> np.ndarray:
-        n, D = M.shape
-        a = self.randint(D, n)
-        b = self.rng.random(n)
-        rows = np.arange(n)
-        right = np.arange(D)[None, :] > a[:, None]
-        C1 = np.where(right, Dd, M)
-        C2 = np.where(right, M, Dd)
-        ma, da = M[rows, a], Dd[rows, a]
-        C1[rows, a] = ma - b * (ma - da)
-        C2[rows, a] = da + b * (ma - da)
-        return np.concatenate([C1, C2])
+        a = self.randint(M.shape[1], M.shape[0])
+        b = self.rng.random(M.shape[0])
+        return _blend_kernel(M, Dd, a, b)
 
     def _sbx(self, M: np.ndarray, Dd: np.ndarray) -> np.ndarray:
         u = self.rng.random(M.shape)
@@ -149,3 +142,26 @@ class GA(Optimizer):
             FY[self._changed] = F
         order = np.argsort(FY, kind="stable")
         self.X, self.F = Y[order], FY[order]
+
+
+@numba.njit(cache=True)
+def _blend_kernel(M, Dd, a, b):
+    """Haupt's single-point blend crossover for parent pairs ``(M[r], Dd[r])``.
+
+    Gene ``a[r]`` blends with weight ``b[r]``; the genes right of it are swapped. Returns
+    the ``2n`` children: first children of every pair, then second children.
+    """
+    n, D = M.shape
+    C = np.empty((2 * n, D))
+    for r in range(n):
+        for d in range(D):
+            if d > a[r]:
+                C[r, d] = Dd[r, d]
+                C[n + r, d] = M[r, d]
+            else:
+                C[r, d] = M[r, d]
+                C[n + r, d] = Dd[r, d]
+        ma, da = M[r, a[r]], Dd[r, a[r]]
+        C[r, a[r]] = ma - b[r] * (ma - da)
+        C[n + r, a[r]] = da + b[r] * (ma - da)
+    return C
