@@ -26,6 +26,9 @@ _LAZY = {
     "dh_to_urdf": "drake_mh.dh",
     "minimize": "drake_mh.optim",
     "OptimizeResult": "drake_mh.optim",
+    "retime": "drake_mh.trajectories",
+    "certify": "drake_mh.trajectories",
+    "Trajectory": "drake_mh.trajectories",
 }
 
 __all__ = ["errors", "__version__", *_LAZY]

@@ -243,3 +243,48 @@ class InvalidTrajectory(DrakeMhError, ValueError):
 
 class VisualizationError(DrakeMhError, RuntimeError):
     """The Meshcat viewer cannot do what was asked (server cannot start, wrong thread ...)."""
+
+
+# --- trajectories (drake_mh.trajectories) -----------------------------------------------------
+
+
+class InfeasibleTrajectory(DrakeMhError, ValueError):
+    """A time parameterization (or a trajectory request) cannot satisfy the limits.
+
+    Raised instead of returning ``None`` (toppra's and Drake's ``Toppra`` convention) so that
+    a failure always says why.
+
+    Attributes:
+        method: the retimer (``"toppra"``, ``"ruckig"``, ``"drake-toppra"`` ...).
+        reason: what made it infeasible and how to fix it.
+    """
+
+    def __init__(self, method: str, reason: str):
+        self.method = method
+        self.reason = reason
+        super().__init__(f"{method}: infeasible trajectory: {reason}")
+
+
+class LimitViolation(DrakeMhError, ValueError):
+    """A trajectory exceeds a joint limit (found by :func:`drake_mh.trajectories.certify`).
+
+    Attributes:
+        joint: name of the joint.
+        quantity: ``"position"``, ``"velocity"``, ``"acceleration"``, ``"jerk"`` or ``"torque"``.
+        time: time [s] of the worst sample.
+        ratio: value / limit at that time (position: normalized distance from the range centre,
+            1 on the limit); ``> 1`` means violated.
+    """
+
+    def __init__(self, joint: str, quantity: str, time: float, ratio: float, tolerance: float = 0.0,
+                 hint: str = ""):
+        self.joint = joint
+        self.quantity = quantity
+        self.time = float(time)
+        self.ratio = float(ratio)
+        self.tolerance = float(tolerance)
+        super().__init__(
+            f"joint {joint!r} exceeds its {quantity} limit at t = {self.time:.6g} s: ratio "
+            f"{self.ratio:.9g} > 1 + {self.tolerance:g}"
+            + (f"; {hint}" if hint else "; slow the trajectory down (scale the limits) or "
+               "use more gridpoints"))

@@ -1,0 +1,120 @@
+"""Geometric joint paths ``q(s)`` through waypoints, for time parameterization.
+
+A joint path is a ``C²`` cubic spline (``scipy.interpolate.CubicSpline``) through the
+waypoints, parameterized by the cumulative joint-space chord length ``s`` [rad] (the usual
+choice: ``|q'(s)| ≈ 1``, so toppra's gridpoints are spread evenly over the motion).
+
+A cubic spline can overshoot between waypoints and leave the joint limits even when every
+waypoint is inside. :func:`joint_path` finds the extrema of every cubic piece exactly (roots of
+its derivative) and, where a piece leaves ``[lower, upper]``, inserts points of the straight
+segment between its two waypoints and refits (the spline then hugs the polyline there) — up to
+``max_refinements`` times; then it raises :class:`~drake_mh.errors.InfeasibleTrajectory`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.interpolate import CubicSpline, PPoly
+
+from drake_mh.errors import InfeasibleTrajectory, InvalidArgument
+
+__all__ = ["joint_path", "piece_extrema", "check_waypoints"]
+
+
+def check_waypoints(waypoints, robot, method: str) -> np.ndarray:
+    """Validate ``waypoints (K, nq)``: numeric, finite, ``K >= 2``, inside the position limits.
+
+    Consecutive duplicates are dropped (they would make zero-length spline pieces).
+
+    Raises:
+        InvalidArgument: wrong shape or non-finite values.
+        InfeasibleTrajectory: a waypoint outside the position limits, or a path of zero length.
+    """
+    try:
+        W = np.array(waypoints, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgument(f"waypoints must be a numeric (K, {robot.nq}) array") from exc
+    if W.ndim != 2 or W.shape[1] != robot.nq or W.shape[0] < 2:
+        raise InvalidArgument(
+            f"waypoints must have shape (K >= 2, {robot.nq}) for {robot.name} (joints "
+            f"{robot.joint_names}), got {W.shape}")
+    if not np.all(np.isfinite(W)):
+        raise InvalidArgument("waypoints contain NaN or inf")
+    outside = ((W < robot.lower) | (W > robot.upper)) & ~robot.continuous
+    if np.any(outside):
+        k, j = np.argwhere(outside)[0]
+        raise InfeasibleTrajectory(
+            method, f"waypoint {k} has joint {robot.joint_names[j]!r} = {W[k, j]:.6g} outside "
+            f"[{robot.lower[j]:.6g}, {robot.upper[j]:.6g}]; move it inside the position limits")
+    keep = np.r_[True, np.any(np.abs(np.diff(W, axis=0)) > 1e-12, axis=1)]
+    W = W[keep]
+    if len(W) < 2:
+        raise InfeasibleTrajectory(method, "all waypoints are equal: there is no motion to time")
+    return W
+
+
+def piece_extrema(spline: PPoly) -> tuple[np.ndarray, np.ndarray]:
+    """Exact minimum and maximum ``(m, nq)`` of every piece of a cubic vector spline."""
+    x, c = spline.x, spline.c  # c: (4, m, nq), highest power first
+    h = np.diff(x)[:, None]
+    a3, a2, a1 = 3 * c[0], 2 * c[1], c[2]  # derivative 3c0 y² + 2c1 y + c2
+    vals = [spline(x[:-1]), spline(x[1:])]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        disc = a2 ** 2 - 4 * a3 * a1
+        sq = np.sqrt(np.maximum(disc, 0.0))
+        cands = [(-a2 + sq) / (2 * a3), (-a2 - sq) / (2 * a3), -a1 / a2]
+    for y in cands:
+        ok = np.isfinite(y) & (y > 0) & (y < h) & (disc >= 0)
+        y = np.where(ok, y, 0.0)
+        v = ((c[0] * y + c[1]) * y + c[2]) * y + c[3]
+        vals.append(np.where(ok, v, vals[0]))
+    V = np.stack(vals)
+    return V.min(axis=0), V.max(axis=0)
+
+
+def joint_path(W: np.ndarray, robot, method: str = "retime", bc_type: str = "not-a-knot",
+               max_refinements: int = 8) -> tuple[CubicSpline, np.ndarray]:
+    """Cubic spline ``s -> q`` through the waypoints, inside the position limits.
+
+    Args:
+        W: ``(K, nq)`` checked waypoints (see :func:`check_waypoints`).
+        robot: gives the position limits.
+        method: name used in error messages.
+        bc_type: scipy ``CubicSpline`` end conditions (``"not-a-knot"``, toppra's default;
+            ``"natural"``; ``"clamped"``).
+        max_refinements: rounds of straight-segment insertion before giving up.
+
+    Returns:
+        ``(spline, s_waypoints)``: the spline and the parameter ``s`` [rad] of each original
+        waypoint (breakpoints include inserted points).
+
+    Raises:
+        InfeasibleTrajectory: the spline still leaves the limits after the refinements.
+    """
+    P = np.array(W, dtype=float)
+    orig = np.ones(len(P), dtype=bool)  # which rows of P are the caller's waypoints
+    lower = np.where(robot.continuous, -np.inf, robot.lower)
+    upper = np.where(robot.continuous, np.inf, robot.upper)
+    for _ in range(max_refinements + 1):
+        s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))]
+        spline = CubicSpline(s, P, bc_type=bc_type)
+        lo, hi = piece_extrema(spline)
+        bad = np.any((lo < lower - 1e-12) | (hi > upper + 1e-12), axis=1)  # (pieces,)
+        if not np.any(bad):
+            return spline, s[orig]
+        # insert the midpoint of the straight segment in every bad piece and its neighbours
+        bad = bad | np.r_[bad[1:], False] | np.r_[False, bad[:-1]]
+        newP, newO = [P[0]], [orig[0]]
+        for i in range(len(P) - 1):
+            if bad[i]:
+                newP.append(0.5 * (P[i] + P[i + 1]))
+                newO.append(False)
+            newP.append(P[i + 1])
+            newO.append(orig[i + 1])
+        P, orig = np.array(newP), np.array(newO)
+    i = int(np.argmax(bad))
+    j = int(np.argmax((lo[i] < lower) | (hi[i] > upper)))
+    raise InfeasibleTrajectory(
+        method, f"the cubic spline through the waypoints leaves joint {robot.joint_names[j]!r}'s "
+        f"position limits between s = {spline.x[i]:.4g} and {spline.x[i + 1]:.4g} even after "
+        f"{max_refinements} refinements; add waypoints or move them away from the limits")

@@ -1,0 +1,523 @@
+"""Time parameterization under joint limits: toppra, ruckig, Drake ``Toppra``.
+
+``retime(waypoints, robot, method=...)`` turns a joint path into a :class:`Trajectory` that is
+**certified** (:func:`~drake_mh.trajectories.certify.certify`, dense sampling) to respect the
+robot's position limits and the requested limits within ``1 + tol``, or raises.
+
+* ``"toppra"`` (Pham & Pham, "A new approach to time-optimal path parameterization based on
+  reachability analysis", IEEE T-RO 2018; the ``toppra`` package): the path is the ``C²``
+  cubic spline of :func:`~drake_mh.trajectories.paths.joint_path`; velocity, acceleration and
+  torque limits (torque ``a(s) s̈ + b(s) ṡ² + c(s)`` with gravity, coefficients from the
+  plant-compiled RNEA of :mod:`~drake_mh.trajectories.dynamics`), seidel solver, interpolation
+  discretization. The time law is built from toppra's gridpoints and ``ṡ`` with constant ``s̈``
+  between gridpoints — the same law as toppra's ``ParametrizeConstAccel``, which does not
+  overshoot (``ParametrizeSpline`` does: +2.5 % velocity, +12 % acceleration measured), but
+  evaluated here with exact chain-rule derivatives.
+* ``"drake-toppra"``: Drake's ``Toppra`` on the same spline and gridpoints (CLP LPs; its torque
+  constraint uses the plant), the cross-check baseline.
+* ``"ruckig"`` (Berscheid & Kröger, RSS 2021; community edition): jerk-limited. The community
+  edition has no intermediate waypoints (they call a cloud API) and ignores position limits,
+  so the path is driven segment by segment, **stopping at every waypoint**, with phase
+  synchronization (all joints on the straight joint-space segment, which stays inside the
+  position box because the box is convex); positions are then checked by certification.
+
+Limits are enforced at the gridpoints by toppra; between them the chain-rule values can exceed
+a limit slightly. Every candidate is certified; on a violation the offending quantity's limit
+is scaled by ``1 / ratio`` (times ``1 - 1e-3``) and the problem is solved again, at most
+``max_attempts`` times, then :class:`~drake_mh.errors.LimitViolation` is raised.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+
+import numpy as np
+from scipy.interpolate import PPoly
+
+from drake_mh.errors import InfeasibleTrajectory, InvalidArgument, LimitViolation, UnknownMethod
+from drake_mh.trajectories.certify import certify
+from drake_mh.trajectories.dynamics import batch_dynamics
+from drake_mh.trajectories.paths import check_waypoints, joint_path
+from drake_mh.trajectories.trajectory import Trajectory, merge_ppolys
+
+__all__ = ["retime", "RETIMERS", "timing_from_gridpoints", "ruckig_state_to_state"]
+
+_log = logging.getLogger(__name__)
+
+RETIMERS = ("toppra", "drake-toppra", "ruckig")
+_DEFAULT_LIMITS = {"toppra": ("velocity", "acceleration", "torque"),
+                   "drake-toppra": ("velocity", "acceleration", "torque"),
+                   "ruckig": ("velocity", "acceleration", "jerk")}
+_SUPPORTED = {"toppra": {"velocity", "acceleration", "torque"},
+              "drake-toppra": {"velocity", "acceleration", "torque"},
+              "ruckig": {"velocity", "acceleration", "jerk", "torque"}}
+
+
+def retime(path, robot, method: str = "toppra", *, limits=None, gridpoints: int | None = None,
+           scale: float = 1.0, tol: float = 1e-6, max_attempts: int = 4,
+           bc_type: str = "not-a-knot", check_points: int = 1) -> Trajectory:
+    """Time-parameterize a joint path under the robot's limits; the result is certified.
+
+    Args:
+        path: ``(K, nq)`` joint waypoints [rad], ``K >= 2``, inside the position limits.
+        robot: the :class:`~drake_mh.robot.Robot` (limits and dynamics).
+        method: ``"toppra"``, ``"drake-toppra"`` or ``"ruckig"``.
+        limits: quantities to enforce besides position (always enforced); default
+            velocity/acceleration/torque for the toppra methods and velocity/acceleration/jerk
+            for ruckig. toppra trajectories have piecewise-constant ``s̈``: their jerk is not
+            limited. ruckig enforces torque by certification only (limits scaled on failure).
+        gridpoints: toppra gridpoints (spline knots are always added); ``None`` chooses them
+            with toppra's ``propose_gridpoints`` (interpolation error <= 1e-3, >= 100 points).
+        scale: fraction of every limit to use, in ``(0, 1]`` (a safety margin).
+        tol: certification tolerance on the ratios (``1 + tol``).
+        max_attempts: solves with tightened limits before giving up.
+        bc_type: end conditions of the spline (toppra methods).
+        check_points: interior points of every gridpoint interval where toppra's acceleration
+            and torque rows are also imposed (``"toppra"`` only; 0 = toppra's interpolation
+            discretization).
+
+    Returns:
+        A :class:`Trajectory`; ``trajectory.info`` holds ``certificate``, ``attempts``,
+        ``solve_time`` [s] (last attempt, without certification), ``gridpoints``.
+
+    Raises:
+        UnknownMethod: ``method`` not in ``RETIMERS``.
+        InvalidArgument: bad waypoints, unsupported limit for the method, bad ``scale``.
+        InfeasibleTrajectory: no parameterization exists (e.g. gravity alone exceeds an effort
+            limit on the path, a waypoint outside the position limits).
+        LimitViolation: still violating after ``max_attempts`` tightened solves.
+    """
+    if method not in RETIMERS:
+        raise UnknownMethod(method, RETIMERS, what="retime method")
+    limits = tuple(_DEFAULT_LIMITS[method] if limits is None else limits)
+    bad = [q for q in limits if q not in _SUPPORTED[method]]
+    if bad:
+        raise InvalidArgument(f"{method} cannot enforce {bad}; it supports {sorted(_SUPPORTED[method])}"
+                              + ("; use method='ruckig' for jerk limits" if "jerk" in bad else ""))
+    if not (0.0 < scale <= 1.0):
+        raise InvalidArgument(f"scale must be in (0, 1], got {scale}")
+    missing = [q for q in limits if not np.any(np.isfinite(_limit(robot, q)))]
+    if missing:
+        raise InvalidArgument(f"robot {robot.name} declares no {missing} limits; leave them out of `limits`")
+    W = check_waypoints(path, robot, method)
+    factors = {q: float(scale) for q in limits}
+    quantities = ("position",) + limits
+    # everything the robot has limits for is reported; only `quantities` are enforced
+    reported = ("position",) + tuple(q for q in ("velocity", "acceleration", "jerk", "torque")
+                                     if np.any(np.isfinite(_limit(robot, q))))
+    attempts = 0
+    while True:
+        attempts += 1
+        start = time.perf_counter()
+        if method == "ruckig":
+            traj = _ruckig_path(W, robot, factors)
+        else:
+            traj = _toppra_like(W, robot, method, factors, gridpoints, bc_type, check_points)
+        solve_time = time.perf_counter() - start
+        cert = certify(traj, robot, quantities=reported, scale=scale)
+        if not cert.ok(quantities, tol) and method != "ruckig":
+            traj, cert = _slow_down(traj, robot, cert, quantities, reported, tol)
+        traj.info.update(certificate=cert, attempts=attempts, solve_time=solve_time, limits=limits,
+                         factors=dict(factors))
+        _log.debug("%s attempt %d: ratios %s", method, attempts,
+                   {q: round(cert.max_ratio((q,)), 6) for q in quantities})
+        if cert.ok(quantities, tol):
+            return traj
+        quantity, joint, t, ratio = cert.worst(quantities)
+        if quantity == "position" or attempts >= max_attempts:
+            raise LimitViolation(joint, quantity, t, ratio, tol,
+                                 hint=f"{method} after {attempts} attempt(s): use more gridpoints, "
+                                 "a smaller `scale`, or waypoints further from the limits")
+        for q in quantities[1:]:  # tighten every violated quantity by its own ratio
+            r = cert.max_ratio((q,))
+            if r <= 1.0 + tol:
+                continue
+            if q == "torque" and method == "ruckig":  # ruckig has no torque limit: slow it down
+                factors["velocity"] = factors.get("velocity", 1.0) * (1.0 - 1e-3) / np.sqrt(r)
+                factors["acceleration"] = factors.get("acceleration", 1.0) * (1.0 - 1e-3) / r
+            else:
+                factors[q] *= (1.0 - 1e-3) / r
+
+
+def _slow_down(traj, robot, cert, quantities, reported, tol):
+    """Repair small velocity/acceleration excesses between gridpoints by a uniform time scaling.
+
+    With ``λ = min(1 / r_v, 1 / sqrt(r_a))`` the velocity and acceleration ratios become
+    ``<= 1``; the torque stays between its old value and gravity's (see
+    :meth:`Trajectory.time_scaled`), so it does not get worse than it was. Torque excesses are
+    left to a re-solve with tightened limits.
+    """
+    r = {q: cert.max_ratio((q,)) for q in quantities}
+    if r.get("torque", 0.0) > 1.0 + tol or r.get("position", 0.0) > 1.0 + tol:
+        return traj, cert
+    lam = min(1.0 / max(r.get("velocity", 0.0), 1.0), 1.0 / np.sqrt(max(r.get("acceleration", 0.0), 1.0)))
+    lam *= 1.0 - 1e-9
+    slowed = traj.time_scaled(lam)
+    slowed.info["time_scaling"] = lam
+    return slowed, certify(slowed, robot, quantities=reported, scale=cert.scale)
+
+
+def _limit(robot, quantity: str) -> np.ndarray:
+    return {"velocity": robot.velocity_limits, "acceleration": robot.acceleration_limits,
+            "jerk": robot.jerk_limits, "torque": robot.effort_limits}[quantity]
+
+
+def timing_from_gridpoints(ss: np.ndarray, sd: np.ndarray) -> PPoly:
+    """Time law ``t -> s`` with constant ``s̈`` between gridpoints (toppra's ``ParametrizeConstAccel``).
+
+    Between ``s_i`` and ``s_{i+1}`` with path speeds ``ṡ_i, ṡ_{i+1}``:
+    ``s̈ = (ṡ_{i+1}² - ṡ_i²) / (2 Δs)`` and ``Δt = 2 Δs / (ṡ_i + ṡ_{i+1})``.
+
+    Args:
+        ss: ``(N,)`` gridpoints, increasing.
+        sd: ``(N,)`` path speeds ``ṡ >= 0`` (toppra's ``sd_vec``).
+
+    Raises:
+        InfeasibleTrajectory: two consecutive zero speeds (the motion would never get there).
+    """
+    sd = np.maximum(np.asarray(sd, dtype=float), 0.0)
+    ds = np.diff(ss)
+    vsum = sd[:-1] + sd[1:]
+    if np.any(vsum <= 0):
+        i = int(np.argmax(vsum <= 0))
+        raise InfeasibleTrajectory("toppra", f"zero path speed on both ends of gridpoint interval {i} "
+                                   f"(s = {ss[i]:.4g}): the limits leave no motion there")
+    dt = 2.0 * ds / vsum
+    u = (sd[1:] ** 2 - sd[:-1] ** 2) / (2.0 * ds)
+    t = np.r_[0.0, np.cumsum(dt)]
+    c = np.vstack([0.5 * u, sd[:-1], ss[:-1]])
+    return PPoly(c, t)
+
+
+# --- toppra and Drake Toppra ----------------------------------------------------------------------
+
+
+def _gridpoints(spline, knots: np.ndarray, gridpoints: int | None) -> np.ndarray:
+    s_end = float(spline.x[-1])
+    if gridpoints is None:
+        import toppra
+
+        gp = toppra.interpolator.propose_gridpoints(_ToppraPath(spline), max_err_threshold=1e-3,
+                                                    min_nb_points=100)
+    else:
+        if int(gridpoints) < 2:
+            raise InvalidArgument(f"gridpoints must be >= 2, got {gridpoints}")
+        gp = np.linspace(0.0, s_end, int(gridpoints))
+    gp = np.unique(np.r_[gp, spline.x])
+    gp = gp[np.r_[True, np.diff(gp) > 1e-9 * s_end]]
+    gp[0], gp[-1] = 0.0, s_end
+    return gp
+
+
+class _ToppraPath:
+    """toppra's geometric-path interface over a scipy spline (``AbstractGeometricPath``)."""
+
+    def __init__(self, spline):
+        self.spline = spline
+        self.dof = spline.c.shape[2]
+        self.path_interval = np.array([spline.x[0], spline.x[-1]])
+        self.waypoints = (spline.x, spline(spline.x))
+
+    def __call__(self, s, order=0):
+        return self.spline(s, nu=order)
+
+    def eval(self, s):
+        return self.spline(s)
+
+    def evald(self, s):
+        return self.spline(s, nu=1)
+
+    def evaldd(self, s):
+        return self.spline(s, nu=2)
+
+    @property
+    def duration(self):
+        return self.path_interval[1] - self.path_interval[0]
+
+
+def _velocity_constraint(spline, vmax):
+    """toppra ``xbound`` constraint ``ṡ² <= min_j vmax_j² / p_j'(s_i)²`` at every gridpoint.
+
+    Same bound as toppra's ``JointVelocityConstraint`` (without its per-call string
+    formatting); the interior of each interval gets velocity rows in :func:`_dense_constraint`.
+    A rigorous variant (largest ``|p'|`` over both neighbouring intervals) was measured 3-6 %
+    slower than Drake's ``Toppra`` at 100 gridpoints on random Panda paths, against 1-2.5 %
+    faster for rows at interior check points followed by the certification's time scaling.
+    """
+    from toppra.constraint import LinearConstraint
+
+    class _Velocity(LinearConstraint):
+        def __init__(self):
+            super().__init__()
+            self.dof = spline.c.shape[2]
+
+        def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
+            ps = np.abs(spline(gridpoints, nu=1))
+            with np.errstate(divide="ignore"):
+                xmax = np.min(np.where(ps > 0, vmax ** 2 / ps ** 2, np.inf), axis=1)
+            xbound = np.column_stack([np.zeros(len(gridpoints)), np.minimum(xmax, 1e16)])
+            return None, None, None, None, None, None, xbound
+
+    return _Velocity()
+
+
+def _dense_constraint(robot, spline, vmax, amax, tmax, fractions):
+    """Acceleration and torque rows at several points of every gridpoint interval.
+
+    toppra's interpolation discretization checks the second-order constraint
+    ``a(s) u + b(s) x + c(s)`` at both ends of each interval, with ``x(s) = x_i + 2 u (s - s_i)``
+    (constant ``s̈ = u``). The same linear rows in ``(u_i, x_i)`` hold at any ``σ`` inside:
+    ``[a(σ) + 2 (σ - s_i) b(σ)] u_i + b(σ) x_i + c(σ)``. Checking at ``fractions`` of each
+    interval shrinks what can be missed between check points (the certification and, if
+    needed, a time scaling catch the rest). Acceleration: ``a = p'``, ``b = p''``, ``c = 0``;
+    torque: ``a = M p'``, ``b = M p'' + C(p, p') p'``, ``c = g`` (gravity included).
+    """
+    from toppra.constraint import DiscretizationType, LinearConstraint
+
+    nq = robot.nq
+    use_vel = np.any(np.isfinite(vmax))
+    use_acc = np.any(np.isfinite(amax))
+    use_tau = np.any(np.isfinite(tmax))
+    lims = np.minimum(np.r_[vmax ** 2 if use_vel else [], amax if use_acc else [],
+                            tmax if use_tau else []], 1e12)
+    phi = np.asarray(fractions, dtype=float)
+
+    class _Dense(LinearConstraint):
+        def __init__(self):
+            super().__init__()
+            self.dof = nq
+            self.identical = True
+            self.discretization_type = DiscretizationType.Interpolation
+
+        def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
+            N1 = len(gridpoints)
+            h = np.r_[np.diff(gridpoints), 0.0]  # stage N: only its own point
+            sig = gridpoints[:, None] + phi[None, :] * h[:, None]  # (N+1, F)
+            S = sig.ravel()
+            P, Ps, Pss = spline(S), spline(S, nu=1), spline(S, nu=2)
+            A, B, C = [], [], []
+            if use_vel:  # p'(σ)² x(σ) <= vmax²
+                A.append(np.zeros_like(Ps)), B.append(Ps ** 2), C.append(np.zeros_like(Ps))
+            if use_acc:
+                A.append(Ps), B.append(Pss), C.append(np.zeros_like(Ps))
+            if use_tau:
+                a, b, c = batch_dynamics(robot).path_coefficients(P, Ps, Pss)
+                A.append(a), B.append(b), C.append(c)
+            A, B, C = (np.hstack(x) for x in (A, B, C))  # (N1*F, m)
+            off = (2.0 * (sig - gridpoints[:, None])).ravel()[:, None]
+            a_rows = (A + off * B).reshape(N1, -1)
+            b_rows = B.reshape(N1, -1)
+            c_rows = C.reshape(N1, -1)
+            lim = np.tile(lims, len(phi))
+            m = len(lim)
+            F = np.vstack([np.eye(m), -np.eye(m)])
+            g = np.r_[lim, lim]
+            return a_rows, b_rows, c_rows, F, g, None, None
+
+    return _Dense()
+
+
+def _diagnose(robot, method, spline, gp, factors) -> InfeasibleTrajectory:
+    """Turn a failed solve into an exception that says why (gravity or limits)."""
+    if "torque" in factors:
+        dyn = batch_dynamics(robot)
+        Q = spline(gp)
+        g = dyn.inverse_dynamics(Q, np.zeros_like(Q), np.zeros_like(Q))
+        ratio = np.abs(g) / (robot.effort_limits * factors["torque"])
+        if np.max(ratio) > 1.0:
+            i, j = np.unravel_index(np.argmax(ratio), ratio.shape)
+            return InfeasibleTrajectory(
+                method, f"holding the arm against gravity at s = {gp[i]:.4g} needs "
+                f"{g[i, j]:.4g} N·m on joint {robot.joint_names[j]!r}, above its effort limit "
+                f"{robot.effort_limits[j] * factors['torque']:.4g} N·m (after scaling); the path "
+                "cannot be followed at any speed: change the path or the payload")
+    return InfeasibleTrajectory(method, "no feasible path parameterization (empty controllable set); "
+                                "check the limits and the path")
+
+
+def _toppra_like(W, robot, method, factors, gridpoints, bc_type, check_points) -> Trajectory:
+    spline, s_way = joint_path(W, robot, method, bc_type=bc_type)
+    gp = _gridpoints(spline, s_way, gridpoints)
+    vmax = robot.velocity_limits * factors.get("velocity", np.inf)
+    amax = robot.acceleration_limits * factors.get("acceleration", np.inf)
+    tmax = robot.effort_limits * factors.get("torque", np.inf)
+    if method == "toppra":
+        import toppra.algorithm as algo
+
+        cons = []
+        if "velocity" in factors:
+            cons.append(_velocity_constraint(spline, vmax))
+        if factors:
+            cons.append(_dense_constraint(robot, spline, vmax, amax, tmax,
+                                          np.linspace(0.0, 1.0, int(check_points) + 2)))
+        instance = algo.TOPPRA(cons, _ToppraPath(spline), gridpoints=gp, solver_wrapper="seidel",
+                               parametrizer="ParametrizeConstAccel")
+        sdd, sd, _ = instance.compute_parameterization(0.0, 0.0)
+        if sd is None:
+            raise _diagnose(robot, method, spline, gp, factors)
+        timing = timing_from_gridpoints(gp, sd)
+    else:
+        timing = _drake_toppra(robot, spline, gp, factors, vmax, amax, tmax)
+    return Trajectory(spline, timing, tuple(robot.joint_names), method,
+                      {"gridpoints": len(gp), "path_knots": len(spline.x)})
+
+
+def _drake_toppra(robot, spline, gp, factors, vmax, amax, tmax) -> PPoly:
+    from pydrake.multibody.optimization import Toppra
+    from pydrake.trajectories import PiecewisePolynomial
+
+    knots = spline.x
+    drake_path = PiecewisePolynomial.CubicHermite(knots, spline(knots).T, spline(knots, nu=1).T)
+    solver = Toppra(drake_path, robot.plant, gp)
+    if "velocity" in factors:
+        solver.AddJointVelocityLimit(-vmax, vmax)
+    if "acceleration" in factors:
+        solver.AddJointAccelerationLimit(-amax, amax)
+    if "torque" in factors:
+        solver.AddJointTorqueLimit(-tmax, tmax)
+    s_traj = solver.SolvePathParameterization()
+    if s_traj is None:
+        raise _diagnose(robot, "drake-toppra", spline, gp, factors)
+    return _ppoly_from_drake(s_traj)
+
+
+def _ppoly_from_drake(traj) -> PPoly:
+    """Exact ``PPoly`` of a scalar Drake ``PiecewisePolynomial`` (Taylor coefficients per segment)."""
+    n = traj.get_number_of_segments()
+    breaks = np.asarray(traj.get_segment_times(), dtype=float)
+    deg = max(traj.getSegmentPolynomialDegree(i) for i in range(n))
+    c = np.zeros((deg + 1, n))
+    from math import factorial
+
+    derivs = [traj] + [traj.MakeDerivative(k) for k in range(1, deg + 1)]
+    for i in range(n):
+        t0 = breaks[i]
+        for k in range(deg + 1):
+            c[deg - k, i] = float(np.asarray(derivs[k].value(t0)).ravel()[0]) / factorial(k)
+    return PPoly(c, breaks)
+
+
+# --- ruckig -------------------------------------------------------------------------------------
+
+
+def _profile_ppoly(profile, t_start: float, duration: float) -> PPoly:
+    """Exact cubic ``PPoly`` of one ruckig DOF profile (brake pre-phase + 7 jerk phases)."""
+    phases = []
+    brake = profile.brake
+    if brake.duration > 0:
+        for k in range(len(brake.t)):
+            if brake.t[k] > 0:
+                phases.append((brake.t[k], brake.j[k], brake.a[k], brake.v[k], brake.p[k]))
+    for k in range(7):
+        if profile.t[k] > 0:
+            phases.append((profile.t[k], profile.j[k], profile.a[k], profile.v[k], profile.p[k]))
+    if getattr(profile, "accel", None) is not None and profile.accel.duration > 0:
+        raise InfeasibleTrajectory("ruckig", "ruckig returned an acceleration pre-profile, which "
+                                   "drake_mh does not convert; start from within the limits")
+    x = [t_start]
+    c = []
+    for dt, j, a, v, p in phases:
+        c.append([j / 6.0, a / 2.0, v, p])
+        x.append(x[-1] + dt)
+    if not phases:  # this DOF does not move
+        c.append([0.0, 0.0, 0.0, profile.p[-1]])
+        x.append(t_start + duration)
+    # a DOF that finishes early (time synchronization) rests at its target until `duration`
+    if x[-1] < t_start + duration - 1e-12:
+        c.append([0.0, 0.0, profile.vf if abs(profile.vf) > 0 else 0.0, profile.pf])
+        x.append(t_start + duration)
+    x[-1] = t_start + duration
+    return PPoly(np.array(c).T, np.array(x))
+
+
+def ruckig_state_to_state(robot, q0, q1, v0=None, a0=None, v1=None, a1=None, *, factors=None,
+                          synchronization: str = "phase") -> Trajectory:
+    """One jerk-limited state-to-state motion with ruckig (online use: call again every cycle).
+
+    Ruckig's community edition ignores ``min_position``/``max_position``; the returned motion's
+    position extrema are checked here against the robot's position limits.
+
+    Args:
+        robot: limits (velocity, acceleration, jerk; ``inf`` jerk is replaced by a large value).
+        q0, q1: start and target positions ``(nq,)`` [rad].
+        v0, a0, v1, a1: start/target velocities and accelerations (default 0).
+        factors: quantity -> fraction of the limit to use (default 1).
+        synchronization: ``"phase"`` (straight line in joint space where ruckig can),
+            ``"time"`` (ruckig's default) or ``"none"``.
+
+    Returns:
+        A :class:`Trajectory` (``method="ruckig"``), not yet certified.
+
+    Raises:
+        InfeasibleTrajectory: ruckig reports an error, or the motion leaves the position limits
+            (e.g. braking from ``v0`` needs more room than the limit leaves).
+    """
+    from ruckig import InputParameter, Result, Ruckig, Synchronization
+    from ruckig import Trajectory as RTrajectory
+
+    nq = robot.nq
+    factors = factors or {}
+    zeros = np.zeros(nq)
+    q0, q1 = robot.check_q(q0, "q0"), robot.check_q(q1, "q1")
+    inp = InputParameter(nq)
+    inp.current_position = q0
+    inp.current_velocity = zeros if v0 is None else robot.check_q(v0, "v0")
+    inp.current_acceleration = zeros if a0 is None else robot.check_q(a0, "a0")
+    inp.target_position = q1
+    inp.target_velocity = zeros if v1 is None else robot.check_q(v1, "v1")
+    inp.target_acceleration = zeros if a1 is None else robot.check_q(a1, "a1")
+
+    def lim(arr, q, big):
+        out = np.where(np.isfinite(arr), arr, big) * factors.get(q, 1.0)
+        return out
+
+    inp.max_velocity = lim(robot.velocity_limits, "velocity", 1e3)
+    inp.max_acceleration = lim(robot.acceleration_limits, "acceleration", 1e4)
+    inp.max_jerk = lim(robot.jerk_limits, "jerk", 1e6)
+    sync = {"phase": Synchronization.Phase, "time": Synchronization.Time, "none": Synchronization.No}
+    if synchronization not in sync:
+        raise InvalidArgument(f"synchronization must be one of {sorted(sync)}, got {synchronization!r}")
+    inp.synchronization = sync[synchronization]
+    otg = Ruckig(nq)
+    out = RTrajectory(nq)
+    try:
+        result = otg.calculate(inp, out)
+    except RuntimeError as exc:  # ruckig raises on invalid input (limits, states)
+        raise InfeasibleTrajectory("ruckig", str(exc)) from exc
+    if result not in (Result.Working, Result.Finished):
+        raise InfeasibleTrajectory("ruckig", f"ruckig returned {result}")
+    traj = _from_ruckig(out, robot)
+    ext = out.position_extrema
+    lo = np.array([e.min for e in ext])
+    hi = np.array([e.max for e in ext])
+    bad = ((lo < robot.lower - 1e-12) | (hi > robot.upper + 1e-12)) & ~robot.continuous
+    if np.any(bad):
+        j = int(np.argmax(bad))
+        raise InfeasibleTrajectory(
+            "ruckig", f"the jerk-limited motion takes joint {robot.joint_names[j]!r} to "
+            f"[{lo[j]:.6g}, {hi[j]:.6g}], outside [{robot.lower[j]:.6g}, {robot.upper[j]:.6g}] "
+            "(ruckig's community edition ignores position limits): start with less velocity "
+            "towards the limit or choose a target further from it")
+    return traj
+
+
+def _from_ruckig(out, robot, t_start: float = 0.0) -> Trajectory:
+    duration = out.duration
+    profiles = out.profiles[0]
+    polys = [_profile_ppoly(profiles[j], t_start, duration) for j in range(robot.nq)]
+    return Trajectory(merge_ppolys(polys), None, tuple(robot.joint_names), "ruckig", {})
+
+
+def _ruckig_path(W, robot, factors) -> Trajectory:
+    """Rest-to-rest ruckig segments through every waypoint, concatenated in time."""
+    pieces = []
+    t = 0.0
+    for k in range(len(W) - 1):
+        seg = ruckig_state_to_state(robot, W[k], W[k + 1], factors=factors, synchronization="phase")
+        pp = seg.path
+        pieces.append(PPoly(pp.c, pp.x + t))
+        t += seg.duration
+    x = np.concatenate([pieces[0].x] + [p.x[1:] for p in pieces[1:]])
+    c = np.concatenate([p.c for p in pieces], axis=1)
+    return Trajectory(PPoly(c, x), None, tuple(robot.joint_names), "ruckig", {"segments": len(pieces)})

@@ -1,0 +1,134 @@
+"""certify: property tests over random paths (every retime result is within its limits), analytic cases."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import random_waypoints
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from scipy.interpolate import PPoly
+
+import drake_mh
+from drake_mh.errors import InfeasibleTrajectory, InvalidArgument, LimitViolation
+from drake_mh.trajectories import Trajectory, certify, retime
+
+_ROBOTS = {}
+
+
+def _robot(name):
+    if name not in _ROBOTS:
+        _ROBOTS[name] = drake_mh.load_robot(name)
+    return _ROBOTS[name]
+
+
+@settings(max_examples=int(__import__("os").environ.get("DRAKE_MH_EXAMPLES", 25)), deadline=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(name=st.sampled_from(["panda", "planar2r", "seed000_6dof"]),
+       method=st.sampled_from(["toppra", "drake-toppra", "ruckig"]),
+       k=st.integers(2, 7), gridpoints=st.sampled_from([20, 60, 150]), seed=st.integers(0, 2**31),
+       scale=st.sampled_from([1.0, 0.5]))
+def test_every_retimed_trajectory_is_within_its_limits(name, method, k, gridpoints, seed, scale):
+    robot = _robot(name)
+    W = random_waypoints(robot, np.random.default_rng(seed), k=k, spread=0.95)
+    try:
+        traj = retime(W, robot, method, gridpoints=gridpoints, scale=scale)
+    except InfeasibleTrajectory:
+        return  # allowed: it says why (e.g. a spline that cannot be kept inside the limits)
+    enforced = ("position",) + traj.info["limits"]
+    assert traj.info["certificate"].max_ratio(enforced) <= 1 + 1e-6
+    # independent re-check: 4x denser, torque from Drake's own inverse dynamics, random times too
+    cert = certify(traj, robot, quantities=enforced, samples_per_piece=32, min_samples=4000,
+                   torque_backend="drake" if len(traj.breaks) < 200 else "rnea", scale=scale)
+    assert cert.max_ratio() <= 1 + 1e-6, cert.table()
+    t = np.random.default_rng(seed).uniform(0, traj.duration, 500)
+    q, v, a = traj.derivatives(t, 2)
+    assert np.all(q >= robot.lower - 1e-9) and np.all(q <= robot.upper + 1e-9)
+    if "velocity" in enforced:
+        assert np.all(np.abs(v) <= scale * robot.velocity_limits * (1 + 1e-6))
+    if "acceleration" in enforced:
+        assert np.all(np.abs(a) <= scale * robot.acceleration_limits * (1 + 1e-6))
+
+
+def _poly_trajectory(c, breaks, names=("panda_joint1",)):
+    """Scalar PPoly (highest power first) as a one-joint trajectory (PPoly with (k, m, 1) coefficients)."""
+    c = np.asarray(c, dtype=float)
+    return Trajectory(PPoly(c[:, :, None], np.asarray(breaks, dtype=float)), None, names, "test")
+
+
+class _OneJoint:
+    """Stand-in robot with one joint and given limits (certify only reads these attributes)."""
+
+    def __init__(self, lower=-1.0, upper=2.0, v=1.0, a=2.0, j=10.0):
+        self.nq = 1
+        self.name = "one"
+        self.joint_names = ["j"]
+        self.lower, self.upper = np.array([lower]), np.array([upper])
+        self.continuous = np.array([False])
+        self.velocity_limits, self.acceleration_limits = np.array([v]), np.array([a])
+        self.jerk_limits, self.effort_limits = np.array([j]), np.array([np.inf])
+
+
+def test_analytic_ratios_and_times():
+    # q(t) = t^3 on [0, 2]: q' = 3t^2 (12 at t=2), q'' = 6t (12), q''' = 6; position 8 at t=2
+    traj = _poly_trajectory([[1.0], [0.0], [0.0], [0.0]], [0.0, 2.0], names=("j",))
+    robot = _OneJoint(lower=-1.0, upper=2.0, v=6.0, a=4.0, j=3.0)
+    cert = certify(traj, robot, quantities=("position", "velocity", "acceleration", "jerk"))
+    assert cert.ratios["velocity"][0] == pytest.approx(2.0, rel=1e-6)
+    assert cert.ratios["acceleration"][0] == pytest.approx(3.0, rel=1e-6)
+    assert cert.ratios["jerk"][0] == pytest.approx(2.0, rel=1e-6)
+    assert cert.times["velocity"][0] == pytest.approx(2.0, abs=1e-6)
+    # position: centre 0.5, half-width 1.5 -> |8 - 0.5| / 1.5 = 5; 6 rad outside the range
+    assert cert.ratios["position"][0] == pytest.approx(5.0, rel=1e-6)
+    assert cert.position_excess[0] == pytest.approx(6.0, rel=1e-6)
+    with pytest.raises(LimitViolation) as info:
+        cert.check()
+    assert info.value.quantity == "position" and info.value.joint == "j"
+    assert info.value.time == pytest.approx(2.0, abs=1e-6) and info.value.ratio == pytest.approx(5.0)
+
+
+def test_peak_between_breaks_is_found():
+    """A velocity peak inside a single long piece is found by the dense samples, not only at ends."""
+    # q(t) = sin-like cubic: q = 3t^2 - 2t^3 on [0, 1] -> q' = 6t - 6t^2, peak 1.5 at t = 0.5
+    traj = _poly_trajectory([[-2.0], [3.0], [0.0], [0.0]], [0.0, 1.0], names=("j",))
+    cert = certify(traj, _OneJoint(v=1.0), quantities=("velocity",), min_samples=1001)
+    assert cert.ratios["velocity"][0] == pytest.approx(1.5, rel=1e-6)
+    assert cert.times["velocity"][0] == pytest.approx(0.5, abs=1e-3)
+
+
+def test_acceleration_jump_is_a_jerk_impulse():
+    # q'' jumps from 0 to 2 at t = 1: jerk is a Dirac impulse there
+    c = np.array([[0.0, 0.0], [0.0, 1.0], [0.0, 0.0], [0.0, 0.0]])
+    traj = _poly_trajectory(c, [0.0, 1.0, 2.0], names=("j",))
+    cert = certify(traj, _OneJoint(upper=5.0, v=5.0, a=5.0, j=1.0), quantities=("jerk", "acceleration"))
+    assert np.isinf(cert.ratios["jerk"][0]) and cert.times["jerk"][0] == pytest.approx(1.0)
+    assert cert.ok(("acceleration",))
+
+
+def test_toppra_jerk_is_reported_unbounded_ruckig_not(panda):
+    W = random_waypoints(panda, np.random.default_rng(11), k=3)
+    top = retime(W, panda, "toppra", gridpoints=50)
+    ruck = retime(W, panda, "ruckig")
+    assert np.isinf(top.info["certificate"].max_ratio(("jerk",)))  # reported, not enforced
+    assert ruck.info["certificate"].max_ratio(("jerk",)) <= 1 + 1e-6
+
+
+def test_certify_argument_errors(panda):
+    traj = _poly_trajectory([[1.0], [0.0]], [0.0, 1.0])
+    with pytest.raises(InvalidArgument, match="joints"):
+        certify(traj, panda)
+    W = random_waypoints(panda, np.random.default_rng(12), k=2)
+    t7 = retime(W, panda, "ruckig")
+    with pytest.raises(InvalidArgument, match="unknown quantities"):
+        certify(t7, panda, quantities=("speed",))
+    with pytest.raises(InvalidArgument, match="not certified"):
+        certify(t7, panda, quantities=("velocity",)).max_ratio(("torque",))
+
+
+def test_certificate_table_and_record(panda):
+    W = random_waypoints(panda, np.random.default_rng(13), k=3)
+    cert = retime(W, panda, "toppra", gridpoints=50).info["certificate"]
+    table = cert.table()
+    assert "panda_joint7" in table and "torque" in table
+    rec = cert.as_dict()
+    assert set(rec) >= {"velocity_ratio", "torque_ratio", "max_ratio", "position_excess"}
