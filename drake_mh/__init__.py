@@ -29,6 +29,9 @@ _LAZY = {
     "retime": "drake_mh.trajectories",
     "certify": "drake_mh.trajectories",
     "Trajectory": "drake_mh.trajectories",
+    "solve_ik": "drake_mh.ik",
+    "IKProblem": "drake_mh.ik",
+    "IKResult": "drake_mh.ik",
 }
 
 __all__ = ["errors", "__version__", *_LAZY]

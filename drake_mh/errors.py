@@ -288,3 +288,13 @@ class LimitViolation(DrakeMhError, ValueError):
             f"{self.ratio:.9g} > 1 + {self.tolerance:g}"
             + (f"; {hint}" if hint else "; slow the trajectory down (scale the limits) or "
                "use more gridpoints"))
+
+
+# --- inverse kinematics (drake_mh.ik) ----------------------------------------------------------
+
+
+class InvalidIKProblem(DrakeMhError, ValueError):
+    """An inverse-kinematics problem is ill-posed (target shape, tolerances, weights, scene).
+
+    The message names the offending argument and the expected form.
+    """

@@ -1,0 +1,47 @@
+"""``drake-mh ik``: JSON output, exit codes, one-line errors."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from drake_mh.cli import main
+
+
+def test_ik_json(capsys):
+    code = main(["ik", "--robot", "panda", "--position", "0.5", "0.1", "0.4", "--rpy", "3.1416", "0", "0",
+                 "--method", "hybrid", "--seed", "3", "--timeout", "1", "--json"])
+    data = json.loads(capsys.readouterr().out)
+    assert code == 0 and data["success"] is True and data["method"] == "hybrid"
+    assert data["position_error"] <= 1e-5 and data["orientation_error"] <= 1e-5
+    assert len(data["q"]) == 7 and data["joint_names"][0] == "panda_joint1"
+    import drake_mh
+
+    robot = drake_mh.load_robot("panda")
+    assert np.allclose(robot.fk(data["q"])[:3, 3], [0.5, 0.1, 0.4], atol=1e-5)
+
+
+def test_ik_text_position_only(capsys):
+    code = main(["ik", "--robot", "seed000_6dof", "--position", "0.4", "0.2", "0.5", "--method", "dls"])
+    out = capsys.readouterr().out
+    assert code == 0 and out.startswith("success: dls on seed000_6dof")
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["ik", "--robot", "nope", "--position", "0", "0", "0.5"], "unknown robot 'nope': bundled robots are panda"),
+    (["ik", "--method", "nope", "--position", "0", "0", "0.5"], "unknown IK method 'nope'; available: abc"),
+    (["ik", "--position", "0", "zero", "0.5"], "--position"),
+    (["ik"], "--position"),
+])
+def test_ik_errors_exit_2_with_one_line(capsys, argv, words):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("drake-mh: error:") and words in err
+
+
+def test_unreachable_exits_1(capsys):
+    code = main(["ik", "--position", "3", "0", "0", "--json"])
+    data = json.loads(capsys.readouterr().out)
+    assert code == 1 and data["success"] is False and "out of reach" in data["message"] and data["nfe"] == 0

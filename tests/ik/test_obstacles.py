@@ -1,0 +1,70 @@
+"""Collision-free IK: no reported success that Drake's exact distance says collides."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from drake_mh.ik import IKProblem, solve_ik
+from drake_mh.ik.drake import ik_context
+from drake_mh.scene import Box, Scene, Sphere
+
+
+@pytest.fixture(scope="module")
+def cluttered(panda):
+    """A sphere and a box next to the arm, between it and the targets."""
+    scene = Scene(panda)
+    scene.add("ball", Sphere(0.08), [0.35, 0.2, 0.45])
+    scene.add("block", Box((0.1, 0.3, 0.25)), [0.4, -0.15, 0.2], rpy=[0, 0, 0.3])
+    return scene
+
+
+def _targets(panda, scene, n, seed):
+    """Targets reached by collision-free configurations (so each problem has a solution)."""
+    Q = panda.random_configurations(400, seed)
+    free = Q[scene.batch_min_distance(Q) > 0.03]
+    return panda.batch.fk(free[:n])
+
+
+@pytest.mark.parametrize("method", ["hybrid", "dls", "de", "drake_snopt"])
+def test_reported_success_never_collides(panda, cluttered, method):
+    budget = 4 if method.startswith("drake") else (6000 if method == "de" else 20000)
+    successes = 0
+    for i, X in enumerate(_targets(panda, cluttered, 4, 1)):
+        problem = IKProblem(panda, X[:3, 3], scene=cluttered, clearance=0.01, position_tolerance=1e-3)
+        result = solve_ik(problem, method, seed=i, budget=budget)
+        exact = cluttered.min_distance(result.q)
+        assert result.min_distance == pytest.approx(exact, abs=1e-12)
+        if result.success:
+            successes += 1
+            assert exact >= 0.01
+            assert not cluttered.in_collision(result.q)
+        else:
+            assert result.position_error > 1e-3 or exact < 0.01 or not result.within_limits
+    if method != "de":
+        assert successes >= 3, method
+
+
+def test_collision_makes_success_false(panda, cluttered):
+    """A configuration that reaches the target but collides is a failure, with the reason."""
+    Q = panda.random_configurations(2000, 5)
+    d = cluttered.exact_min_distance(Q[:300])
+    q = Q[:300][np.argmin(d)]
+    assert cluttered.min_distance(q) < 0
+    problem = IKProblem(panda, panda.fk(q)[:3, 3], scene=cluttered)
+    from drake_mh.ik import verify
+
+    result = verify(problem, q, method="test", start=0.0, nfe=0)
+    assert result.position_error < 1e-12 and not result.success and "clearance" in result.message
+
+
+def test_drake_ik_context_sees_the_obstacles(panda, cluttered):
+    """The obstacles are registered in the IK's own plant context: Drake's distances agree."""
+    problem = IKProblem(panda, [0.4, 0.0, 0.5], scene=cluttered)
+    diagram_context, plant_context = ik_context(problem)
+    sg_context = panda.scene_graph.GetMyContextFromRoot(diagram_context)
+    for q in panda.random_configurations(5, 3):
+        panda.plant.SetPositions(plant_context, q)
+        query = panda.scene_graph.get_query_output_port().Eval(sg_context)
+        pairs = query.ComputeSignedDistancePairwiseClosestPoints()
+        assert min(p.distance for p in pairs) == pytest.approx(cluttered.min_distance(q), abs=1e-9)
