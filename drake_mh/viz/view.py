@@ -75,6 +75,7 @@ class View:
                  clear: bool = True, q=None):
         if not isinstance(prefix, str) or not prefix.startswith("/") or prefix.rstrip("/") == "":
             raise InvalidArgument(f"prefix must be a Meshcat path like '/drake_mh', got {prefix!r}")
+        q0 = robot.check_q(robot.home if q is None else q)  # before anything is drawn or cleared
         self.robot = robot
         self.meshcat = meshcat if meshcat is not None else get_meshcat()
         check_thread(self.meshcat)
@@ -87,7 +88,7 @@ class View:
             self.clear()
         self.geometry.draw(self.meshcat, self.robot_path)
         self.q = None
-        self.set_q(robot.home if q is None else q)
+        self.set_q(q0)
 
     # --- paths and basics -------------------------------------------------------------------
 

@@ -137,3 +137,10 @@ def test_update_obstacles_follows_the_scene(view, panda, scene):
     assert view.meshcat.HasPath(view.obstacle_path("wall"))
     X = viz_html.transforms(view.html())
     np.testing.assert_allclose(X[view.obstacle_path("ball")][:3, 3], [0.45, 0.05, 0.55], atol=1e-12)
+
+
+def test_a_bad_initial_configuration_leaves_the_drawing_alone(meshcat, panda):
+    view = View(panda, meshcat=meshcat)
+    with pytest.raises(InvalidConfiguration):
+        View(panda, meshcat=meshcat, q=np.zeros(2))
+    assert meshcat.HasPath(view.link_paths()["panda_link1"])
