@@ -4,8 +4,10 @@ Accepted inputs (see :func:`as_motion`):
 
 * a configuration ``q (nq,)``, or any object with a ``.q`` attribute (an ``IKResult``);
 * a trajectory: a pair ``(t (K,), Q (K, nq))``, an object with ``.t`` and ``.Q`` attributes,
-  a mapping with keys ``t``/``Q`` or ``traj_t``/``traj_q`` (a study record's arrays), or a
-  Drake ``Trajectory`` (e.g. ``PiecewisePolynomial``; sampled at the animation rate).
+  a mapping with keys ``t``/``Q`` or ``traj_t``/``traj_q`` (a study record's arrays), a
+  :class:`drake_mh.trajectories.Trajectory` (anything with ``start_time``, ``end_time`` and
+  ``position(t) -> (K, nq)``) or a Drake ``Trajectory`` (e.g. ``PiecewisePolynomial``); the
+  last two are sampled at the animation rate.
 """
 
 from __future__ import annotations
@@ -103,6 +105,8 @@ def as_motion(robot, value, sample_rate: float = 30.0) -> Motion:
                               f"got keys {sorted(map(str, value))}")
     if hasattr(value, "t") and hasattr(value, "Q"):
         return Motion(*check_trajectory(robot, value.t, value.Q))
+    if callable(getattr(value, "position", None)) and hasattr(value, "start_time") and hasattr(value, "end_time"):
+        return _from_position_function(robot, value, sample_rate)
     if hasattr(value, "vector_values") and hasattr(value, "start_time") and hasattr(value, "end_time"):
         return _from_drake_trajectory(robot, value, sample_rate)
     if hasattr(value, "q") and not isinstance(value, np.ndarray):
@@ -126,14 +130,35 @@ _WHAT_TO_PASS = ("cannot show {got}: pass a configuration q (nq,), an object wit
                  "a trajectory (t (K,), Q (K, nq)), an object with .t and .Q, or a Drake Trajectory")
 
 
+def _sample_times(t0: float, t1: float, sample_rate: float) -> np.ndarray:
+    if not (np.isfinite(t0) and np.isfinite(t1) and t1 >= t0):
+        raise InvalidTrajectory(f"the trajectory's time span [{t0}, {t1}] s is not a finite interval", "trajectory")
+    n = max(2, int(np.ceil((t1 - t0) * sample_rate)) + 1)
+    return np.linspace(t0, t1, n) if t1 > t0 else np.array([t0])
+
+
+def _value(attribute) -> float:
+    return float(attribute() if callable(attribute) else attribute)
+
+
+def _from_position_function(robot, traj, sample_rate: float) -> Motion:
+    """drake_mh's ``Trajectory``: ``start_time``/``end_time`` [s] and ``position(t) -> (K, nq)``."""
+    t = _sample_times(_value(traj.start_time), _value(traj.end_time), sample_rate)
+    Q = np.asarray(traj.position(t), dtype=float)
+    if Q.shape != (t.size, robot.nq):
+        raise InvalidTrajectory(
+            f"trajectory.position(t) gave shape {Q.shape} for {t.size} times; expected ({t.size}, "
+            f"{robot.nq}) joint positions of {robot.name}", "trajectory", (t.size, robot.nq), Q.shape)
+    return Motion(*check_trajectory(robot, t, Q))
+
+
 def _from_drake_trajectory(robot, traj, sample_rate: float) -> Motion:
     t0, t1 = float(traj.start_time()), float(traj.end_time())
     if traj.rows() != robot.nq or traj.cols() != 1:
         raise InvalidTrajectory(
             f"the Drake trajectory has values of shape ({traj.rows()}, {traj.cols()}); "
             f"expected ({robot.nq}, 1) joint positions of {robot.name}", "trajectory")
-    n = max(2, int(np.ceil((t1 - t0) * sample_rate)) + 1)
-    t = np.linspace(t0, t1, n) if t1 > t0 else np.array([t0])
+    t = _sample_times(t0, t1, sample_rate)
     Q = np.asarray(traj.vector_values(t)).T.reshape(t.size, robot.nq)
     return Motion(*check_trajectory(robot, t, Q))
 

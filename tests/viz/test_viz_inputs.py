@@ -38,3 +38,34 @@ def test_drake_trajectory_of_the_wrong_size(planar2r):
     traj = PiecewisePolynomial.FirstOrderHold([0.0, 1.0], np.zeros((3, 2)))
     with pytest.raises(InvalidTrajectory, match=r"\(3, 1\).*\(2, 1\)"):
         as_motion(planar2r, traj)
+
+
+class _PositionTrajectory:
+    """Duck type of drake_mh.trajectories.Trajectory: time span properties and position(t)."""
+
+    def __init__(self, nq, duration=1.0, shape=None):
+        self.start_time, self.end_time, self._nq, self._shape = 0.0, duration, nq, shape
+
+    def position(self, t):
+        t = np.atleast_1d(t)
+        out = 0.1 * t[:, None] * np.ones((1, self._nq))
+        return out if self._shape is None else np.zeros(self._shape)
+
+
+def test_position_function_trajectories_are_sampled(planar2r):
+    motion = as_motion(planar2r, _PositionTrajectory(2, duration=1.0), sample_rate=10)
+    np.testing.assert_allclose(motion.t, np.linspace(0, 1, 11))
+    np.testing.assert_allclose(motion.Q[-1], [0.1, 0.1])
+    with pytest.raises(InvalidTrajectory, match=r"gave shape \(3, 3\)"):
+        as_motion(planar2r, _PositionTrajectory(2, shape=(3, 3)))
+
+
+def test_drake_mh_trajectory_is_shown(planar2r):
+    trajectories = pytest.importorskip("drake_mh.trajectories")
+    from scipy.interpolate import CubicSpline
+
+    spline = CubicSpline([0.0, 2.0], [[0.0, 0.0], [0.5, -0.5]], bc_type="clamped")  # a PPoly of time
+    traj = trajectories.Trajectory(spline)
+    motion = as_motion(planar2r, traj, sample_rate=5)
+    assert motion.t[0] == 0.0 and motion.t[-1] == 2.0 and motion.Q.shape == (11, 2)
+    np.testing.assert_allclose(motion.Q[-1], [0.5, -0.5], atol=1e-12)
