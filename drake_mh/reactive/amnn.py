@@ -1,0 +1,64 @@
+"""AMNN: the ESM paper's accelerated multi-agent recurrent neural network (eqs. (12)-(21)).
+
+AMNN is ARO (Wang et al. 2022) arranged as a network: each agent neuron is a rabbit, each
+layer a generation. drake_mh builds it on ``drake_mh.optim.ARO(variant="amnn")`` (the
+agent update of eqs. (12)-(18) and the projection onto the box of eq. (19), vectorized over
+the P agents) and adds the ESM specifics here:
+
+* **Layers.** ``L + 1`` layers of ``P`` agents per control step (the paper: "L + 1 layers,
+  each except the last containing P agent neurons; the first performs initialization"):
+  layer 0 is the initial layer (the warm-start population evaluated under this step's
+  objective), layers ``l = 1 .. L`` are ARO generations ``t = l`` with ``T = L`` in eqs.
+  (12) and (14). The evaluation budget of a step is therefore ``(L + 1) P``.
+* **Eq. (19), obstacle inequality.** With ``handling="reject"`` (default) a candidate that
+  violates eq. (9) gets ``F = +inf``; ARO's greedy selection (eq. (20)) then keeps
+  ``θ_i(l)``: exactly the paper's "``p_Ωi(l+1) = θ_i(l)`` if not (9)", without re-evaluating
+  ``θ_i(l)``. The box part of eq. (19) is ARO-amnn's clip; the box itself is eq. (11).
+* **Eq. (21).** The output is the best agent of the last layer (the paper writes arg max of
+  F; the minimum is meant, F being minimized).
+* **Recurrence.** The last layer of step k is the first layer of step k + 1 (warm start,
+  :func:`drake_mh.reactive.esm_solvers.warm_start_rows`).
+
+The paper runs L = 1000, P = 128 on a GPU at 30 Hz; a CPU core affords fewer layers (see
+``docs/esm.md`` for the measured budget).
+"""
+
+from __future__ import annotations
+
+from drake_mh.errors import InvalidArgument
+from drake_mh.reactive.esm_solvers import MetaheuristicSolver
+
+PAPER_LAYERS = 1000
+PAPER_AGENTS = 128
+
+
+class AMNN(MetaheuristicSolver):
+    """AMNN step solver: ``L`` layers x ``P`` agents of ARO-amnn per control step.
+
+    Args:
+        layers: L, the number of layers after the initial one (paper: 1000).
+        agents: P, agent neurons per layer (paper: 128).
+        handling: ``"reject"`` (eq. (19), default) or ``"repair"``.
+        warm_start: the previous step's last layer seeds this step's first layer.
+        immigrants: fraction of that layer re-drawn uniformly in the box (0: the paper's
+            recurrence, the last layer passed on unchanged).
+
+    Raises:
+        InvalidArgument: ``layers < 1`` or ``agents < 2``.
+    """
+
+    def __init__(self, layers: int = 200, agents: int = 32, handling: str = "reject", warm_start: bool = True,
+                 immigrants: float = 0.0):
+        if not (isinstance(layers, int) and layers >= 1):
+            raise InvalidArgument(f"AMNN layers L must be an integer >= 1; got {layers!r}")
+        if not (isinstance(agents, int) and agents >= 2):
+            raise InvalidArgument(f"AMNN agents P must be an integer >= 2 (eq. (15) needs j != i); got {agents!r}")
+        super().__init__("aro", budget=(layers + 1) * agents, pop_size=agents, handling=handling,
+                         warm_start=warm_start, immigrants=immigrants, variant="amnn")
+        self.layers = layers
+        self.agents = agents
+        self.name = "amnn"
+
+    @property
+    def budget_label(self) -> str:
+        return f"L={self.layers} x P={self.agents}"
