@@ -57,9 +57,9 @@ class HybridConfig:
 
 
 def _generation(problem: IKProblem, rng: np.random.Generator, config: HybridConfig, parents: np.ndarray | None,
-                first: bool) -> np.ndarray:
+                first: bool, P: int) -> np.ndarray:
     """A new ranked population ``(P, nq)``, best first by the problem's objective."""
-    P, nq = config.population, problem.nq
+    nq = problem.nq
     lower, upper = problem.lower, problem.upper
     Q = lower + (upper - lower) * rng.random((P, nq))
     if first and problem.q_ref is not None:
@@ -93,13 +93,14 @@ def solve_hybrid(problem: IKProblem, seed=0, budget: int | None = None, timeout:
     start = time.perf_counter() if start is None else start
     config = config or HybridConfig()
     rng = np.random.default_rng(seed)
-    K = config.candidates
-    lm = BatchLM(problem, K, config.lm)
     deadline = np.inf if timeout is None else start + timeout
     budget = np.inf if budget is None else budget
+    P = int(min(config.population, budget))  # a tiny budget is never exceeded
+    K = min(config.candidates, P)
+    lm = BatchLM(problem, K, config.lm)
     sphere_check = problem.scene is not None and bool(problem.scene.obstacles)
 
-    pool = _generation(problem, rng, config, None, first=True)
+    pool = _generation(problem, rng, config, None, first=True, P=P)
     nfe = len(pool)
     lm.start(slice(0, K), pool[:K])
     cursor = K
@@ -127,16 +128,16 @@ def solve_hybrid(problem: IKProblem, seed=0, budget: int | None = None, timeout:
             if lm.fa[k] < best_f:
                 best_q, best_f = lm.Qa[k].copy(), lm.fa[k]
             if cursor + stalled.size > len(pool):
-                if nfe + config.population > budget:
+                if nfe + P > budget:
                     break
-                pool = _generation(problem, rng, config, lm.Qa, first=False)
+                pool = _generation(problem, rng, config, lm.Qa, first=False, P=P)
                 nfe += len(pool)
                 cursor = 0
             lm.start(stalled, pool[cursor:cursor + stalled.size])
             cursor += stalled.size
             attempts += stalled.size
     k = lm.best_row()
-    if lm.fa[k] < best_f:
+    if lm.fa[k] < best_f:  # fa is inf for rows never evaluated
         best_q = lm.Qa[k].copy()
     why = "timeout" if time.perf_counter() > deadline else "budget exhausted"
     extra = f", {rejected} converged candidates rejected for collision" if rejected else ""

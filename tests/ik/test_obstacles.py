@@ -68,3 +68,22 @@ def test_drake_ik_context_sees_the_obstacles(panda, cluttered):
         query = panda.scene_graph.get_query_output_port().Eval(sg_context)
         pairs = query.ComputeSignedDistancePairwiseClosestPoints()
         assert min(p.distance for p in pairs) == pytest.approx(cluttered.min_distance(q), abs=1e-9)
+
+
+def test_cached_ik_context_follows_the_scene(panda):
+    """The Drake baselines reuse their context only while the obstacles are unchanged."""
+    from drake_mh.ik.drake import cached_ik_context
+
+    scene = Scene(panda)
+    scene.add("ball", Sphere(0.1), [0.4, 0.0, 0.4])
+    problem = IKProblem(panda, [0.4, 0.2, 0.5], scene=scene)
+    first = cached_ik_context(problem)
+    assert cached_ik_context(problem)[1] is first[1]
+    scene.move("ball", position=[0.4, 0.1, 0.4])
+    moved = cached_ik_context(problem)
+    assert moved[1] is not first[1]
+    sg_context = panda.scene_graph.GetMyContextFromRoot(moved[0])
+    q = panda.home
+    panda.plant.SetPositions(moved[1], q)
+    pairs = panda.scene_graph.get_query_output_port().Eval(sg_context).ComputeSignedDistancePairwiseClosestPoints()
+    assert min(p.distance for p in pairs) == pytest.approx(scene.min_distance(q), abs=1e-9)

@@ -101,3 +101,11 @@ def test_bad_arguments(small_problem, kwargs, error, words):
 def test_not_a_problem():
     with pytest.raises(InvalidIKProblem, match="IKProblem"):
         solve_ik([0.3, 0, 0.5], "hybrid")
+
+
+@pytest.mark.parametrize("method", ["hybrid", "pinv", "dls", "pso", "cmaes"])
+@pytest.mark.parametrize("budget", [1, 10, 100])
+def test_budget_never_exceeded(small_problem, method, budget):
+    tight = IKProblem(small_problem.robot, small_problem.p_WT, position_tolerance=1e-300)
+    result = solve_ik(tight, method, seed=0, budget=budget)
+    assert 0 < result.nfe <= budget and not result.success
