@@ -273,11 +273,16 @@ def _execute(
             else:
                 window = parallel * _WINDOW_FACTOR
             running: dict[Future, CaseSpec] = {}
+            broken = False  # the pool broke before we saw which future it took down
             try:
                 while queue or running:
-                    while queue and len(running) < window and not suspects:
+                    while queue and len(running) < window and not suspects and not broken:
                         spec = queue.pop()
-                        running[pool.submit(run_case_task, task_source, spec)] = spec
+                        try:
+                            running[pool.submit(run_case_task, task_source, spec)] = spec
+                        except BrokenProcessPool:
+                            queue.append(spec)  # never started: runs again in a fresh pool
+                            broken = True
                     if not running:
                         break
                     finished, _ = wait(running, return_when=FIRST_COMPLETED)
@@ -298,9 +303,11 @@ def _execute(
                 for future in running:
                     future.cancel()
                 raise
-        if not suspects:
-            return
-        if isinstance(executor, Executor):
+        if isinstance(executor, Executor) and (suspects or broken):
             raise RuntimeError("the executor passed to run_study broke (a worker died); pass a fresh one")
+        if not suspects:
+            if broken and queue:
+                continue  # a fresh pool for the cases that could not be submitted
+            return
         logger.warning("a worker process died; re-running the %d case(s) it was running one by one", len(suspects))
         _isolate(suspects, task_source, executor, store_record)
