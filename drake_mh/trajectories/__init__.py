@@ -15,6 +15,8 @@ from drake_mh.trajectories.certify import QUANTITIES, Certificate, certify
 from drake_mh.trajectories.dynamics import BatchDynamics, batch_dynamics
 from drake_mh.trajectories.retime import RETIMERS, retime, ruckig_state_to_state
 from drake_mh.trajectories.trajectory import Trajectory
+from drake_mh.trajectories.viapoint import ViaPointFitness, ViaPointProblem, viapoint_trajectory
 
 __all__ = ["retime", "certify", "Certificate", "Trajectory", "BatchDynamics", "batch_dynamics",
-           "ruckig_state_to_state", "RETIMERS", "QUANTITIES"]
+           "ruckig_state_to_state", "RETIMERS", "QUANTITIES", "ViaPointProblem", "ViaPointFitness",
+           "viapoint_trajectory"]

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
-from conftest import random_waypoints
+from traj_helpers import random_waypoints
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.interpolate import PPoly
@@ -22,13 +24,18 @@ def _robot(name):
     return _ROBOTS[name]
 
 
-@settings(max_examples=int(__import__("os").environ.get("DRAKE_MH_EXAMPLES", 25)), deadline=None,
+@pytest.mark.slow
+@settings(max_examples=int(os.environ.get("DRAKE_MH_EXAMPLES", 25)), deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(name=st.sampled_from(["panda", "planar2r", "seed000_6dof"]),
        method=st.sampled_from(["toppra", "drake-toppra", "ruckig"]),
        k=st.integers(2, 7), gridpoints=st.sampled_from([20, 60, 150]), seed=st.integers(0, 2**31),
        scale=st.sampled_from([1.0, 0.5]))
 def test_every_retimed_trajectory_is_within_its_limits(name, method, k, gridpoints, seed, scale):
+    """Property: whatever path, robot, method and gridpoints, a returned trajectory is within limits.
+
+    ``DRAKE_MH_EXAMPLES=300`` runs a longer search (passed: 300 examples).
+    """
     robot = _robot(name)
     W = random_waypoints(robot, np.random.default_rng(seed), k=k, spread=0.95)
     try:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import random_waypoints
+from traj_helpers import random_waypoints
 from scipy.interpolate import PPoly
 
 import drake_mh

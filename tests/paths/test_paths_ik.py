@@ -1,0 +1,48 @@
+"""IK along a Cartesian path: warm start, joint-displacement penalty, largest joint step."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import drake_mh
+from drake_mh.errors import InvalidArgument
+from drake_mh.paths import ik_along_path, trapezoidal_path
+
+
+@pytest.fixture(scope="module")
+def arm6():
+    return drake_mh.load_robot("seed000_6dof")
+
+
+def test_table3_path_with_drake_ik_is_continuous(arm6):
+    path = trapezoidal_path()  # 50 points
+    jp = ik_along_path(arm6, path, method="drake_snopt", seed=0, budget=5)
+    assert jp.all_success and jp.q.shape == (50, 6)
+    assert np.max(jp.position_error) <= 1e-3
+    for q, p in zip(jp.q, path.points):  # independent FK check
+        assert np.linalg.norm(arm6.fk(q)[:3, 3] - p) <= 1e-3
+    # the reported largest step is the real one, on the named joint
+    steps = np.abs(np.diff(jp.q, axis=0)).max(axis=1)
+    assert jp.max_step == pytest.approx(steps.max()) and jp.max_step_index == int(np.argmax(steps))
+    k = jp.max_step_index
+    assert jp.max_step_joint == arm6.joint_names[int(np.argmax(np.abs(jp.q[k + 1] - jp.q[k])))]
+    assert jp.max_step < 0.5  # consecutive points 5 cm apart at most: no branch jump
+
+
+def test_metaheuristic_warm_start_and_penalty_keep_the_branch(arm6):
+    path = trapezoidal_path([[0.9, 0.2, 0.3], [0.8, 0.4, 0.3]], 6)
+    start = ik_along_path(arm6, path.points[:1], method="drake_snopt", seed=1, budget=5).q[0]
+    jp = ik_along_path(arm6, path, method="pso", seed=3, q_start=start, budget=4000, first_budget=4000)
+    assert jp.all_success
+    assert jp.max_step < 1.0  # PSO lands anywhere within 1 mm: its steps are rougher
+    assert jp.method == "pso" and jp.nfe > 0
+    smooth = ik_along_path(arm6, path, method="hybrid", seed=3, q_start=start, budget=2000)
+    assert smooth.all_success and smooth.max_step < 0.2
+
+
+def test_bad_input(arm6):
+    with pytest.raises(InvalidArgument, match="points"):
+        ik_along_path(arm6, np.zeros((3, 2)))
+    with pytest.raises(InvalidArgument, match="ref_weight"):
+        ik_along_path(arm6, np.zeros((2, 3)), ref_weight=-1.0)
