@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
@@ -46,16 +47,32 @@ def segment_clearance(points, obstacles, link_radius: float = 0.0) -> np.ndarray
         radius - link_radius`` [m]; ``+inf`` without obstacles. Negative means collision.
     """
     points = np.asarray(points, dtype=float)
-    out = np.full(points.shape[:-2], np.inf)
+    shape = points.shape[:-2]
     if not obstacles:
-        return out
-    a = points[..., :-1, :]
-    ab = points[..., 1:, :] - a
-    ab2 = np.maximum(np.sum(ab * ab, axis=-1), 1e-300)
-    for obstacle in obstacles:
-        c = np.asarray(obstacle.centre, dtype=float)
-        s = np.clip(np.sum((c - a) * ab, axis=-1) / ab2, 0.0, 1.0)
-        closest = a + s[..., None] * ab
-        dist = np.hypot(closest[..., 0] - c[0], closest[..., 1] - c[1])
-        out = np.minimum(out, np.min(dist, axis=-1) - float(obstacle.radius) - float(link_radius))
-    return out
+        return np.full(shape, np.inf)
+    flat = np.ascontiguousarray(points.reshape(-1, points.shape[-2], 2))
+    centres = np.array([o.centre for o in obstacles], dtype=float).reshape(-1, 2)
+    radii = np.array([o.radius for o in obstacles], dtype=float) + float(link_radius)
+    out = np.empty(len(flat))
+    _clearance_kernel(flat, centres, radii, out)
+    return out.reshape(shape)
+
+
+@numba.njit(cache=True, nogil=True)
+def _clearance_kernel(points, centres, radii, out):  # pragma: no cover - compiled
+    """out[m] = min over segments s and circles c of |segment(points[m, s:s+2]) - c| - r_c."""
+    M, K = points.shape[0], points.shape[1]
+    for m in range(M):
+        best = np.inf
+        for s in range(K - 1):
+            ax, ay = points[m, s, 0], points[m, s, 1]
+            abx, aby = points[m, s + 1, 0] - ax, points[m, s + 1, 1] - ay
+            ab2 = max(abx * abx + aby * aby, 1e-300)
+            for c in range(centres.shape[0]):
+                acx, acy = centres[c, 0] - ax, centres[c, 1] - ay
+                t = min(max((acx * abx + acy * aby) / ab2, 0.0), 1.0)
+                dx, dy = acx - t * abx, acy - t * aby
+                d = np.sqrt(dx * dx + dy * dy) - radii[c]
+                if d < best:
+                    best = d
+        out[m] = best

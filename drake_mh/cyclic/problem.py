@@ -143,6 +143,8 @@ class ThreeLinkProblem:
         self.r = np.linspace(0.0, 1.0, int(n_samples))
         self.p_WB, self.phi_prev = self._base_at(self.r)
         self.p_WT = self._target_at(self.r)
+        self._centres = np.array([o.centre for o in self.obstacles], dtype=float).reshape(-1, 2)
+        self._radii = np.array([o.radius for o in self.obstacles], dtype=float) + self.link_radius
 
     # --- sampling ---------------------------------------------------------------------------
 
@@ -200,16 +202,33 @@ class ThreeLinkProblem:
         feasible = reachable & (limit_excess <= 0.0) & (clearance > 0.0) & (closure < 1e-6)
         return Evaluation(k, theta, reachable, limit_excess, clearance, closure, fitness, feasible)
 
+    def evaluate_fast(self, k) -> tuple[np.ndarray, np.ndarray]:
+        """``(feasible (P,), fitness (P,))`` by the fused numba kernel (no joint angles kept).
+
+        Same numbers as :meth:`evaluate` (tested), about 5x faster: the optimizers' path.
+        """
+        from drake_mh.cyclic._kernel import evaluate_population
+
+        k = np.ascontiguousarray(np.atleast_1d(np.asarray(k, dtype=float)).reshape(-1))
+        P = len(k)
+        reachable = np.empty(P, dtype=np.bool_)
+        excess, clearance, closure, fitness = (np.empty(P) for _ in range(4))
+        evaluate_population(k, self.p_WB, self.phi_prev, self.p_WT, self.lengths, self.root, self.lower,
+                            self.upper, self._centres, self._radii, self.r, reachable, excess, clearance,
+                            closure, fitness)
+        feasible = reachable & (excess <= 0.0) & (clearance > 0.0) & (closure < 1e-6)
+        return feasible, fitness
+
     def feasible(self, k) -> np.ndarray:
         """``(P,)`` bool: ``k`` keeps the component feasible over the whole period."""
-        return self.evaluate(k).feasible
+        return self.evaluate_fast(k)[0]
 
     def objective(self, X) -> np.ndarray:
         """The optimizers' objective ``f(X (P, 1)) -> (P,)``: eq. (1) (MATLAB style) where
         feasible, ``+inf`` where not (eq. (21) read as "collision = infeasible")."""
         X = np.asarray(X, dtype=float)
-        ev = self.evaluate(X.reshape(len(X), -1)[:, 0])
-        return np.where(ev.feasible, ev.fitness, np.inf)
+        feasible, fitness = self.evaluate_fast(X.reshape(len(X), -1)[:, 0])
+        return np.where(feasible, fitness, np.inf)
 
     def converged_fitness(self, k: float, n: int = 8192):
         """Eq. (1) as an integral at one ``k`` (see :func:`converged_path_length`).
