@@ -8,8 +8,9 @@ robot's position limits and the requested limits within ``1 + tol``, or raises.
   reachability analysis", IEEE T-RO 2018; the ``toppra`` package): the path is the ``C²``
   cubic spline of :func:`~drake_mh.trajectories.paths.joint_path`; velocity, acceleration and
   torque limits (torque ``a(s) s̈ + b(s) ṡ² + c(s)`` with gravity, coefficients from the
-  plant-compiled RNEA of :mod:`~drake_mh.trajectories.dynamics`), seidel solver, interpolation
-  discretization. The time law is built from toppra's gridpoints and ``ṡ`` with constant ``s̈``
+  plant-compiled RNEA of :mod:`~drake_mh.trajectories.dynamics`), seidel solver, toppra's
+  interpolation discretization plus the same rows at ``check_points`` interior points of every
+  gridpoint interval (:func:`_dense_constraints`). The time law is built from toppra's gridpoints and ``ṡ`` with constant ``s̈``
   between gridpoints — the same law as toppra's ``ParametrizeConstAccel``, which does not
   overshoot (``ParametrizeSpline`` does: +2.5 % velocity, +12 % acceleration measured), but
   evaluated here with exact chain-rule derivatives.
@@ -21,10 +22,13 @@ robot's position limits and the requested limits within ``1 + tol``, or raises.
   synchronization (all joints on the straight joint-space segment, which stays inside the
   position box because the box is convex); positions are then checked by certification.
 
-Limits are enforced at the gridpoints by toppra; between them the chain-rule values can exceed
-a limit slightly. Every candidate is certified; on a violation the offending quantity's limit
-is scaled by ``1 / ratio`` (times ``1 - 1e-3``) and the problem is solved again, at most
-``max_attempts`` times, then :class:`~drake_mh.errors.LimitViolation` is raised.
+Limits are enforced at the check points by toppra; between them the chain-rule values can
+exceed a limit slightly. Every candidate is certified. A velocity/acceleration excess of a
+toppra method is repaired by one uniform time scaling (:func:`_slow_down`, which cannot raise
+the torque beyond the larger of its old value and gravity's); any other violation scales the
+offending quantity's limit by ``1 / ratio`` (times ``1 - 1e-3``; for ruckig a torque excess
+scales its velocity and acceleration limits) and solves again, at most ``max_attempts`` times,
+then :class:`~drake_mh.errors.LimitViolation` is raised.
 """
 
 from __future__ import annotations
@@ -240,7 +244,7 @@ def _velocity_constraint(spline, vmax):
     """toppra ``xbound`` constraint ``ṡ² <= min_j vmax_j² / p_j'(s_i)²`` at every gridpoint.
 
     Same bound as toppra's ``JointVelocityConstraint`` (without its per-call string
-    formatting); the interior of each interval gets velocity rows in :func:`_dense_constraint`.
+    formatting); the interior of each interval gets velocity rows in :func:`_dense_constraints`.
     A rigorous variant (largest ``|p'|`` over both neighbouring intervals) was measured 3-6 %
     slower than Drake's ``Toppra`` at 100 gridpoints on random Panda paths, against 1-2.5 %
     faster for rows at interior check points followed by the certification's time scaling.
@@ -262,42 +266,44 @@ def _velocity_constraint(spline, vmax):
     return _Velocity()
 
 
-def _dense_constraint(robot, spline, vmax, amax, tmax, fractions):
-    """Acceleration and torque rows at several points of every gridpoint interval.
+def _dense_constraints(robot, spline, vmax, amax, tmax, fractions) -> list:
+    """Velocity, acceleration and torque rows at several points of every gridpoint interval.
 
     toppra's interpolation discretization checks the second-order constraint
     ``a(s) u + b(s) x + c(s)`` at both ends of each interval, with ``x(s) = x_i + 2 u (s - s_i)``
     (constant ``s̈ = u``). The same linear rows in ``(u_i, x_i)`` hold at any ``σ`` inside:
     ``[a(σ) + 2 (σ - s_i) b(σ)] u_i + b(σ) x_i + c(σ)``. Checking at ``fractions`` of each
     interval shrinks what can be missed between check points (the certification and, if
-    needed, a time scaling catch the rest). Acceleration: ``a = p'``, ``b = p''``, ``c = 0``;
-    torque: ``a = M p'``, ``b = M p'' + C(p, p') p'``, ``c = g`` (gravity included).
+    needed, a time scaling catch the rest). Velocity: ``a = 0``, ``b = p'²``, ``c = 0`` against
+    ``v_max²``; acceleration: ``a = p'``, ``b = p''``, ``c = 0``; torque: ``a = M p'``,
+    ``b = M p'' + C(p, p') p'``, ``c = g`` (gravity included).
+
+    One toppra constraint object per fraction: toppra's seidel wrapper multiplies each
+    object's ``F`` with its rows, and one object with every row (126 x 63 for the Panda) made
+    OpenBLAS go multi-threaded — measured 100-200 ms per solve on a loaded 2-core machine
+    instead of ~1 ms.
     """
     from toppra.constraint import DiscretizationType, LinearConstraint
 
-    nq = robot.nq
     use_vel = np.any(np.isfinite(vmax))
     use_acc = np.any(np.isfinite(amax))
     use_tau = np.any(np.isfinite(tmax))
     lims = np.minimum(np.r_[vmax ** 2 if use_vel else [], amax if use_acc else [],
                             tmax if use_tau else []], 1e12)
     phi = np.asarray(fractions, dtype=float)
+    m = len(lims)
+    cache: dict = {}
 
-    class _Dense(LinearConstraint):
-        def __init__(self):
-            super().__init__()
-            self.dof = nq
-            self.identical = True
-            self.discretization_type = DiscretizationType.Interpolation
-
-        def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
+    def rows(gridpoints):
+        key = (len(gridpoints), float(gridpoints[-1]))
+        if key not in cache:
             N1 = len(gridpoints)
             h = np.r_[np.diff(gridpoints), 0.0]  # stage N: only its own point
             sig = gridpoints[:, None] + phi[None, :] * h[:, None]  # (N+1, F)
             S = sig.ravel()
             P, Ps, Pss = spline(S), spline(S, nu=1), spline(S, nu=2)
             A, B, C = [], [], []
-            if use_vel:  # p'(σ)² x(σ) <= vmax²
+            if use_vel:
                 A.append(np.zeros_like(Ps)), B.append(Ps ** 2), C.append(np.zeros_like(Ps))
             if use_acc:
                 A.append(Ps), B.append(Pss), C.append(np.zeros_like(Ps))
@@ -306,16 +312,25 @@ def _dense_constraint(robot, spline, vmax, amax, tmax, fractions):
                 A.append(a), B.append(b), C.append(c)
             A, B, C = (np.hstack(x) for x in (A, B, C))  # (N1*F, m)
             off = (2.0 * (sig - gridpoints[:, None])).ravel()[:, None]
-            a_rows = (A + off * B).reshape(N1, -1)
-            b_rows = B.reshape(N1, -1)
-            c_rows = C.reshape(N1, -1)
-            lim = np.tile(lims, len(phi))
-            m = len(lim)
-            F = np.vstack([np.eye(m), -np.eye(m)])
-            g = np.r_[lim, lim]
-            return a_rows, b_rows, c_rows, F, g, None, None
+            cache.clear()
+            cache[key] = ((A + off * B).reshape(N1, len(phi), m), B.reshape(N1, len(phi), m),
+                          C.reshape(N1, len(phi), m))
+        return cache[key]
 
-    return _Dense()
+    class _Rows(LinearConstraint):
+        def __init__(self, k):
+            super().__init__()
+            self.k = k
+            self.dof = robot.nq
+            self.identical = True
+            self.discretization_type = DiscretizationType.Interpolation
+
+        def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
+            a, b, c = rows(gridpoints)
+            F = np.vstack([np.eye(m), -np.eye(m)])
+            return a[:, self.k], b[:, self.k], c[:, self.k], F, np.r_[lims, lims], None, None
+
+    return [_Rows(k) for k in range(len(phi))]
 
 
 def _diagnose(robot, method, spline, gp, factors) -> InfeasibleTrajectory:
@@ -349,8 +364,8 @@ def _toppra_like(W, robot, method, factors, gridpoints, bc_type, check_points) -
         if "velocity" in factors:
             cons.append(_velocity_constraint(spline, vmax))
         if factors:
-            cons.append(_dense_constraint(robot, spline, vmax, amax, tmax,
-                                          np.linspace(0.0, 1.0, int(check_points) + 2)))
+            cons += _dense_constraints(robot, spline, vmax, amax, tmax,
+                                       np.linspace(0.0, 1.0, int(check_points) + 2))
         instance = algo.TOPPRA(cons, _ToppraPath(spline), gridpoints=gp, solver_wrapper="seidel",
                                parametrizer="ParametrizeConstAccel")
         sdd, sd, _ = instance.compute_parameterization(0.0, 0.0)
