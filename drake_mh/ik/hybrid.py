@@ -140,6 +140,6 @@ def solve_hybrid(problem: IKProblem, seed=0, budget: int | None = None, timeout:
     if lm.fa[k] < best_f:  # fa is inf for rows never evaluated
         best_q = lm.Qa[k].copy()
     why = "timeout" if time.perf_counter() > deadline else "budget exhausted"
-    extra = f", {rejected} converged candidates rejected for collision" if rejected else ""
+    extra = f", {rejected} converged candidates rejected (sphere model or Drake)" if rejected else ""
     return verify(problem, best_q, method="hybrid", start=start, nfe=nfe, attempts=attempts,
                   message=f"{why} after {attempts} starts{extra}")

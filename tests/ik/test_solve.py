@@ -109,3 +109,21 @@ def test_budget_never_exceeded(small_problem, method, budget):
     tight = IKProblem(small_problem.robot, small_problem.p_WT, position_tolerance=1e-300)
     result = solve_ik(tight, method, seed=0, budget=budget)
     assert 0 < result.nfe <= budget and not result.success
+
+
+def test_other_frame(panda):
+    """IK of another frame than the end effector (the wrist, panda_link6): kernel, LM and Drake agree."""
+    q = panda.random_configurations(1, 3)[0]
+    problem = IKProblem(panda, panda.fk(q, "panda_link6"), position_tolerance=1e-5, orientation_tolerance=1e-5,
+                        frame="panda_link6")
+    assert problem.reach.radius < reach_radius_of_ee(panda)
+    for method, budget in (("hybrid", 20000), ("drake_snopt", 10)):
+        result = solve_ik(problem, method, seed=0, budget=budget)
+        assert result.success, (method, result.message)
+        assert np.allclose(panda.fk(result.q, "panda_link6")[:3, 3], problem.p_WT, atol=1e-5)
+
+
+def reach_radius_of_ee(robot) -> float:
+    from drake_mh.ik import reach_bound
+
+    return reach_bound(robot).radius
