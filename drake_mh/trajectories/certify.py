@@ -201,7 +201,7 @@ _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
 
 
 def _refine(trajectory, robot, quantity, T, r, lo, hi, scale, backend, best, best_t,
-            threshold: float = 0.9, per_joint: int = 3, iterations: int = 14) -> None:
+            threshold: float = 0.9, per_joint: int = 2, iterations: int = 8) -> None:
     """Sharpen the largest ratios between samples (golden-section search around local maxima).
 
     Dense samples miss a peak's top by ``O(c Δt²)`` (seen: 9e-6 at 20 gridpoints). For every
