@@ -1,0 +1,524 @@
+"""The framework paper's regenerating path follower (§3.4: 3.4.1 and 3.4.2).
+
+The arm follows a path for which a joint solution exists at every point (§3.3: IK at each
+point). When an obstacle moves — a scripted motion or a slider of the interactive app —
+:meth:`RegeneratingFollower.react` predicts which *remaining* configurations (the points the
+arm has not reached) now collide and repairs the plan:
+
+1. **Obstacle in the path (§3.4.2, Algorithm 2).** If remaining path points come closer than
+   ``replan.tool_clearance`` to an obstacle, the ``3·nC`` points around each run of ``nC``
+   colliding points are replaced by the nearest obstacle-free points found by the
+   metaheuristic (:mod:`drake_mh.reactive.replan`), and IK is solved again for all of them.
+2. **Obstacle on the arm (§3.4.1).** Every remaining configuration whose *exact* signed
+   distance (Drake, ``Scene.min_distance``) is below ``clearance`` gets a new IK solution for
+   the *same* target point; the path is unchanged. A batched sphere-model pre-screen
+   (``Scene.batch_min_distance``, never more than Drake's distance) skips the configurations
+   that are certainly clear; every one it flags is confirmed with Drake before it counts.
+
+Regenerated IK keeps continuity with *both* neighbours. The points of a run ``[a, b]`` of
+consecutive regenerated points are solved in path order; point ``k`` gets the reference
+``q_ref = Q[k-1] + (Q[b+1] - Q[k-1]) / (b - k + 2)`` — from the configuration before it (already
+final; the current one for the first remaining point) a step towards the first unchanged
+configuration after the run, spreading the remaining gap evenly (``Q[k-1]`` when the run
+reaches the end of the path) — as the centre of the search box and of the displacement
+penalty ``ref_weight · ||q - q_ref||``. (Referencing only ``Q[k-1]`` left the whole gap at the
+run's end: a 0.5-0.9 rad step where the run rejoined the old plan.) The
+metaheuristics get the previous configuration, the old (colliding) one and the next one in
+their initial population (``x0``), the gradient methods start from ``q_ref``. A regenerated
+configuration must be verified by Drake with the larger ``ik_clearance`` (hysteresis: it is not
+flagged again by the next small obstacle motion). Each solve searches first within
+``q_prev ± 0.3 rad`` (:class:`LocalIKProblem`), then on failure with a fresh seed within
+``± 1 rad``, then over the whole joint range without the displacement penalty
+(``search_radii``): continuity first, but feasibility over continuity. After a solve,
+revolute joints are shifted by 2π toward the previous configuration (the range centre for
+the first point of a plan; same pose), joints the task does not see (whose reset to the
+previous value keeps the tool on its target and the arm clear; the 6-DOF arm's last joint)
+are reset, and the configuration is verified with Drake again. The best configuration is
+kept and a point that no attempt solved is reported in ``failed``.
+
+Any method of :func:`drake_mh.ik.available_ik_methods` solves the IK (optimizers, hybrid,
+Jacobian and Drake baselines); Algorithm 2 runs an optimizer (the IK method when it is one).
+Same seed, same plan (budget-limited runs; a ``timeout`` makes results machine-dependent).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from drake_mh.errors import InvalidArgument, UnknownMethod
+from drake_mh.ik.problem import IKProblem
+from drake_mh.reactive.replan import (ReplanConfig, ReplanResult, collision_runs, colliding_path_points,
+                                      replan_points, replan_windows)
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["FollowerConfig", "RegenerationEvent", "RegeneratingFollower", "LocalIKProblem", "largest_joint_step",
+           "wrap_toward", "revolute_mask"]
+
+_EMPTY = np.zeros(0, dtype=int)
+
+
+def largest_joint_step(Q) -> float:
+    """``max_k max_j |Q[k+1, j] - Q[k, j]|`` [rad] of ``Q (N, nq)``; 0 for fewer than 2 rows."""
+    Q = np.asarray(Q, dtype=float)
+    return float(np.abs(np.diff(Q, axis=0)).max()) if len(Q) > 1 else 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class LocalIKProblem(IKProblem):
+    """An :class:`~drake_mh.ik.IKProblem` whose search box is ``q_ref ± search_radius`` within the limits.
+
+    Every method of :func:`~drake_mh.ik.solve_ik` searches within ``problem.lower`` /
+    ``problem.upper`` (metaheuristic bounds, hybrid and Jacobian restarts and clamps);
+    verification still uses the robot's own limits. ``search_radius=None``: the limits.
+    Drake's ``InverseKinematics`` keeps the robot's limits but starts at ``q_ref``.
+    """
+
+    search_radius: float | None = None
+
+    @property
+    def lower(self) -> np.ndarray:
+        """``(nq,)`` lower end of the search box [rad]."""
+        if self.search_radius is None or self.q_ref is None:
+            return self.robot.lower
+        return np.maximum(self.robot.lower, self.q_ref - self.search_radius)
+
+    @property
+    def upper(self) -> np.ndarray:
+        """``(nq,)`` upper end of the search box [rad]."""
+        if self.search_radius is None or self.q_ref is None:
+            return self.robot.upper
+        return np.minimum(self.robot.upper, self.q_ref + self.search_radius)
+
+
+def revolute_mask(robot) -> np.ndarray:
+    """``(nq,)`` whether each joint is revolute (a 2π shift leaves its pose unchanged)."""
+    return np.array([robot.plant.GetJointByName(n).type_name() == "revolute" for n in robot.joint_names])
+
+
+def wrap_toward(robot, q, q_ref) -> np.ndarray:
+    """``q`` with each revolute joint shifted by a multiple of 2π to the value nearest ``q_ref`` within the limits.
+
+    The same pose (forward kinematics and collision geometry are unchanged); joints with a
+    range wider than 2π (the 6-DOF arm: ±260°, ±360°) otherwise start a path near a limit
+    and must later turn back a full revolution (measured: a 6.2 rad step on joint 3).
+    """
+    q = np.array(q, dtype=float)
+    revolute = revolute_mask(robot)
+    for j in np.flatnonzero(revolute & ~robot.continuous):
+        candidates = q[j] + 2.0 * np.pi * np.arange(-3, 4)
+        ok = candidates[(candidates >= robot.lower[j]) & (candidates <= robot.upper[j])]
+        if ok.size:
+            q[j] = ok[np.argmin(np.abs(ok - q_ref[j]))]
+    return q
+
+
+def _tidy(problem, result, q_prev):
+    """Continuity without changing what the task sees; the result is verified with Drake again.
+
+    1. Revolute joints are shifted by 2π toward ``q_prev`` (the range centre for a first point)
+       (:func:`wrap_toward`: same pose).
+    2. With a ``q_prev``, a joint whose reset to ``q_prev`` keeps the position within the
+       tolerance (batched FK) and the sphere-model clearance is reset — for the 6-DOF arm the
+       last joint, which does not move the tool point and which a whole-range search leaves
+       anywhere in ±2π.
+
+    If Drake does not verify the tidied configuration, the original result is returned.
+    """
+    import time as _time
+
+    from drake_mh.ik import verify
+
+    robot = problem.robot
+    ref = 0.5 * (robot.lower + robot.upper) if q_prev is None else q_prev
+    q = wrap_toward(robot, result.q, ref)
+    changed = bool(np.any(q != result.q))
+    if q_prev is not None:
+        for j in np.argsort(-np.abs(q - q_prev)):
+            if abs(q[j] - q_prev[j]) < 1e-9:
+                break
+            trial = q.copy()
+            trial[j] = q_prev[j]
+            e_p, e_o = problem.pose_errors(trial[None])
+            if e_p[0] > problem.position_tolerance or e_o[0] > problem.orientation_tolerance:
+                continue
+            if problem.has_obstacles and problem.scene.batch_min_distance(trial[None])[0] < problem.clearance:
+                continue
+            q, changed = trial, True
+    if not changed:
+        return result
+    start = _time.perf_counter() - result.time
+    tidy = verify(problem, q, method=result.method, start=start, nfe=result.nfe,
+                  message=result.message + "; tidied (2π shifts, unseen joints kept)")
+    return tidy if tidy.success else result
+
+
+@dataclass(frozen=True)
+class FollowerConfig:
+    """Settings of the regenerating follower (module docstring).
+
+    Attributes:
+        method: IK method, any name of :func:`drake_mh.ik.available_ik_methods` (default
+            ``"e3gsa"``, the framework paper's algorithm).
+        budget: per IK solve, as in :func:`drake_mh.ik.solve_ik` (``None``: its default).
+        timeout: [s] per IK solve (``None``: none; results then depend on the machine).
+        search_radii: one IK attempt per entry [rad]: the search box is the joint limits
+            intersected with ``q_prev ± radius`` (``None``: the whole range); widened on
+            failure (default 0.3, 1.0, whole range). Bounds every joint step when the first
+            attempt succeeds — also of joints the task does not see (the 6-DOF arm's last
+            joint does not move its tool point: unbounded, it jumped 6 rad).
+        clearance: [m] a configuration is predicted to collide when Drake's exact signed
+            distance to an obstacle is below it (default 0.01; keep >= 1e-4, Drake's
+            capsule-box GJK can be 6e-5 m optimistic).
+        ik_clearance: [m] a regenerated configuration must keep this exact distance (>=
+            ``clearance``; default 0.015).
+        ref_weight: [m/rad] displacement penalty to the previous configuration.
+        position_tolerance: [m] on the tool position (default 1 mm, the paper's position IK).
+        prescreen: sphere-model pre-screen before Drake's exact check (the decision is
+            Drake's either way).
+        replan_path: re-plan path points the obstacle cuts (§3.4.2); ``False``: only §3.4.1.
+        replan: :class:`~drake_mh.reactive.replan.ReplanConfig` of Algorithm 2.
+        params: optimizer options for the metaheuristic IK, as ``((name, value), ...)``.
+    """
+
+    method: str = "e3gsa"
+    budget: int | None = None
+    timeout: float | None = None
+    search_radii: tuple = (0.3, 1.0, None)
+    clearance: float = 0.01
+    ik_clearance: float = 0.015
+    ref_weight: float = 0.05
+    position_tolerance: float = 1e-3
+    prescreen: bool = True
+    replan_path: bool = True
+    replan: ReplanConfig = field(default_factory=ReplanConfig)
+    params: tuple = ()
+
+    def __post_init__(self):
+        from drake_mh.ik import available_ik_methods
+
+        methods = available_ik_methods()
+        if not isinstance(self.method, str) or self.method.lower() not in methods:
+            raise UnknownMethod(str(self.method), methods, what="IK method")
+        object.__setattr__(self, "method", self.method.lower())
+        radii = tuple(self.search_radii) if isinstance(self.search_radii, (tuple, list)) else ()
+        if not radii or not all(r is None or (isinstance(r, (int, float)) and np.isfinite(r) and r > 0)
+                                for r in radii):
+            raise InvalidArgument(f"search_radii must be a non-empty tuple of positive radii [rad] or None "
+                                  f"(whole joint range), got {self.search_radii!r}")
+        object.__setattr__(self, "search_radii", radii)
+        for name in ("clearance", "ik_clearance"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and v >= 1e-4):
+                raise InvalidArgument(f"{name} must be >= 1e-4 m (Drake's GJK distance can be 6e-5 m "
+                                      f"optimistic), got {v!r}")
+        if self.ik_clearance < self.clearance:
+            raise InvalidArgument(f"ik_clearance ({self.ik_clearance} m) must be >= clearance ({self.clearance} m), "
+                                  "or regenerated configurations would be flagged again at once")
+        if not (np.isfinite(self.ref_weight) and self.ref_weight >= 0):
+            raise InvalidArgument(f"ref_weight must be >= 0, got {self.ref_weight!r}")
+        if not (np.isfinite(self.position_tolerance) and self.position_tolerance > 0):
+            raise InvalidArgument(f"position_tolerance must be > 0 m, got {self.position_tolerance!r}")
+        if not isinstance(self.replan, ReplanConfig):
+            raise InvalidArgument("replan must be a drake_mh.reactive.replan.ReplanConfig")
+        object.__setattr__(self, "params", tuple(dict(self.params).items()))
+
+
+@dataclass(frozen=True)
+class RegenerationEvent:
+    """What one :meth:`RegeneratingFollower.react` did.
+
+    Attributes:
+        number: event counter (0, 1, ...).
+        index: the path point the arm was at (points ``> index`` could be changed).
+        obstacles: ``{name: p_WO (3,)}`` obstacle positions [m] at the event.
+        colliding: configuration indices predicted to collide (Drake-confirmed) before repair.
+        screened: configurations the pre-screen passed to Drake (all remaining without it).
+        path_colliding: path indices closer than the tool clearance to an obstacle.
+        replans: the :class:`~drake_mh.reactive.replan.ReplanResult` of each window.
+        regenerated: indices whose IK was solved again (windows ∪ colliding).
+        failed: regenerated indices whose configuration Drake did not verify.
+        detect_time, time: [s] prediction alone; the whole event (prediction + repair).
+        max_step_before, max_step_after: largest joint step [rad] of the remaining motion
+            (from the current configuration to the end) before and after.
+        min_distance_after: smallest exact distance [m] of the remaining configurations after.
+        nfe: IK evaluations spent.
+    """
+
+    number: int
+    index: int
+    obstacles: dict
+    colliding: np.ndarray
+    screened: int
+    path_colliding: np.ndarray
+    replans: tuple
+    regenerated: np.ndarray
+    failed: np.ndarray
+    detect_time: float
+    time: float
+    max_step_before: float
+    max_step_after: float
+    min_distance_after: float
+    nfe: int
+
+    @property
+    def replanned(self) -> np.ndarray:
+        """Indices whose path point was re-planned (the windows)."""
+        return np.concatenate([r.window for r in self.replans]) if self.replans else _EMPTY
+
+    @property
+    def changed(self) -> bool:
+        """Whether the plan changed."""
+        return self.regenerated.size > 0
+
+    def summary(self) -> str:
+        """One line for logs and the app's status."""
+        if not self.changed:
+            return f"no collision predicted ({self.screened} checked with Drake, {1e3 * self.time:.1f} ms)"
+        parts = [f"{self.regenerated.size} points regenerated in {self.time:.2f} s"]
+        if self.replans:
+            parts.append(f"path re-planned at {self.replanned.size} points (3·nC, nC = {self.path_colliding.size})")
+        if self.failed.size:
+            parts.append(f"FAILED at {self.failed.tolist()}")
+        parts.append(f"max step {self.max_step_after:.3f} rad")
+        return "; ".join(parts)
+
+
+class RegeneratingFollower:
+    """Follows a path with a joint solution per point and repairs it when obstacles move.
+
+    Args:
+        robot: the :class:`~drake_mh.robot.Robot`.
+        scene: the :class:`~drake_mh.scene.Scene` whose obstacles move (``scene.move``).
+        points: ``(N, 3)`` tool positions [m] (or a ``CartesianPath``).
+        Q: ``(N, nq)`` a joint solution per point [rad].
+        config: :class:`FollowerConfig`.
+        seed: base seed of every regeneration.
+        index: the point the arm is at.
+
+    Attributes:
+        points, Q: the current plan (updated by :meth:`react`).
+        index: current point; ``executed`` ``(N, nq)``: the configuration each point had when
+            the arm reached it (NaN ahead of the arm); ``regenerated_mask`` ``(N,)``: points
+            ever regenerated; ``events``: every :class:`RegenerationEvent`.
+    """
+
+    def __init__(self, robot, scene, points, Q, config: FollowerConfig | None = None, seed: int = 0,
+                 index: int = 0):
+        P = np.array(getattr(points, "points", points), dtype=float)
+        if P.ndim != 2 or P.shape[1] != 3 or len(P) < 2 or not np.all(np.isfinite(P)):
+            raise InvalidArgument(f"points must be a finite (N >= 2, 3) array [m], got shape {P.shape}")
+        Q = robot.check_Q(Q, "Q")
+        if len(Q) != len(P):
+            raise InvalidArgument(f"Q has {len(Q)} configurations for {len(P)} points: give one per point "
+                                  "(e.g. drake_mh.paths.ik_along_path(robot, points).q)")
+        if scene.robot is not robot:
+            raise InvalidArgument("the scene belongs to another Robot object; build it with Scene(robot)")
+        if isinstance(index, bool) or int(index) != index or not 0 <= index < len(P):
+            raise InvalidArgument(f"index must be a point index in [0, {len(P) - 1}], got {index!r}")
+        self.robot, self.scene = robot, scene
+        self.config = config if config is not None else FollowerConfig()
+        if not isinstance(self.config, FollowerConfig):
+            raise InvalidArgument("config must be a drake_mh.reactive.FollowerConfig")
+        self.seed = int(seed)
+        self.points, self.Q = P, Q.copy()
+        self.index = int(index)
+        self.executed = np.full_like(self.Q, np.nan)
+        self.executed[: self.index + 1] = self.Q[: self.index + 1]
+        self.regenerated_mask = np.zeros(len(P), dtype=bool)
+        self.events: list[RegenerationEvent] = []
+        self.plan_failed = _EMPTY
+
+    # --- construction from a path ---------------------------------------------------------
+
+    @classmethod
+    def plan(cls, robot, scene, points, config: FollowerConfig | None = None, seed: int = 0, q_start=None,
+             progress=None) -> RegeneratingFollower:
+        """Solves IK at every point ("Generate solutions", §3.3) and returns a follower at point 0.
+
+        The same recurrence as :func:`drake_mh.paths.ik_along_path` (each point warm-started
+        from the previous solution with the displacement penalty), with the config's method,
+        budget, tolerance, ``ik_clearance`` and retries. Check ``follower.plan_failed``.
+
+        Args:
+            robot, scene, points, config, seed: as for the constructor.
+            q_start: configuration near which to solve the first point (``None``: free search).
+            progress: ``progress(k, N)`` called after each point (the app's status line).
+        """
+        config = config if config is not None else FollowerConfig()
+        P = np.array(getattr(points, "points", points), dtype=float)
+        q0 = robot.home if q_start is None else robot.check_q(q_start, "q_start")
+        follower = cls(robot, scene, P, np.tile(q0, (len(P), 1)), config, seed)
+        failed = []
+        for k in range(len(P)):
+            q_prev = follower.Q[k - 1] if k > 0 else (None if q_start is None else q0)
+            res, _ = follower._solve_point(k, -1, q_prev, None)
+            follower.Q[k] = res.q
+            if not res.success:
+                failed.append(k)
+            if progress is not None:
+                progress(k + 1, len(P))
+        follower.executed[0] = follower.Q[0]
+        follower.plan_failed = np.array(failed, dtype=int)
+        return follower
+
+    # --- state ------------------------------------------------------------------------------
+
+    @property
+    def n_points(self) -> int:
+        """Number of path points."""
+        return len(self.points)
+
+    @property
+    def q(self) -> np.ndarray:
+        """The current configuration ``(nq,)``."""
+        return self.Q[self.index].copy()
+
+    @property
+    def done(self) -> bool:
+        """Whether the arm is at the last point."""
+        return self.index >= self.n_points - 1
+
+    def advance(self, steps: int = 1) -> np.ndarray:
+        """Moves the arm ``steps`` points along the plan; returns the new configuration."""
+        for _ in range(int(steps)):
+            if self.done:
+                break
+            self.index += 1
+            self.executed[self.index] = self.Q[self.index]
+        return self.q
+
+    def restart(self, index: int = 0) -> None:
+        """Puts the arm back at ``index`` (a closed path run again); the plan is kept."""
+        self.index = int(index)
+        self.executed[:] = np.nan
+        self.executed[: self.index + 1] = self.Q[: self.index + 1]
+
+    # --- prediction -------------------------------------------------------------------------
+
+    def predict(self, start: int | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+        """Remaining configurations that collide now (Drake's exact check decides).
+
+        Args:
+            start: first index checked (default ``index + 1``).
+
+        Returns:
+            ``(indices, exact distances [m] of those, number checked with Drake)``.
+        """
+        start = self.index + 1 if start is None else int(start)
+        idx = np.arange(start, self.n_points)
+        if idx.size == 0 or not self.scene.obstacles:
+            return _EMPTY, np.zeros(0), 0
+        c = self.config.clearance
+        if self.config.prescreen:  # conservative: >= c here means >= c for Drake too
+            idx = idx[self.scene.batch_min_distance(self.Q[idx]) < c]
+        exact = np.array([self.scene.min_distance(self.Q[k]) for k in idx])
+        hit = exact < c
+        return idx[hit], exact[hit], int(idx.size)
+
+    def remaining_max_step(self) -> float:
+        """Largest joint step [rad] from the current configuration to the end of the plan."""
+        return largest_joint_step(self.Q[self.index:])
+
+    # --- repair -----------------------------------------------------------------------------
+
+    def _seed(self, event: int, k: int, attempt: int) -> int:
+        key = [self.seed & 0xFFFFFFFF, event + 1, k + 1, attempt]  # SeedSequence takes no negatives
+        return int(np.random.SeedSequence(key).generate_state(1)[0])
+
+    def _solve_point(self, k: int, event: int, q_prev, old_q) -> tuple[object, int]:
+        """IK for point ``k`` near the reference ``q_prev`` (module docstring); ``(best IKResult, nfe)``.
+
+        ``event`` = -1 for the initial plan; ``q_prev`` = ``None``: no reference (first point).
+        In :meth:`react` the reference spreads the gap to the next unchanged configuration
+        evenly over the run's remaining points.
+        """
+        from drake_mh.ik import GRADIENT_METHODS, solve_ik
+
+        cfg = self.config
+        extra = dict(cfg.params)
+        seeds = [q for q in (q_prev, old_q) if q is not None]
+        if old_q is not None and k + 1 < self.n_points:
+            seeds.append(self.Q[k + 1])
+        use_x0 = cfg.method not in GRADIENT_METHODS and bool(seeds)
+        best, nfe = None, 0
+        for attempt, radius in enumerate(cfg.search_radii):
+            local = q_prev is not None and radius is not None
+            problem = LocalIKProblem(self.robot, self.points[k], position_tolerance=cfg.position_tolerance,
+                                     scene=self.scene, clearance=cfg.ik_clearance, q_ref=q_prev,
+                                     ref_weight=cfg.ref_weight if local else 0.0,
+                                     search_radius=radius if local else None)
+            if use_x0:  # clipped into this attempt's search box
+                extra["x0"] = np.clip(np.array(seeds), problem.lower, problem.upper)
+            res = solve_ik(problem, cfg.method, seed=self._seed(event, k, attempt), budget=cfg.budget,
+                           timeout=cfg.timeout, **extra)
+            nfe += int(res.nfe)
+            if res.success:
+                res = _tidy(problem, res, q_prev)
+            score = (not res.success, res.position_error + max(0.0, cfg.ik_clearance - res.min_distance))
+            if best is None or score < best[0]:
+                best = (score, res)
+            if res.success:
+                break
+        return best[1], nfe
+
+    def react(self) -> RegenerationEvent:
+        """Checks the remaining plan against the obstacles' current poses and repairs it.
+
+        Returns:
+            The :class:`RegenerationEvent` (also appended to :attr:`events`); ``changed`` is
+            ``False`` when nothing collides.
+        """
+        start = time.perf_counter()
+        cfg = self.config
+        number = len(self.events)
+        lo, hi = self.index + 1, self.n_points - 1
+        step_before = self.remaining_max_step()
+        path_hits = _EMPTY
+        windows: list[np.ndarray] = []
+        if cfg.replan_path and lo <= hi and self.scene.obstacles:
+            path_hits = colliding_path_points(self.points, self.scene, cfg.replan.tool_clearance, start=lo)
+            windows = replan_windows(path_hits, lo, hi)
+        colliding, _, screened = self.predict(lo)
+        detect_time = time.perf_counter() - start
+        replans: list[ReplanResult] = []
+        optimizer = cfg.replan.optimizer(cfg.method)
+        for w, window in enumerate(windows):
+            result = replan_points(self.points, window, self.scene, cfg.replan, method=optimizer,
+                                   seed=self._seed(number, self.n_points + w, 0), colliding=path_hits)
+            self.points[window] = result.new_points
+            replans.append(result)
+        todo = np.union1d(np.concatenate(windows) if windows else _EMPTY, colliding).astype(int)
+        failed, nfe = [], 0
+        anchors = {}  # k -> the first unchanged configuration after k's run (None at the path's end)
+        for a, b in collision_runs(todo):
+            for k in range(a, b + 1):
+                anchors[k] = (b, self.Q[b + 1].copy() if b + 1 < self.n_points else None)
+        for k in todo:  # increasing: Q[k-1] is final when k is solved
+            b, q_after = anchors[int(k)]
+            q_ref = self.Q[k - 1] if q_after is None else self.Q[k - 1] + (q_after - self.Q[k - 1]) / (b - k + 2)
+            res, used = self._solve_point(int(k), number, q_ref, self.Q[k].copy())
+            nfe += used
+            self.Q[k] = res.q
+            self.regenerated_mask[k] = True
+            if not res.success:
+                failed.append(int(k))
+                logger.warning("point %d: no verified IK solution after %d attempts (%s)", k, len(cfg.search_radii),
+                               res.message)
+        remaining = self.Q[lo:]
+        min_after = (float(self.scene.exact_min_distance(remaining).min())
+                     if remaining.size and self.scene.obstacles else np.inf)
+        event = RegenerationEvent(
+            number=number, index=self.index,
+            obstacles={n: o.position for n, o in self.scene.obstacles.items()},
+            colliding=colliding, screened=screened, path_colliding=path_hits, replans=tuple(replans),
+            regenerated=todo, failed=np.array(failed, dtype=int), detect_time=detect_time,
+            time=time.perf_counter() - start, max_step_before=step_before,
+            max_step_after=self.remaining_max_step(), min_distance_after=min_after, nfe=nfe)
+        self.events.append(event)
+        logger.info("event %d at point %d: %s", number, self.index, event.summary())
+        return event
