@@ -1,0 +1,413 @@
+"""The interactive planner app (framework paper §4, GUI of Table 1) in the browser with Meshcat.
+
+Table 1's parts and where they are here (details in ``docs/app.md``):
+
+* part 1 (robot, algorithm, obstacle): ``--robot`` / ``--method`` / ``--no-obstacle``; the
+  buttons "Next robot" and "Next algorithm" cycle the choices (Meshcat has no drop-down);
+* part 2 (path: start / via / end points, number of points): "Edit next point" selects start,
+  via 1, via 2 or end, the sliders "Point X/Y/Z" move it, the slider "Points in path";
+* part 3 (simulation window): the Meshcat view; "Show environment" draws path, robot, obstacle;
+* part 4 (IK solver): "Generate / Regenerate solutions" (§3.3), "Test run" (play once);
+* parts 5, 7: "Run" (loops on a closed path) and "Stop";
+* part 6 (obstacle position): sliders "Obstacle X/Y/Z" (and radius) move the obstacle live; the
+  follower regenerates (§3.4.1) or re-plans (§3.4.2) at once (:mod:`drake_mh.reactive.follower`).
+
+A status line ("Setup: ..." / "Status: ...", inert buttons at the bottom of the panel: Meshcat
+has no text element) reports what happened. ``status_file`` receives the same state as JSON
+(rewritten atomically on every change) for scripts and tests; ``max_seconds`` ends the loop.
+
+Everything runs in the thread that created Meshcat (Drake requires it): one loop polls the
+controls, moves the obstacle, regenerates and poses the robot at ``fps``. Generation blocks
+the loop (the status shows the progress); the browser stays connected.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import logging
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from drake_mh.errors import InvalidArgument
+from drake_mh.viz.app_controls import Controls, SliderSpec
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["AppConfig", "PlannerApp", "POINT_NAMES"]
+
+POINT_NAMES = ("start", "via 1", "via 2", "end")
+
+
+@dataclass(frozen=True)
+class AppConfig:
+    """Start-up settings of the app (the command line's options).
+
+    Attributes:
+        robots: robot names the "Next robot" button cycles through (the first is loaded).
+        method: IK / planner algorithm (any of :func:`drake_mh.ik.available_ik_methods`).
+        points: ``((x, y, z) * 4)`` start, via 1, via 2, end [m] (default Table 3: a closed loop).
+        n_points: points in the path (Table 3: 50).
+        obstacle: ``(x, y, z)`` [m] or ``None`` for no obstacle (default (0.2, 0.2, 0.6)).
+        obstacle_radius: [m] of the spherical obstacle (default 0.2, as the scenario).
+        seed: seed of generation and regeneration; budget: per IK solve (``None``: default).
+        fps: frame rate of the loop [Hz]; speed: playback speed (1 = the path's own timing).
+        port: Meshcat port (``None``: first free from 7000; 0: any).
+        status_file: JSON status written on every change (``None``: none).
+    """
+
+    robots: tuple = ("seed000_6dof", "panda")
+    method: str = "e3gsa"
+    points: tuple = ((0.2, 0.8, 0.3), (1.0, 0.2, 0.2), (0.5, 0.4, 0.1), (0.2, 0.8, 0.3))
+    n_points: int = 50
+    obstacle: tuple | None = (0.2, 0.2, 0.6)
+    obstacle_radius: float = 0.2
+    seed: int = 0
+    budget: int | None = None
+    fps: float = 30.0
+    speed: float = 1.0
+    port: int | None = None
+    status_file: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        from drake_mh.ik import available_ik_methods
+
+        if self.method.lower() not in available_ik_methods():
+            from drake_mh.errors import UnknownMethod
+
+            raise UnknownMethod(self.method, available_ik_methods(), what="IK method")
+        P = np.asarray(self.points, dtype=float)
+        if P.shape != (4, 3) or not np.all(np.isfinite(P)):
+            raise InvalidArgument(f"points must be start, via 1, via 2, end: 4 finite (x, y, z) [m], got {P.shape}")
+        if isinstance(self.n_points, bool) or int(self.n_points) != self.n_points or not 4 <= self.n_points <= 500:
+            raise InvalidArgument(f"n_points must be an integer in [4, 500], got {self.n_points!r}")
+        if not (np.isfinite(self.fps) and 1 <= self.fps <= 120):
+            raise InvalidArgument(f"fps must be in [1, 120] Hz, got {self.fps!r}")
+        if not (np.isfinite(self.speed) and self.speed > 0):
+            raise InvalidArgument(f"speed must be > 0, got {self.speed!r}")
+        if not (np.isfinite(self.obstacle_radius) and self.obstacle_radius > 0):
+            raise InvalidArgument(f"obstacle_radius must be a positive length [m], got {self.obstacle_radius!r}")
+        if not self.robots:
+            raise InvalidArgument("robots must name at least one robot (drake-mh robots lists them)")
+
+
+class PlannerApp:
+    """The app: state, drawing and one loop (module docstring).
+
+    Args:
+        config: :class:`AppConfig`.
+        meshcat: a Meshcat instance (default: this thread's localhost server).
+    """
+
+    def __init__(self, config: AppConfig = AppConfig(), meshcat=None):
+        from drake_mh.ik import available_ik_methods
+        from drake_mh.viz.server import get_meshcat
+
+        self.config = config
+        self.meshcat = meshcat if meshcat is not None else get_meshcat(config.port)
+        self.methods = available_ik_methods()
+        self.method = config.method.lower()
+        self.robot_index = 0
+        self.points = np.array(config.points, dtype=float)
+        self.n_points = int(config.n_points)
+        self.edit = 0
+        self.mode = "idle"          # idle | test | run
+        self.t = 0.0                # time along the path [s]
+        self.follower = None
+        self.message = "ready: press Generate / Regenerate solutions"
+        self.events = 0
+        self.regenerated_total = 0
+        self.last_event = ""
+        self.frames = 0
+        self.run_frames, self.run_time = 0, 0.0
+        self.started = time.monotonic()
+        self.clicks: dict[str, int] = {}
+        self._load_robot()
+        P = self.points
+        o = config.obstacle if config.obstacle is not None else (0.5, 0.5, 0.5)
+        reach = 1.5
+        sliders = [
+            SliderSpec("Point X [m]", -reach, reach, 0.01, P[0, 0]),
+            SliderSpec("Point Y [m]", -reach, reach, 0.01, P[0, 1]),
+            SliderSpec("Point Z [m]", -reach, reach, 0.01, P[0, 2]),
+            SliderSpec("Points in path", 4, 200, 1, self.n_points),
+            SliderSpec("Obstacle X [m]", -reach, reach, 0.01, o[0]),
+            SliderSpec("Obstacle Y [m]", -reach, reach, 0.01, o[1]),
+            SliderSpec("Obstacle Z [m]", -reach, reach, 0.01, o[2]),
+            SliderSpec("Obstacle radius [m]", 0.01, 0.5, 0.01, config.obstacle_radius),
+        ]
+        self.controls = Controls(self.meshcat, sliders)
+        self.meshcat.SetCameraPose([1.9, -1.3, 1.3], [0.45, 0.3, 0.25])  # the Table 3 workspace
+        self.show_environment()
+
+    # --- model -----------------------------------------------------------------------------
+
+    @property
+    def robot_name(self) -> str:
+        """The loaded robot's name."""
+        return self.config.robots[self.robot_index]
+
+    def _load_robot(self) -> None:
+        import drake_mh
+        from drake_mh.scene import Scene, Sphere
+        from drake_mh.viz.view import View
+
+        self.robot = drake_mh.load_robot(self.robot_name)
+        self.scene = Scene(self.robot)
+        if self.config.obstacle is not None:
+            radius = getattr(self, "_radius", self.config.obstacle_radius)
+            position = getattr(self, "_obstacle_p", self.config.obstacle)
+            self.scene.add("obstacle", Sphere(radius), position)
+        self.view = View(self.robot, meshcat=self.meshcat)
+        self.follower = None
+        self._make_path()
+
+    def _make_path(self) -> None:
+        from drake_mh.paths import trapezoidal_path
+
+        points = self.points
+        keep = np.concatenate([[True], np.linalg.norm(np.diff(points, axis=0), axis=1) > 1e-9])
+        self.path = trapezoidal_path(points[keep], n_points=max(self.n_points, int(keep.sum())))
+        self.follower = None
+
+    def _follower_config(self):
+        from drake_mh.reactive.follower import FollowerConfig
+
+        return FollowerConfig(method=self.method, budget=self.config.budget)
+
+    # --- drawing ---------------------------------------------------------------------------
+
+    def show_environment(self) -> None:
+        """Draws the path, its stop points, the obstacle and the robot (Table 1 part 3)."""
+        view = self.view
+        view.add_obstacles(self.scene)
+        points = self.follower.points if self.follower is not None else self.path.points
+        view.add_path(points, "path")
+        for i, p in enumerate(self.points):
+            view.add_target(p, f"point{i}", radius=0.025 if i == self.edit else 0.015,
+                            colour=(0.9, 0.2, 0.2, 0.9) if i == self.edit else (0.1, 0.75, 0.2, 0.9))
+        view.set_q(self.follower.q if self.follower is not None else self.robot.home)
+
+    def _pose_along(self, t: float) -> None:
+        """Poses the robot at time ``t`` of the path (linear between the points' solutions)."""
+        f = self.follower
+        times = self.path.times
+        k = int(np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 1))
+        while f.index < k:
+            f.advance()
+        if k >= len(times) - 1:
+            self.view.set_q(f.Q[-1])
+            return
+        s = (t - times[k]) / max(times[k + 1] - times[k], 1e-9)
+        self.view.set_q(f.Q[k] + np.clip(s, 0.0, 1.0) * (f.Q[k + 1] - f.Q[k]))
+
+    # --- actions (buttons) -------------------------------------------------------------------
+
+    def generate(self) -> None:
+        """'Generate / Regenerate solutions': IK at every point with the chosen algorithm (§3.3)."""
+        from drake_mh.reactive.follower import RegeneratingFollower
+
+        self.mode = "idle"
+        seed = self.config.seed + self.clicks.get("Generate / Regenerate solutions", 0)
+        start = time.perf_counter()
+
+        def progress(k, n):
+            if k % 5 == 0 or k == n:
+                self._status(f"generating with {self.method}: {k}/{n} points")
+
+        self.follower = RegeneratingFollower.plan(self.robot, self.scene, self.path.points, self._follower_config(),
+                                                  seed=seed, progress=progress)
+        took = time.perf_counter() - start
+        failed = self.follower.plan_failed
+        self.message = (f"solutions generated with {self.method} in {took:.1f} s, largest joint step "
+                        f"{self.follower.remaining_max_step():.3f} rad"
+                        + (f"; NOT verified at points {failed.tolist()}" if failed.size else "; all verified"))
+        self.show_environment()
+
+    def play(self, mode: str) -> None:
+        """'Test run' (once) or 'Run' (looping on a closed path) from the start."""
+        if self.follower is None:
+            self.message = "no solutions yet: press Generate / Regenerate solutions first"
+            return
+        self.follower.restart(0)
+        self.t = 0.0
+        self.mode = mode
+        self.run_frames, self.run_time = 0, 0.0
+        self.message = "test run" if mode == "test" else "running: move the obstacle with its sliders"
+
+    def stop(self) -> None:
+        """'Stop'."""
+        self.mode = "idle"
+        self.message = f"stopped at point {self.follower.index if self.follower else 0}"
+
+    def next_robot(self) -> None:
+        """'Next robot': loads the next robot of ``config.robots`` (the plan is discarded)."""
+        self.robot_index = (self.robot_index + 1) % len(self.config.robots)
+        self.mode = "idle"
+        self._load_robot()
+        self.show_environment()
+        self.message = f"robot {self.robot_name} loaded: press Generate / Regenerate solutions"
+
+    def next_algorithm(self) -> None:
+        """'Next algorithm': the next IK method; regeneration uses it from now on."""
+        self.method = self.methods[(self.methods.index(self.method) + 1) % len(self.methods)]
+        if self.follower is not None:
+            self.follower.config = dataclasses.replace(self.follower.config, method=self.method)
+        self.message = f"algorithm {self.method} (used by the next generation and every regeneration)"
+
+    def next_point(self) -> None:
+        """'Edit next point': the Point X/Y/Z sliders now edit start / via 1 / via 2 / end."""
+        self.edit = (self.edit + 1) % 4
+        for axis, name in enumerate(("Point X [m]", "Point Y [m]", "Point Z [m]")):
+            self.controls.set(name, self.points[self.edit, axis])
+        self.show_environment()
+        self.message = f"editing the {POINT_NAMES[self.edit]} point"
+
+    # --- reactions (sliders) ------------------------------------------------------------------
+
+    def move_obstacle(self, position=None, radius=None) -> None:
+        """Moves (or resizes) the obstacle and lets the follower react (§3.4.1 / §3.4.2)."""
+        from drake_mh.scene import Sphere
+
+        if self.config.obstacle is None:
+            self.message = "no obstacle (started with --no-obstacle)"
+            return
+        if radius is not None:
+            self._radius = float(radius)
+            p = self.scene.obstacles["obstacle"].position
+            self.scene.remove("obstacle")
+            self.scene.add("obstacle", Sphere(self._radius), p)
+            self.view.add_obstacles(self.scene)
+        if position is not None:
+            self._obstacle_p = tuple(float(v) for v in position)
+            self.scene.move("obstacle", position)
+            self.view.update_obstacles(self.scene)
+        if self.follower is None:
+            self.message = "obstacle moved (no solutions yet)"
+            return
+        event = self.follower.react()
+        if event.changed:
+            self.events += 1
+            self.regenerated_total += int(event.regenerated.size)
+            self.last_event = event.summary()
+            if event.replans:
+                self.view.add_path(self.follower.points, "path")
+        self.message = event.summary()
+
+    def edit_path(self, changed: dict) -> None:
+        """A path slider moved: new path, solutions discarded."""
+        for axis, name in enumerate(("Point X [m]", "Point Y [m]", "Point Z [m]")):
+            if name in changed:
+                self.points[self.edit, axis] = changed[name]
+        if "Points in path" in changed:
+            self.n_points = int(round(changed["Points in path"]))
+        self.mode = "idle"
+        self._make_path()
+        self.show_environment()
+        self.message = (f"path changed ({len(self.path.points)} points, {self.path.duration:.1f} s): "
+                        "press Generate / Regenerate solutions")
+
+    # --- loop -------------------------------------------------------------------------------
+
+    def handle(self, name: str) -> None:
+        """Runs the action of a clicked button."""
+        self.clicks[name] = self.clicks.get(name, 0) + 1
+        actions = {
+            "Next robot": self.next_robot, "Next algorithm": self.next_algorithm, "Edit next point": self.next_point,
+            "Show environment": self.show_environment, "Generate / Regenerate solutions": self.generate,
+            "Test run": lambda: self.play("test"), "Run": lambda: self.play("run"), "Stop": self.stop,
+        }
+        if name in actions:
+            actions[name]()
+
+    def tick(self, dt: float) -> None:
+        """One frame: buttons, sliders, motion."""
+        for name in self.controls.clicked():
+            self.handle(name)
+        changed = self.controls.changed()
+        if any(k.startswith("Point") for k in changed):
+            self.edit_path(changed)
+        moved = [changed.get(f"Obstacle {a} [m]") for a in "XYZ"]
+        if any(v is not None for v in moved) or "Obstacle radius [m]" in changed:
+            p = [self.controls.value(f"Obstacle {a} [m]") for a in "XYZ"]
+            self.move_obstacle(p if any(v is not None for v in moved) else None,
+                               changed.get("Obstacle radius [m]"))
+        if self.mode in ("test", "run") and self.follower is not None:
+            self.t += dt * self.config.speed
+            self.run_frames += 1
+            self.run_time += dt
+            if self.t >= self.path.duration:
+                closed = np.allclose(self.path.points[0], self.path.points[-1])
+                if self.mode == "run" and closed:
+                    self._pose_along(self.path.duration)
+                    self.t -= self.path.duration
+                    self.follower.restart(0)
+                    self.follower.react()  # the whole loop lies ahead again
+                else:
+                    self._pose_along(self.path.duration)
+                    self.message = "test run finished" if self.mode == "test" else "run finished"
+                    self.mode = "idle"
+                    return
+            self._pose_along(self.t)
+        self.frames += 1
+
+    def _status(self, message: str | None = None) -> None:
+        if message is not None:
+            self.message = message
+        setup = (f"Setup: {self.robot_name} | {self.method} | editing {POINT_NAMES[self.edit]} | "
+                 f"{len(self.path.points)} points")
+        self.controls.status(setup, f"Status: {self.message}")
+        self.write_status()
+
+    def state(self) -> dict:
+        """The app's state as a JSON-friendly dict (the status file's content)."""
+        f = self.follower
+        obstacle = self.scene.obstacles.get("obstacle")
+        return {
+            "url": self.meshcat.web_url(), "robot": self.robot_name, "method": self.method, "mode": self.mode,
+            "message": self.message, "editing": POINT_NAMES[self.edit], "points": self.points.tolist(),
+            "n_points": len(self.path.points),
+            "obstacle": None if obstacle is None else obstacle.position.tolist(),
+            "obstacle_radius": None if obstacle is None else float(obstacle.shape.radius),
+            "solutions": f is not None, "index": None if f is None else int(f.index),
+            "plan_hash": None if f is None else hashlib.sha256(f.Q.tobytes() + f.points.tobytes()).hexdigest()[:16],
+            "events": self.events, "regenerated_total": self.regenerated_total, "last_event": self.last_event,
+            "clicks": dict(self.clicks), "frames": self.frames,
+            "run_fps": self.run_frames / self.run_time if self.run_time > 0 else None,
+            "elapsed": time.monotonic() - self.started,
+        }
+
+    def write_status(self) -> None:
+        """Writes :meth:`state` to ``config.status_file`` atomically (if set)."""
+        if not self.config.status_file:
+            return
+        path = Path(self.config.status_file)
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text(json.dumps(self.state(), indent=1))
+        os.replace(tmp, path)
+
+    def run(self, max_seconds: float | None = None) -> dict:
+        """The loop: runs until ``max_seconds`` (``None``: until Ctrl-C); returns the final state."""
+        period = 1.0 / self.config.fps
+        deadline = np.inf if max_seconds is None else time.monotonic() + float(max_seconds)
+        last = time.monotonic()
+        last_write = 0.0
+        shown = None
+        self._status()
+        while time.monotonic() < deadline:
+            now = time.monotonic()
+            dt, last = now - last, now
+            self.tick(min(dt, 0.25))
+            key = (self.message, self.method, self.edit, self.robot_name, len(self.path.points))
+            if key != shown or now - last_write > 0.5:
+                self._status()
+                shown, last_write = key, now
+            time.sleep(max(0.0, period - (time.monotonic() - now)))
+        self._status()
+        return self.state()

@@ -1,0 +1,116 @@
+"""Meshcat browser controls of the planner app: buttons, sliders and a two-line status.
+
+Drake's Meshcat offers buttons (``AddButton`` / ``GetButtonClicks``) and sliders
+(``AddSlider`` / ``GetSliderValue`` / ``SetSliderValue``) in the page's control panel, but no
+drop-down and no text element (pydrake 1.51: checked with ``dir(Meshcat)``). So:
+
+* choices (robot, algorithm, which path point the sliders edit) are buttons that *cycle*
+  through the options ("Next robot", "Next algorithm", "Edit next point"); the current choice
+  is shown in the setup line;
+* the status is shown as the label of two inert buttons at the bottom of the panel
+  ("Setup: ..." and "Status: ..."); a new text deletes and re-adds them (they stay last).
+
+:class:`Controls` polls clicks and slider changes without callbacks (Meshcat has none): the
+app's loop calls :meth:`Controls.clicked` and :meth:`Controls.changed` every frame, in the
+thread that created the Meshcat instance (a Drake requirement).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["Controls", "SliderSpec", "BUTTONS"]
+
+#: the app's buttons in panel order (framework paper Table 1: parts 1, 2, 4, 5/7)
+BUTTONS = (
+    "Next robot",
+    "Next algorithm",
+    "Edit next point",
+    "Show environment",
+    "Generate / Regenerate solutions",
+    "Test run",
+    "Run",
+    "Stop",
+)
+
+
+@dataclass(frozen=True)
+class SliderSpec:
+    """A slider: label, range, step and initial value (units in the label)."""
+
+    name: str
+    low: float
+    high: float
+    step: float
+    value: float
+
+
+class Controls:
+    """Buttons, sliders and status lines in Meshcat's control panel (module docstring).
+
+    Args:
+        meshcat: the ``pydrake.geometry.Meshcat`` (used from its own thread only).
+        sliders: the :class:`SliderSpec` list, added after the buttons.
+    """
+
+    def __init__(self, meshcat, sliders):
+        self.meshcat = meshcat
+        self._clicks: dict[str, int] = {}
+        self._values: dict[str, float] = {}
+        self._status_labels: list[str] = []
+        meshcat.DeleteAddedControls()
+        for name in BUTTONS:
+            meshcat.AddButton(name)
+            self._clicks[name] = 0
+        for spec in sliders:
+            self._values[spec.name] = float(meshcat.AddSlider(spec.name, spec.low, spec.high, spec.step, spec.value))
+
+    @property
+    def slider_names(self) -> list[str]:
+        """Names of the sliders."""
+        return list(self._values)
+
+    def clicked(self) -> list[str]:
+        """Buttons clicked since the last call (each once, in panel order)."""
+        out = []
+        for name, seen in self._clicks.items():
+            count = self.meshcat.GetButtonClicks(name)
+            if count != seen:
+                self._clicks[name] = count
+                out.append(name)
+        return out
+
+    def changed(self) -> dict[str, float]:
+        """``{slider: new value}`` of the sliders moved in the browser since the last call."""
+        out = {}
+        for name, seen in self._values.items():
+            value = float(self.meshcat.GetSliderValue(name))
+            if value != seen:
+                self._values[name] = value
+                out[name] = value
+        return out
+
+    def value(self, name: str) -> float:
+        """Current value of a slider."""
+        return self._values[name]
+
+    def set(self, name: str, value: float) -> None:
+        """Set a slider from the app (not reported by :meth:`changed`)."""
+        self.meshcat.SetSliderValue(name, float(value))
+        self._values[name] = float(self.meshcat.GetSliderValue(name))
+
+    def status(self, *lines: str) -> None:
+        """Show ``lines`` as the labels of inert buttons at the bottom of the panel."""
+        # a quote in a control's name breaks Meshcat's page (the control never appears): drop them
+        labels = [line.replace("\n", " ").replace("'", "").replace('"', "")[:160] for line in lines]
+        if labels == self._status_labels:
+            return
+        for old in self._status_labels:
+            self.meshcat.DeleteButton(old)
+        unique = []
+        for label in labels:  # Meshcat identifies controls by name: keep them distinct
+            while label in unique or label in self._clicks or label in self._values:
+                label += " "
+            unique.append(label)
+            self.meshcat.AddButton(label)
+        self._status_labels = unique

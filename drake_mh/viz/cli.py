@@ -1,0 +1,91 @@
+"""``drake-mh app``: the interactive planner (framework paper §4, Table 1) in the browser.
+
+Example::
+
+    drake-mh app                                   # seed000_6dof, e3gsa, Table 3 path, obstacle
+    drake-mh app --method pso --n-points 80 --generate --run
+    drake-mh app --max-seconds 60 --status-file app.json    # headless / scripted use
+
+Prints the Meshcat URL (localhost only) and runs until Ctrl-C or ``--max-seconds``. Exit code
+0 on a normal end, 2 for bad input (unknown robot or method: one line naming the choices).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["register", "cmd_app"]
+
+
+def register(subparsers, common: argparse.ArgumentParser) -> None:
+    """Adds ``app``."""
+    p = subparsers.add_parser(
+        "app",
+        parents=[common],
+        help="interactive planner in the browser (Meshcat): path, IK, run, move the obstacle live",
+        description="The framework paper's GUI (Table 1) in the browser: choose robot and algorithm (buttons "
+        "cycle them), edit start / via / end points and the number of points (sliders), show the "
+        "environment, generate solutions, test run, run / stop, and move the obstacle with its X / Y / Z "
+        "sliders while the arm runs: colliding solutions are regenerated (§3.4.1) and the path re-planned "
+        "where the obstacle cuts it (§3.4.2). The server listens on localhost only.",
+    )
+    p.add_argument("--robot", action="append", default=None, metavar="NAME",
+                   help="robot(s) the 'Next robot' button cycles through; the first is loaded "
+                        "(default seed000_6dof, panda)")
+    p.add_argument("--method", default="e3gsa", help="IK / planner algorithm (default e3gsa, the paper's)")
+    p.add_argument("--start", nargs=3, type=float, default=None, metavar=("X", "Y", "Z"), help="start point [m]")
+    p.add_argument("--via", nargs=3, type=float, action="append", default=None, metavar=("X", "Y", "Z"),
+                   help="intermediate point [m]; give it twice (default Table 3)")
+    p.add_argument("--end", nargs=3, type=float, default=None, metavar=("X", "Y", "Z"), help="end point [m]")
+    p.add_argument("--n-points", type=int, default=50, help="points in the path (default 50, Table 3)")
+    p.add_argument("--obstacle", nargs=3, type=float, default=(0.2, 0.2, 0.6), metavar=("X", "Y", "Z"),
+                   help="obstacle position [m] (default 0.2 0.2 0.6, the paper's)")
+    p.add_argument("--obstacle-radius", type=float, default=0.2, help="sphere radius [m] (default 0.2)")
+    p.add_argument("--no-obstacle", action="store_true", help="no obstacle")
+    p.add_argument("--seed", type=int, default=0, help="seed of generation and regeneration (default 0)")
+    p.add_argument("--budget", type=int, default=None, help="per IK solve (default: the method's)")
+    p.add_argument("--fps", type=float, default=30.0, help="frame rate of the loop [Hz] (default 30)")
+    p.add_argument("--speed", type=float, default=1.0, help="playback speed (default 1: the path's timing)")
+    p.add_argument("--port", type=int, default=None, help="Meshcat port (default: first free from 7000; 0: any)")
+    p.add_argument("--generate", action="store_true", help="generate solutions at start")
+    p.add_argument("--run", action="store_true", help="start running at once (implies --generate)")
+    p.add_argument("--max-seconds", type=float, default=None, help="quit after this many seconds (headless use)")
+    p.add_argument("--status-file", default=None, metavar="PATH",
+                   help="write the app's state as JSON on every change (for scripts and tests)")
+    p.set_defaults(func=cmd_app)
+
+
+def cmd_app(args: argparse.Namespace) -> int:
+    """``drake-mh app``: returns 0 when the loop ends."""
+    import sys
+
+    import drake_mh
+    from drake_mh.errors import InvalidArgument, UnknownRobot
+    from drake_mh.viz.app import AppConfig, PlannerApp
+
+    robots = tuple(args.robot) if args.robot else AppConfig.robots
+    for name in robots:
+        if name not in drake_mh.available_robots() and not str(name).endswith(".urdf"):
+            raise UnknownRobot(name, drake_mh.available_robots())
+    defaults = AppConfig.points
+    via = args.via or [defaults[1], defaults[2]]
+    if len(via) != 2:
+        raise InvalidArgument(f"give --via exactly twice (intermediate points 1 and 2), got {len(via)}")
+    points = (tuple(args.start or defaults[0]), tuple(via[0]), tuple(via[1]), tuple(args.end or defaults[3]))
+    if args.max_seconds is not None and not args.max_seconds > 0:
+        raise InvalidArgument(f"--max-seconds must be > 0, got {args.max_seconds}")
+    config = AppConfig(robots=robots, method=args.method, points=points, n_points=args.n_points,
+                       obstacle=None if args.no_obstacle else tuple(args.obstacle),
+                       obstacle_radius=args.obstacle_radius, seed=args.seed, budget=args.budget, fps=args.fps,
+                       speed=args.speed, port=args.port, status_file=args.status_file)
+    app = PlannerApp(config)
+    print(f"drake-mh app: open {app.meshcat.web_url()} in a browser (localhost only; Ctrl-C to quit)", flush=True)
+    if args.generate or args.run:
+        app.generate()
+    if args.run:
+        app.play("run")
+    state = app.run(args.max_seconds)
+    fps = state["run_fps"]
+    print(f"drake-mh app: stopped after {state['elapsed']:.0f} s ({state['events']} regeneration events"
+          + (f", {fps:.1f} frames/s while running)" if fps else ")"), file=sys.stdout, flush=True)
+    return 0
