@@ -24,14 +24,21 @@ FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-
          "--window-size=1200,800")
 
 
+def _missing(message: str):
+    """Skip locally; in CI (``CI`` set, as .ci/run runs) the browser test must run: fail."""
+    if os.environ.get("CI"):
+        pytest.fail(f"{message} — .ci/run must install it", pytrace=False)
+    pytest.skip(message)
+
+
 def _browser(tmp_path):
     try:
         from selenium import webdriver
         from selenium.webdriver.chrome.service import Service
     except ImportError:
-        pytest.skip("selenium is not installed: pip install selenium (see docs/app.md)")
+        _missing("selenium is not installed: pip install selenium (see docs/app.md)")
     if not (os.path.exists(CHROMIUM) and os.path.exists(DRIVER)):
-        pytest.skip("Chromium is missing: apt-get install -y chromium chromium-driver (see docs/app.md)")
+        _missing("Chromium is missing: apt-get install -y chromium chromium-driver (see docs/app.md)")
     options = webdriver.ChromeOptions()
     options.binary_location = CHROMIUM
     for flag in FLAGS:
