@@ -251,8 +251,9 @@ class ThreeLinkProblem:
 
         Returns:
             Sorted ``[(lo, hi), ...]`` [rad] with ``-π <= lo < hi``; an interval through ±π is
-            returned once with ``hi > π``. Each ``(lo, hi)`` is feasible throughout (on the
-            sample grid) and ``lo - tol``/``hi + tol`` are not.
+            returned once with ``hi > π``. ``lo`` and ``hi`` are feasible and ``lo - tol``,
+            ``hi + tol`` are not; inside, every grid value is feasible (an infeasible gap
+            narrower than the grid step could be missed; the tests sample inside at random).
         """
         grid = -np.pi + TWO_PI * np.arange(int(resolution)) / int(resolution)
         ok = np.concatenate([self.feasible(chunk) for chunk in np.array_split(grid, max(1, len(grid) // 256))])
