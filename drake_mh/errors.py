@@ -298,3 +298,17 @@ class InvalidIKProblem(DrakeMhError, ValueError):
 
     The message names the offending argument and the expected form.
     """
+
+
+class InfeasibleComponent(DrakeMhError, ValueError):
+    """No constant orientation angle ``k`` keeps a 3-link component feasible over the period.
+
+    Attributes:
+        component: the component's name.
+        reason: why (unreachable samples, limits, obstacles) and how to fix it.
+    """
+
+    def __init__(self, component: str, reason: str):
+        self.component = component
+        self.reason = reason
+        super().__init__(f"component {component!r}: no feasible constant k: {reason}")

@@ -29,25 +29,11 @@ import numpy as np
 from drake_mh.cyclic.fitness import converged_path_length, matlab_path_length
 from drake_mh.cyclic.obstacles import CircleObstacle, segment_clearance
 from drake_mh.cyclic.three_link import reachable_orientation, three_link_ik, three_link_points
-from drake_mh.errors import DrakeMhError, InvalidArgument
+from drake_mh.errors import InfeasibleComponent, InvalidArgument
 
 __all__ = ["ThreeLinkProblem", "Evaluation", "Boundary", "InfeasibleComponent"]
 
 TWO_PI = 2.0 * np.pi
-
-
-class InfeasibleComponent(DrakeMhError, ValueError):
-    """No constant orientation angle ``k`` keeps a 3-link component feasible over the period.
-
-    Attributes:
-        component: the component's name.
-        reason: why (unreachable samples, limits, obstacles) and how to fix it.
-    """
-
-    def __init__(self, component: str, reason: str):
-        self.component = component
-        self.reason = reason
-        super().__init__(f"component {component!r}: no feasible constant k: {reason}")
 
 
 @dataclass(frozen=True)
