@@ -158,8 +158,10 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
     nq = robot.nq
     ratios, times = {}, {}
     excess = np.zeros(nq)
+    order = max(_ORDER[q] for q in quantities)
+    D = trajectory.derivatives(T.ravel(), order)  # once for every quantity
     for quantity in quantities:
-        r = _ratio(trajectory, robot, quantity, T.ravel(), scale, torque_backend).reshape(P, K, nq)
+        r = _ratio_from(D, robot, quantity, scale, torque_backend).reshape(P, K, nq)
         flat = r.reshape(P * K, nq)
         idx = np.argmax(flat, axis=0)
         ratios[quantity] = flat[idx, np.arange(nq)].copy()
@@ -181,10 +183,17 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
                        float(scale))
 
 
+_ORDER = {"position": 0, "velocity": 1, "acceleration": 2, "jerk": 3, "torque": 2}
+
+
 def _ratio(trajectory, robot, quantity: str, t: np.ndarray, scale: float, backend: str) -> np.ndarray:
     """``(len(t), nq)`` ratios of ``quantity`` to its (scaled) limit at times ``t``."""
-    order = {"position": 0, "velocity": 1, "acceleration": 2, "jerk": 3, "torque": 2}[quantity]
-    D = trajectory.derivatives(t, order)
+    return _ratio_from(trajectory.derivatives(t, _ORDER[quantity]), robot, quantity, scale, backend)
+
+
+def _ratio_from(D, robot, quantity: str, scale: float, backend: str) -> np.ndarray:
+    """Ratios from precomputed derivatives ``D = [q, q', ...]`` (each ``(M, nq)``)."""
+    order = _ORDER[quantity]
     if quantity == "position":
         centre, half = 0.5 * (robot.upper + robot.lower), 0.5 * (robot.upper - robot.lower)
         return np.abs(D[0] - centre) / np.where(robot.continuous, np.inf, half)

@@ -49,6 +49,13 @@ __all__ = ["retime", "RETIMERS", "timing_from_gridpoints", "ruckig_state_to_stat
 
 _log = logging.getLogger(__name__)
 
+#: toppra's first solve uses velocity and acceleration limits 1 % tighter. Between the check
+#: points the chain-rule values exceed the limits by up to ~1-2 % at 100 gridpoints. Measured on
+#: 12 random Panda paths at 100 gridpoints: without head-room 12/12 solves needed the
+#: time-scaling repair and a second certification (9.6 ms per retime, duration 0.985 x Drake's
+#: Toppra); with 1 %: 1/12 (6.6 ms, 0.988 x); with 2 %: 0/12 (6.3 ms, 0.998 x).
+_FIRST_MARGIN = 0.01
+
 RETIMERS = ("toppra", "drake-toppra", "ruckig")
 _DEFAULT_LIMITS = {"toppra": ("velocity", "acceleration", "torque"),
                    "drake-toppra": ("velocity", "acceleration", "torque"),
@@ -106,6 +113,10 @@ def retime(path, robot, method: str = "toppra", *, limits=None, gridpoints: int 
         raise InvalidArgument(f"robot {robot.name} declares no {missing} limits; leave them out of `limits`")
     W = check_waypoints(path, robot, method)
     factors = {q: float(scale) for q in limits}
+    if method != "ruckig":  # head-room for what the check points miss (see _FIRST_MARGIN)
+        for q in ("velocity", "acceleration"):
+            if q in factors:
+                factors[q] *= 1.0 - _FIRST_MARGIN
     quantities = ("position",) + limits
     # everything the robot has limits for is reported; only `quantities` are enforced
     reported = ("position",) + tuple(q for q in ("velocity", "acceleration", "jerk", "torque")
