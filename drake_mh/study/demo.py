@@ -18,7 +18,7 @@ from drake_mh.errors import InvalidArgument
 logger = logging.getLogger(__name__)
 
 #: studies the demo runs (quick grid), in order; the IK comparison joins when it exists
-DEMO_STUDIES: tuple[str, ...] = ("bench_kinematics", "fk_accuracy")
+DEMO_STUDIES: tuple[str, ...] = ("bench_kinematics", "fk_accuracy", "retime_benchmark")
 #: optional studies added to the demo when their script exists
 OPTIONAL_DEMO_STUDIES: tuple[str, ...] = ("ik_comparison",)
 
