@@ -193,12 +193,13 @@ def _framework_table(records: list[dict]) -> str:
     lines = ["Framework follower (part framework): medians over seeds; clearance by Drake's exact distance "
              "(refined capsule-box/cylinder pairs) at the path points and between them.", "",
              "| scenario | method | runs | success | points regenerated | regeneration time [s] | "
-             "largest joint step plan -> executed [rad] | min clearance at points / swept [m] |",
-             "|---|---|---|---|---|---|---|---|"]
+             "largest joint step plan -> executed [rad] | min clearance at points / swept [m] | "
+             "clearance of the configuration occupied when the obstacle jumps [m] | min clearance after it [m] |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for (scenario, method), group in groups.items():
         ok = [r for r in group if r.get("status") == "ok"]
         if not ok:
-            lines.append(f"| {scenario} | {method} | {len(group)} | raised | | | | |")
+            lines.append(f"| {scenario} | {method} | {len(group)} | raised | | | | | | |")
             continue
 
         def med(key):
@@ -207,7 +208,8 @@ def _framework_table(records: list[dict]) -> str:
         lines.append(f"| {scenario} | {method} | {len(ok)} | {sum(bool(r['success']) for r in ok)}/{len(ok)} | "
                      f"{med('points_regenerated'):.0f} | {med('time'):.3f} | {med('max_step_plan'):.2f} -> "
                      f"{med('max_step_executed'):.2f} | {min(r['min_distance_executed'] for r in ok):.3f} / "
-                     f"{min(r['min_distance_swept'] for r in ok):.3f} |")
+                     f"{min(r['min_distance_swept'] for r in ok):.3f} | {min(r['clearance_at_move'] for r in ok):.3f} | "
+                     f"{min(r['min_distance_after_move'] for r in ok):.3f} |")
     return "\n".join(lines)
 
 
