@@ -69,7 +69,9 @@ def solve_ik(problem: IKProblem, method: str = "hybrid", seed=0, budget: int | N
             evaluated for ``hybrid``/``pinv``/``dls`` (default 200,000 when there is no
             timeout), solver starts for ``drake_*`` (default 20 when there is no timeout).
         timeout: [s] wall-clock limit (``None``: none); the solve stops at whichever of budget
-            and timeout comes first.
+            and timeout comes first. The very first solve on a machine also compiles the numba
+            kernels (a few seconds, then cached on disk) and the first in a process loads them
+            (~0.1-1 s): warm up with one untimed solve before timing tight budgets.
         config: the method's configuration object (:class:`~drake_mh.ik.hybrid.HybridConfig`,
             :class:`~drake_mh.ik.jacobian.JacobianConfig`, :class:`~drake_mh.ik.drake.DrakeIKConfig`).
         **params: optimizer options for the metaheuristics (``pop_size`` and the method's
