@@ -29,6 +29,10 @@ _ITERATIONS = 90
 def _sdf(kind, dims, x, y, z):
     """Signed distance of the point (x, y, z), in the obstacle frame, to the primitive.
 
+    The scalar, compiled twin of the vectorized ``signed_distance`` methods of
+    :mod:`drake_mh.shapes` (the golden-section search calls it ~100 times per pair); the
+    tests check the two against each other through dense sampling.
+
     dims: sphere (r, 0, 0); box (half x, half y, half z); cylinder (r, half length, 0);
     capsule (r, half length, 0).
     """

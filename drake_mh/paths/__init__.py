@@ -9,7 +9,7 @@ See ``docs/trajectories.md``.
 """
 
 from drake_mh.paths.cartesian import TABLE3_POINTS, CartesianPath, TrapezoidalProfile, trapezoidal_path
-from drake_mh.paths.ik_path import JointPath, ik_along_path
+from drake_mh.paths.ik_path import JointPath, ik_along_path, joint_steps
 
-__all__ = ["trapezoidal_path", "CartesianPath", "TrapezoidalProfile", "TABLE3_POINTS", "ik_along_path",
+__all__ = ["trapezoidal_path", "CartesianPath", "TrapezoidalProfile", "TABLE3_POINTS", "ik_along_path", "joint_steps",
            "JointPath"]

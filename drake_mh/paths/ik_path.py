@@ -26,7 +26,7 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument
 
-__all__ = ["JointPath", "ik_along_path"]
+__all__ = ["JointPath", "ik_along_path", "joint_steps"]
 
 
 @dataclass(frozen=True)
@@ -58,6 +58,12 @@ class JointPath:
     def all_success(self) -> bool:
         """Whether every point was solved."""
         return bool(np.all(self.success))
+
+
+def joint_steps(Q) -> np.ndarray:
+    """Largest absolute joint change between consecutive rows of ``Q (N, nq)``: ``(N-1,)`` [rad]."""
+    Q = np.asarray(Q, dtype=float)
+    return np.abs(np.diff(Q, axis=0)).max(axis=1) if len(Q) > 1 else np.zeros(0)
 
 
 def ik_along_path(robot, points, method: str = "hybrid", seed: int = 0, *, q_start=None,
@@ -115,7 +121,7 @@ def ik_along_path(robot, points, method: str = "hybrid", seed: int = 0, *, q_sta
         Q[k], ok[k], err[k] = res.q, res.success, res.position_error
         nfe += int(res.nfe)
         q_prev = res.q
-    steps = np.abs(np.diff(Q, axis=0)).max(axis=1) if len(P) > 1 else np.zeros(0)
+    steps = joint_steps(Q)
     i = int(np.argmax(steps)) if len(steps) else 0
     j = int(np.argmax(np.abs(Q[i + 1] - Q[i]))) if len(steps) else 0
     return JointPath(Q, ok, err, steps, float(steps[i]) if len(steps) else 0.0, i, robot.joint_names[j],

@@ -51,6 +51,7 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument, UnknownMethod
 from drake_mh.ik.problem import IKProblem
+from drake_mh.paths.ik_path import joint_steps
 from drake_mh.reactive.replan import (ReplanConfig, ReplanResult, collision_runs, colliding_path_points,
                                       replan_points, replan_windows)
 
@@ -64,8 +65,8 @@ _EMPTY = np.zeros(0, dtype=int)
 
 def largest_joint_step(Q) -> float:
     """``max_k max_j |Q[k+1, j] - Q[k, j]|`` [rad] of ``Q (N, nq)``; 0 for fewer than 2 rows."""
-    Q = np.asarray(Q, dtype=float)
-    return float(np.abs(np.diff(Q, axis=0)).max()) if len(Q) > 1 else 0.0
+    steps = joint_steps(Q)
+    return float(steps.max()) if len(steps) else 0.0
 
 
 @dataclass(frozen=True, eq=False)

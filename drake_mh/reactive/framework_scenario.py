@@ -92,7 +92,7 @@ def run_framework_scenario(method: str = "e3gsa", seed: int = 0, *, budget: int 
     import dataclasses
 
     import drake_mh
-    from drake_mh.paths import trapezoidal_path
+    from drake_mh.paths import joint_steps, trapezoidal_path
     from drake_mh.reactive.follower import FollowerConfig, RegeneratingFollower, largest_joint_step
     from drake_mh.scene import Scene, Sphere
 
@@ -182,7 +182,7 @@ def run_framework_scenario(method: str = "e3gsa", seed: int = 0, *, budget: int 
         "event_index": np.array([e.index for e in events], dtype=int),
         "event_time": np.array([e.time for e in events]),
         "event_points": np.array([e.regenerated.size for e in events], dtype=int),
-        "joint_steps": np.abs(np.diff(executed, axis=0)).max(axis=1),
+        "joint_steps": joint_steps(executed),
     })
     return record
 

@@ -223,8 +223,7 @@ class View:
 
     def add_ee_path(self, Q, name: str = "ee_path", frame: str | None = None, **kwargs) -> str:
         """Draw the path of the end effector (or ``frame``) through the configurations ``Q (N, nq)``."""
-        Q = self.robot.check_Q(Q, "Q")
-        P = np.array([self.robot.fk(q, frame)[:3, 3] for q in Q])
+        P = self.robot.batch.positions(self.robot.check_Q(Q, "Q"), frame)
         if P.shape[0] == 1:
             P = np.vstack([P, P])
         return self.add_path(P, name, **kwargs)

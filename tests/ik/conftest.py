@@ -1,21 +1,10 @@
-"""Shared robots and targets of the IK tests (loaded once per session)."""
+"""Targets of the IK tests (the robots come from tests/conftest.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-import drake_mh
-
-
-@pytest.fixture(scope="session")
-def panda():
-    return drake_mh.load_robot("panda")
-
-
-@pytest.fixture(scope="session")
-def six_dof():
-    return drake_mh.load_robot("seed000_6dof")
 
 
 @pytest.fixture(scope="session")
