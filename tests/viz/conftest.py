@@ -15,16 +15,6 @@ def meshcat():
     return get_meshcat(announce=False)
 
 
-@pytest.fixture(scope="session")
-def panda():
-    return drake_mh.load_robot("panda")
-
-
-@pytest.fixture(scope="session")
-def planar2r():
-    return drake_mh.load_robot("planar2r")
-
-
 @pytest.fixture
 def scene(panda):
     """A Panda scene with a resting box and a moving sphere."""
