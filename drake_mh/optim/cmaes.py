@@ -24,9 +24,15 @@ How it is wrapped:
 
 D = 1 is refused (pycma 4.x fails on it with an explicit population size).
 
-Bound handling: pycma's ``BoundTransform`` (a smooth piecewise-quadratic map of the
-genotype into ``[0, 1]``); the evaluated points are always inside the box. Injected
-``x0`` points within 2.5 % of a bound are moved slightly by that transform.
+Bound handling: pycma's own ``BoxConstraintsLinQuadTransformation`` (the map behind its
+``BoundTransform``: identity inside ``[0.05, 0.95]``, quadratic towards each bound,
+mirrored/periodic outside), applied by us to the whole population in one call. pycma runs
+unbounded on the genotype, with ``maxstd = 1/3`` of the range as its bounded mode would
+set. Measured reason: pycma's bounded mode applies the transform one individual at a time
+in Python, which made the mapping cost more than the whole CMA update (D = 30, lambda =
+14: 1.05 ms per generation bounded vs 0.48 ms unbounded, same machine). The evaluated
+points are always inside the box; injected ``x0`` points go in through the transform's
+inverse, so they are evaluated exactly where they are.
 """
 
 from __future__ import annotations
@@ -79,22 +85,25 @@ class CMAES(Optimizer):
             )
         import cma  # local import: pycma takes ~0.2 s to import
 
+        from cma.transformations import BoxConstraintsLinQuadTransformation
+
         self._cma = cma
+        self._to_box = BoxConstraintsLinQuadTransformation([[0.0, 1.0]])
         self.restarts = 0
         if self.x0 is not None:
-            mean = (self.x0[0] - self.lower) / self.width
+            mean = self._to_box.inverse((self.x0[0] - self.lower) / self.width)
         else:
             mean = self.rng.random(self.dim)
         self._new_es(mean)
         if self.x0 is not None:
             Y0 = (self.x0[: self.pop_size] - self.lower) / self.width
-            self.es.inject(list(Y0), force=True)
+            self.es.inject([self._to_box.inverse(y) for y in Y0], force=True)
 
     def _new_es(self, mean: np.ndarray) -> None:
         rng = self.rng
         opts = {
             "popsize": self.pop_size,
-            "bounds": [0.0, 1.0],
+            "maxstd": 1.0 / 3.0,
             "seed": float("nan"),
             "randn": lambda *shape: rng.standard_normal(shape),
             "verbose": -9,
@@ -104,13 +113,14 @@ class CMAES(Optimizer):
         self.es = self._cma.CMAEvolutionStrategy([float(m) for m in mean], self.config.sigma0, opts)
 
     def _ask(self) -> np.ndarray:
-        Y = np.asarray(self.es.ask(), dtype=float)
-        self._Y = Y
+        G = np.asarray(self.es.ask(), dtype=float)      # genotypes, unbounded
+        self._G = G
+        Y = self._to_box(G.ravel(), copy=True).reshape(G.shape)   # all rows at once
         return np.clip(self.lower + Y * self.width, self.lower, self.upper)
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         Ft = np.where(np.isfinite(F), F, np.finfo(float).max)
-        self.es.tell(list(self._Y), list(Ft))
+        self.es.tell(list(self._G), list(Ft))
         if self.config.restarts and self.es.stop():
             self.restarts += 1
             logger.debug("cmaes restart %d after %s", self.restarts, dict(self.es.stop()))

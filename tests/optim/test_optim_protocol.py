@@ -113,7 +113,8 @@ def test_ask_tell_run_equals_minimize(method):
 
 @pytest.mark.parametrize("method", ALL)
 def test_x0_is_injected_into_the_first_population(method):
-    x0 = np.array([[3.0, -1.5, 1.0, 2.5], [0.0, 0.0, 0.0, 1.0]])
+    # the last row sits on the bounds, where a bound transform (cmaes) must still hit it exactly
+    x0 = np.array([[3.0, -1.5, 1.0, 2.5], [0.0, 0.0, 0.0, 1.0], [5.0, -2.0, 3.0, 0.5]])
     rec = Recorder()
     res = minimize(rec, (LOWER, UPPER), method=method, budget=200, seed=1, x0=x0)
     first = rec.rows[0]
