@@ -10,10 +10,11 @@ Quick (``--quick``): F4 and F5, D = 10, 3 replicates, budget 1 000 D.
 Per case the record holds the final error f - f*, success (error <= 1e-8, the CEC
 threshold), the best-so-far error history, the run time and the optimizer's own overhead
 per generation of P evaluations (objective time subtracted). The runner's report gives
-median / IQR tables, Friedman ranks, Wilcoxon-Holm tests and the median convergence curve
-over all cases; the summary below gives per-function tables (shifted functions), Friedman
-ranks and Wilcoxon signed-rank tests against the best-ranked method (Holm-corrected,
-Derrac et al. 2011), convergence milestones, the centre-bias ratio of Kudela (2022) and the
+median / IQR tables, Friedman ranks, Wilcoxon-Holm tests and median / IQR convergence
+curves, one panel per function, dimension and shift (``Fields.panels``); the summary below
+gives per-function tables (shifted functions), Friedman ranks and Wilcoxon signed-rank tests
+against the best-ranked method (Holm-corrected, Derrac et al. 2011), convergence milestones,
+the centre-bias ratio of Kudela (2022) and the
 overhead table (P = 50, D = 7, target <= 50 us).
 
 Run: ``drake-mh study optimizer_benchmark [--quick] [--workers N]`` or
@@ -242,15 +243,15 @@ study = Study(
                 "budget_per_dim": [1_000], "method": available_methods(), "rep": list(range(3))},
     seed=0,
     fields=Fields(method="method", success="success", time="time", error="error", nfe="nfe",
-                  instance=("function", "dim", "shift", "rep")),
+                  instance=("function", "dim", "shift", "rep"), panels=("function", "dim", "shift")),
     description=(
         "All drake_mh optimizers (metaheuristics PSO, BAT, GSA, e3GSA, WOA, AO, GA, ABC, ARO and "
         "the baselines CMA-ES, DE, random search) on a CEC 2017 subset (F1, F3, F4, F5, F9, F10) "
         "with equal evaluation budgets (10 000 D), each function both with its CEC optimum "
         "(shifted) and with the optimum moved to the box centre (unshifted), to measure the "
         "centre bias of Kudela (2022). Error = f - f*; the runner's statistics pool shifted and "
-        "unshifted blocks, the summary separates them. The convergence figure pools all "
-        "functions (median best-so-far error against evaluations)."
+        "unshifted blocks, the summary separates them. The convergence figure has one panel per "
+        "function, dimension and shift (median and IQR of the best-so-far error against evaluations)."
     ),
     summarize=summarize,
 )

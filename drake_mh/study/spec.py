@@ -35,6 +35,9 @@ class Fields:
         lower_is_better: orientation of ``error``.
         rank: whether the method values are competing methods to rank (Friedman / Wilcoxon);
             ``False`` e.g. when the "method" field is a robot in a verification study.
+        panels: fields whose value combinations each get their own convergence panel (e.g.
+            ``("function", "dim", "shift")``: problems of different scale are not pooled);
+            ``None``: the first instance field when it has 2-6 values, else one panel.
     """
 
     method: str = "method"
@@ -45,6 +48,7 @@ class Fields:
     instance: tuple[str, ...] | None = None
     lower_is_better: bool = True
     rank: bool = True
+    panels: tuple[str, ...] | None = None
 
     def to_dict(self) -> dict:
         """Returns the fields as a JSON-friendly dict."""
@@ -57,14 +61,16 @@ class Fields:
             "instance": None if self.instance is None else list(self.instance),
             "lower_is_better": self.lower_is_better,
             "rank": self.rank,
+            "panels": None if self.panels is None else list(self.panels),
         }
 
     @classmethod
     def from_dict(cls, data: Mapping) -> Fields:
         """Inverse of :meth:`to_dict` (unknown keys ignored)."""
         kwargs = {k: data[k] for k in ("method", "success", "time", "error", "nfe", "lower_is_better", "rank") if k in data}
-        if data.get("instance") is not None:
-            kwargs["instance"] = tuple(data["instance"])
+        for key in ("instance", "panels"):
+            if data.get(key) is not None:
+                kwargs[key] = tuple(data[key])
         return cls(**kwargs)
 
 

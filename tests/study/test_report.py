@@ -146,3 +146,25 @@ def test_study_markdown_summary_renders_as_html_tables():
     doc.add(Markdown(text))
     page = to_html(doc)
     assert "<table>" in page and "<td>x | y</td>" in page and "<h3>Ranks</h3>" in page
+
+
+def test_convergence_panels_per_field_combination(toy_results, monkeypatch):
+    import dataclasses
+
+    from drake_mh.study import Fields
+    from drake_mh.study.report import plots
+
+    fields = Fields(instance=("inst", "rep"), panels=("inst", "rep"))
+    assert Fields.from_dict(fields.to_dict()) == fields
+    data = ReportData.load(toy_results)
+    data = dataclasses.replace(data, fields=dataclasses.replace(data.fields, panels=("inst", "rep")))
+    titles = []
+    render = plots._render
+
+    def capture(fig):
+        titles.extend(ax.get_title() for ax in fig.axes if ax.get_visible())
+        return render(fig)
+
+    monkeypatch.setattr(plots, "_render", capture)
+    assert plots.convergence_figure(data) is not None
+    assert sorted(titles) == sorted(f"inst = {i}, rep = {r}" for i in "pq" for r in range(4))   # 8 panels, 2 rows

@@ -79,7 +79,8 @@ def best_so_far_on_grid(nfe: np.ndarray, best: np.ndarray, grid: np.ndarray, low
 def convergence_figure(data: ReportData) -> FigureFile | None:
     """Median and IQR band of best-so-far vs function evaluations, per method.
 
-    One panel per value of the first instance key when it has 2..6 values, else one panel.
+    One panel per value combination of ``fields.panels`` (rows of up to 6), else one per value
+    of the first instance key when it has 2..6 values, else one panel.
     Returns ``None`` when no record has ``history_nfe`` and ``history_best`` arrays.
     """
     histories = []
@@ -91,15 +92,26 @@ def convergence_figure(data: ReportData) -> FigureFile | None:
             histories.append((record, arrays["history_nfe"], arrays["history_best"]))
     if not histories:
         return None
-    panel_key = data.instance_keys[0] if data.instance_keys else None
-    panel_values = sorted({str(r.get(panel_key)) for r, _, _ in histories}) if panel_key else []
-    if not (2 <= len(panel_values) <= MAX_PANELS):
-        panel_key, panel_values = None, ["all"]
+    if data.fields.panels:
+        panel_keys = tuple(data.fields.panels)
+    else:
+        panel_keys = (data.instance_keys[0],) if data.instance_keys else ()
+        if not 2 <= len({str(r.get(panel_keys[0])) for r, _, _ in histories} if panel_keys else ()) <= MAX_PANELS:
+            panel_keys = ()
+
+    def panel_of(record) -> tuple:
+        return tuple(record.get(k) for k in panel_keys)
+
+    panel_values = sorted({panel_of(r) for r, _, _ in histories}, key=lambda v: [(str(type(x)), x) for x in v])
+    columns = min(len(panel_values), MAX_PANELS)
+    rows = -(-len(panel_values) // columns)
     colors = _colors(data.methods)
-    fig = _figure(4.2 * len(panel_values), 3.4)
-    axes = fig.subplots(1, len(panel_values), squeeze=False)[0]
+    fig = _figure(4.2 * columns, 3.4 * rows)
+    axes = fig.subplots(rows, columns, squeeze=False).ravel()
+    for ax in axes[len(panel_values):]:
+        ax.set_visible(False)
     for ax, panel in zip(axes, panel_values):
-        chosen = [h for h in histories if panel_key is None or str(h[0].get(panel_key)) == panel]
+        chosen = [h for h in histories if panel_of(h[0]) == panel]
         top = max(float(np.max(h[1])) for h in chosen)
         low = max(1.0, min(float(np.min(h[1])) for h in chosen))
         grid = np.unique(np.geomspace(low, top, 200)) if top > low else np.array([low])
@@ -124,7 +136,8 @@ def convergence_figure(data: ReportData) -> FigureFile | None:
             ax.set_yscale("log")
         ax.set_xlabel("function evaluations")
         ax.set_ylabel("best so far")
-        ax.set_title(f"{panel_key} = {panel}" if panel_key else data.name, fontsize=10)
+        ax.set_title(", ".join(f"{k} = {v}" for k, v in zip(panel_keys, panel)) if panel_keys else data.name,
+                     fontsize=10)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
     caption = "Best-so-far objective vs function evaluations: median (line) and interquartile range (band) over cases."
