@@ -11,7 +11,12 @@ one point to the next; here each point after the first is solved
 * with a **joint-displacement penalty** ``ref_weight · ||q - q_prev||`` in the objective
   (:class:`drake_mh.ik.IKProblem`'s ``q_ref``/``ref_weight``). The position term is a norm, not
   its square, so a small weight picks the closest solution on the target's self-motion
-  manifold without pulling the end effector off the target.
+  manifold without pulling the end effector off the target;
+* within **search boxes that widen on failure** (``q_prev ± 0.3 rad``, ``± 1 rad``, then the
+  whole range without penalty) and **tidied** (2π shifts toward ``q_prev``, joints the task
+  does not see kept) — :func:`drake_mh.paths.continuity.solve_near`, shared with the
+  regenerating follower. (Without them Drake's SNOPT and the hybrid, which only start near
+  ``q_prev``, were measured to jump 4–6 rad on the 6-DOF arm's ±2π joints.)
 
 Any method of :func:`drake_mh.ik.available_ik_methods` can be used. The result reports the
 largest joint step between consecutive points (where it happens and on which joint).
@@ -25,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
+from drake_mh.paths.continuity import DEFAULT_SEARCH_RADII, solve_near
 
 __all__ = ["JointPath", "ik_along_path", "joint_steps"]
 
@@ -69,7 +75,8 @@ def joint_steps(Q) -> np.ndarray:
 def ik_along_path(robot, points, method: str = "hybrid", seed: int = 0, *, q_start=None,
                   ref_weight: float = 0.01, budget: int | None = None, timeout: float | None = None,
                   first_budget: int | None = None, position_tolerance: float = 1e-3, scene=None,
-                  clearance: float = 0.0, **params) -> JointPath:
+                  clearance: float = 0.0, search_radii=DEFAULT_SEARCH_RADII, progress=None,
+                  **params) -> JointPath:
     """Solve position IK at every point of a path, each warm-started from the previous solution.
 
     Args:
@@ -84,23 +91,27 @@ def ik_along_path(robot, points, method: str = "hybrid", seed: int = 0, *, q_sta
         first_budget: budget of the first point (default ``budget``): it has no warm start.
         position_tolerance: [m] (default 1 mm, the framework paper's position-only IK).
         scene, clearance: obstacles, as in :class:`drake_mh.ik.IKProblem`.
+        search_radii: search boxes around the previous solution [rad], one attempt each,
+            ``None`` = the whole range (:func:`~drake_mh.paths.continuity.solve_near`).
+        progress: ``progress(k, N)`` called after each point.
         **params: optimizer options for the metaheuristics.
 
     Returns:
         :class:`JointPath`.
 
     Raises:
-        InvalidArgument: points of the wrong shape, a negative ``ref_weight``.
+        InvalidArgument: points of the wrong shape, a negative ``ref_weight``, bad ``search_radii``.
     """
-    from drake_mh.ik import GRADIENT_METHODS, IKProblem, solve_ik
-
     P = np.asarray(getattr(points, "points", points), dtype=float)
     if P.ndim != 2 or P.shape[1] != 3 or len(P) < 1 or not np.all(np.isfinite(P)):
         raise InvalidArgument(f"points must be a finite (N, 3) array of positions, got shape {P.shape}")
     if not (ref_weight >= 0):
         raise InvalidArgument(f"ref_weight must be >= 0, got {ref_weight!r}")
+    radii = tuple(search_radii) if isinstance(search_radii, (tuple, list)) else ()
+    if not radii or not all(r is None or (isinstance(r, (int, float)) and np.isfinite(r) and r > 0) for r in radii):
+        raise InvalidArgument(f"search_radii must be a non-empty tuple of positive radii [rad] or None "
+                              f"(whole joint range), got {search_radii!r}")
     seeds = np.random.SeedSequence(seed).spawn(len(P))
-    metaheuristic = method.lower() not in GRADIENT_METHODS
     Q = np.zeros((len(P), robot.nq))
     ok = np.zeros(len(P), dtype=bool)
     err = np.zeros(len(P))
@@ -108,19 +119,20 @@ def ik_along_path(robot, points, method: str = "hybrid", seed: int = 0, *, q_sta
     start = time.perf_counter()
     q_prev = None if q_start is None else robot.check_q(q_start, "q_start")
     for k, target in enumerate(P):
+        def seed_of(attempt: int, k=k) -> int:
+            return int(seeds[k].generate_state(attempt + 1)[attempt])
+
         first = k == 0
-        problem = IKProblem(robot, target, position_tolerance=position_tolerance, scene=scene,
-                            clearance=clearance, q_ref=q_prev,
-                            ref_weight=0.0 if (first or q_prev is None) else ref_weight)
-        extra = dict(params)
-        if metaheuristic and q_prev is not None:
-            extra["x0"] = q_prev
-        res = solve_ik(problem, method, seed=int(seeds[k].generate_state(1)[0]),
-                       budget=first_budget if (first and first_budget is not None) else budget,
-                       timeout=timeout, **extra)
+        res, used = solve_near(robot, target, q_prev, method, seed_of, search_radii=radii,
+                               ref_weight=0.0 if first else ref_weight, position_tolerance=position_tolerance,
+                               scene=scene, clearance=clearance,
+                               budget=first_budget if (first and first_budget is not None) else budget,
+                               timeout=timeout, x0=[q_prev], params=params)
         Q[k], ok[k], err[k] = res.q, res.success, res.position_error
-        nfe += int(res.nfe)
+        nfe += used
         q_prev = res.q
+        if progress is not None:
+            progress(k + 1, len(P))
     steps = joint_steps(Q)
     i = int(np.argmax(steps)) if len(steps) else 0
     j = int(np.argmax(np.abs(Q[i + 1] - Q[i]))) if len(steps) else 0
