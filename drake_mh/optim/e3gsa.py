@@ -37,7 +37,8 @@ import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.optim.gsa import GSA
+from drake_mh.optim._population_kernels import distinct_indices
+from drake_mh.optim.gsa import _EPS, GSA, _acceleration_kernel
 
 
 @dataclass(frozen=True)
@@ -83,21 +84,25 @@ class E3GSA(GSA):
         if self.X is None:
             return self.initial_population()
         c, N, D = self.config, self.pop_size, self.dim
-        a = self.acceleration()
-        R = self.rng.random((3, N, D))
-        Xn = _velocity_step(self.X, self.V, a, self.best_x, R, c.c1, c.c2)
+        G, k = self.schedule()
         n_jump = math.ceil(c.p_explore * (1.0 - self.progress()) * N)
-        if n_jump > 0:
-            worst = np.argpartition(self.F, N - n_jump)[N - n_jump:] if n_jump < N else np.arange(N)
-            donors = self.donors(n_jump, N, exclude_self=False)   # three distinct agents each
-            Xn[worst] = self.X[donors[:, 0]] + c.F * (self.X[donors[:, 1]] - self.X[donors[:, 2]])
-            self.V[worst] = 0.0
-        return self.reinit(Xn)
+        n_w, n_r = N * k, 4 * N * D
+        U = self.rng.random(n_w + n_r + 3 * n_jump)
+        a = _acceleration_kernel(self.X, self.F, U[:n_w].reshape(k, N), G, _EPS)
+        donors = distinct_indices(U[n_w + n_r:].reshape(n_jump, 3), N, False)   # three distinct agents
+        return _move(self.X, self.V, self.F, a, self.best_x, U[n_w:n_w + n_r].reshape(4, N, D),
+                     donors, c.c1, c.c2, c.F, self.lower, self.upper)
 
 
 @numba.njit(cache=True)
-def _velocity_step(X, V, a, g, R, c1, c2):
-    """``v <- r0 v + c1 r1 a + c2 r2 (g - x)`` in place on V; returns ``x + v`` (step 2)."""
+def _move(X, V, FX, a, g, R, donors, c1, c2, F, lower, upper):
+    """Steps 2-3 and the re-draw of out-of-box components; ``V`` is updated in place.
+
+    ``R (4, N, D)``: w, r1, r2 of step 2, then the uniforms of the re-draws. ``donors
+    (n_jump, 3)``: r1, r2, r3 of the DE/rand/1 jump of each of the ``n_jump`` worst agents
+    (by ``FX``, stable order: among equal values the higher index counts as worse).
+    Returns the new positions ``(N, D)``.
+    """
     N, D = X.shape
     Xn = np.empty((N, D))
     for i in range(N):
@@ -105,4 +110,17 @@ def _velocity_step(X, V, a, g, R, c1, c2):
             v = R[0, i, d] * V[i, d] + c1 * R[1, i, d] * a[i, d] + c2 * R[2, i, d] * (g[d] - X[i, d])
             V[i, d] = v
             Xn[i, d] = X[i, d] + v
+    n_jump = donors.shape[0]
+    if n_jump > 0:
+        worst = np.argsort(FX, kind="mergesort")[N - n_jump:]
+        for m in range(n_jump):
+            i = worst[m]
+            p, q, r = donors[m, 0], donors[m, 1], donors[m, 2]
+            for d in range(D):
+                Xn[i, d] = X[p, d] + F * (X[q, d] - X[r, d])
+                V[i, d] = 0.0
+    for i in range(N):
+        for d in range(D):
+            if Xn[i, d] < lower[d] or Xn[i, d] > upper[d]:
+                Xn[i, d] = lower[d] + R[3, i, d] * (upper[d] - lower[d])
     return Xn
