@@ -31,9 +31,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
+from drake_mh.optim._population_kernels import greedy_replace
 from drake_mh.optim.base import Optimizer
 
 
@@ -90,41 +92,74 @@ class AO(Optimizer):
         r = c.r1 + c.U * D1
         theta = -c.omega * D1 + 1.5 * np.pi
         self.spiral = r * np.cos(theta) - r * np.sin(theta)          # (y - x), eqs. (8)-(10)
-
-    def _levy(self, n: int) -> np.ndarray:
-        Z = self.rng.standard_normal((2, n, self.dim))
-        return self.config.s * Z[0] * self.sigma / np.abs(Z[1]) ** (1.0 / self.config.beta)
+        self._no_box = np.empty((0, self.dim))
 
     def _ask(self) -> np.ndarray:
         if self.X is None:
             return self.initial_population()
         c, P, D = self.config, self.pop_size, self.dim
         t, T = self.nit, self.T
-        tau = min(t / T, 1.0)
-        X, Xb = self.X, self.best_x
-        XM = X.mean(axis=0)
-        R = self.rng.random((P, 4))
-        choose = R[:, 0] <= 0.5
-        r = R[:, 1:2]
-        if t <= 2.0 * T / 3.0:
-            X1 = Xb * (1.0 - tau) + (XM - Xb * r)                                     # (3)
-            XR = X[self.randint(P, P)]
-            X2 = Xb * self._levy(P) + XR + self.spiral * r                            # (5)
-            Xn = np.where(choose[:, None], X1, X2)
-        else:
-            box = self.lower + self.width * self.rng.random((P, D))
-            X3 = (Xb - XM) * c.alpha - r + box * c.delta                              # (13)
-            QF = float(t) ** ((2.0 * R[:, 2:3] - 1.0) / (1.0 - T) ** 2)               # (15)
-            G1 = 2.0 * R[:, 3:4] - 1.0                                                # (16)
-            G2 = 2.0 * (1.0 - tau)                                                    # (17)
-            X4 = QF * Xb - G1 * X * r - G2 * self._levy(P) + r * G1                   # (14)
-            Xn = np.where(choose[:, None], X3, X4)
-        return self.clip(Xn)
+        early = t <= 2.0 * T / 3.0
+        R = self.rng.random((P, 5))
+        n_levy = int(np.count_nonzero(R[:, 0] > 0.5))     # agents on eq. (5) or (14)
+        Z = self.rng.standard_normal((2, n_levy, D))
+        B = self._no_box if early else self.rng.random((P - n_levy, D))
+        return _move(self.X, self.best_x, R, Z, B, t, T, early, c.alpha, c.delta, c.s * self.sigma,
+                     1.0 / c.beta, self.spiral, self.lower, self.upper)
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         if self.X is None:
             self.X, self.F = X, F.copy()
             return
-        better = F < self.F
-        np.copyto(self.X, X, where=better[:, None])
-        np.copyto(self.F, F, where=better)
+        greedy_replace(self.X, self.F, X, F, False)
+
+
+@numba.njit(cache=True)
+def _move(X, Xb, R, Z, B, t, T, early, alpha, delta, s_sigma, inv_beta, spiral, lower, upper):
+    """Eqs. (3), (5), (13), (14) for every agent, then clip onto the box.
+
+    ``R (P, 5)`` per agent: the strategy test (``<= 0.5``: eq. (3) / (13)), ``rand`` of
+    the equations, QF's and G1's draws (eqs. (15)-(16)) and the random agent X_R
+    (``floor(u P)``). The agents with ``R[i, 0] > 0.5`` take, in order, the rows of
+    ``Z (2, n_levy, D)``: Levy(D) = ``s sigma Z0 / |Z1|^(1/beta)`` (Mantegna, eqs. (6)-(7);
+    ``s_sigma = s sigma``, ``inv_beta = 1 / beta``). Late (``early`` false), the other
+    agents take, in order, the rows of ``B (P - n_levy, D)``: uniforms for eq. (13)'s
+    random box point. Returns the new positions ``(P, D)``.
+    """
+    P, D = X.shape
+    tau = min(t / T, 1.0)
+    XM = np.zeros(D)
+    for i in range(P):
+        for d in range(D):
+            XM[d] += X[i, d]
+    XM /= P
+    G2 = 2.0 * (1.0 - tau)                                                      # (17)
+    Xn = np.empty((P, D))
+    n_levy, n_box = 0, 0
+    for i in range(P):
+        r = R[i, 1]
+        levy = R[i, 0] > 0.5
+        if early and not levy:                                                  # (3)
+            for d in range(D):
+                Xn[i, d] = Xb[d] * (1.0 - tau) + (XM[d] - Xb[d] * r)
+        elif early:                                                             # (5)
+            k = min(int(R[i, 4] * P), P - 1)
+            for d in range(D):
+                L = s_sigma * Z[0, n_levy, d] / abs(Z[1, n_levy, d]) ** inv_beta
+                Xn[i, d] = Xb[d] * L + X[k, d] + spiral[d] * r
+            n_levy += 1
+        elif not levy:                                                          # (13)
+            for d in range(D):
+                box = lower[d] + (upper[d] - lower[d]) * B[n_box, d]
+                Xn[i, d] = (Xb[d] - XM[d]) * alpha - r + box * delta
+            n_box += 1
+        else:                                                                   # (14)
+            QF = float(t) ** ((2.0 * R[i, 2] - 1.0) / (1.0 - T) ** 2)           # (15)
+            G1 = 2.0 * R[i, 3] - 1.0                                            # (16)
+            for d in range(D):
+                L = s_sigma * Z[0, n_levy, d] / abs(Z[1, n_levy, d]) ** inv_beta
+                Xn[i, d] = QF * Xb[d] - G1 * X[i, d] * r - G2 * L + r * G1
+            n_levy += 1
+        for d in range(D):
+            Xn[i, d] = min(max(Xn[i, d], lower[d]), upper[d])
+    return Xn

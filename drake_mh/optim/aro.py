@@ -37,9 +37,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
+from drake_mh.optim._population_kernels import greedy_replace
 from drake_mh.optim.base import Optimizer
 
 VARIANTS = ("aro", "amnn")
@@ -75,42 +77,76 @@ class ARO(Optimizer):
         self.X = None
         self.T = max(1, math.ceil(self.budget / self.pop_size) - 1)
         self.amnn = self.config.variant == "amnn"
+        self._no_normals = np.empty((2, 0))
 
     def _ask(self) -> np.ndarray:
         if self.X is None:
             return self.initial_population()
         P, D = self.pop_size, self.dim
         t, T = min(self.nit, self.T), self.T
-        X = self.X
-        U = self.rng.random((P, 6))
-        A = 4.0 * (1.0 - t / T) * np.log(1.0 / np.maximum(U[:, 0], 1e-300))
-        n_dims = np.ceil(U[:, 1] * D)
-        # c: n_dims random distinct dimensions per rabbit (rank of random keys < n_dims)
-        ranks = np.argsort(np.argsort(self.rng.random((P, D)), axis=1), axis=1)
-        c = ranks < n_dims[:, None]
-        Lw = (math.e - math.exp(((t - 1) / T) ** 2)) * np.sin(2.0 * np.pi * U[:, 2])
-        R = Lw[:, None] * c
-        j = self.others(P)
-        Xj = X[j]
-        if self.amnn:
-            detour = X + R * (Xj - X)                                              # ESM (15)
-            n2 = U[:, 4]
-        else:
-            jump = np.round(0.5 * (0.05 + U[:, 3])) * self.rng.standard_normal(P)
-            detour = Xj + R * (X - Xj) + jump[:, None]                             # ARO (1)
-            n2 = self.rng.standard_normal(P)
-        g = np.zeros((P, D))
-        g[np.arange(P), self.randint(D, P)] = 1.0
-        H = (T - t + 1) / T * n2
-        b = X + H[:, None] * g * X                                                 # ARO (13)
-        hide = X + R * (U[:, 5:6] * b - X)                                         # ARO (11)
-        V = np.where((A > 1.0)[:, None], detour, hide)
-        return self.clip(V) if self.amnn else self.reinit(V)
+        U = self.rng.random((P, 8 + (D if self.amnn else 2 * D)))
+        N = self._no_normals if self.amnn else self.rng.standard_normal((2, P))
+        return _move(self.X, U, N, t, T, self.amnn, self.lower, self.upper)
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         if self.X is None:
             self.X, self.F = X.copy(), F.copy()
             return
-        better = F < self.F                                                         # ESM (20)
-        np.copyto(self.X, X, where=better[:, None])
-        np.copyto(self.F, F, where=better)
+        greedy_replace(self.X, self.F, X, F, False)                                 # ESM (20)
+
+
+@numba.njit(cache=True)
+def _move(X, U, N, t, T, amnn, lower, upper):
+    """One generation of candidate moves (detour or hiding) for every rabbit, then the
+    variant's bound handling. Returns the candidates ``(P, D)``.
+
+    ``U (P, 8 + D)`` for ``amnn``, ``(P, 8 + 2 D)`` for ``aro``; per rabbit, the columns
+    are r1 (energy A), r2 (size of the mask c), r3 (angle of R), r4 (the jump, ``aro``),
+    n2 (``amnn``), r5, the other rabbit j (``floor(u (P - 1))``, skipping i), the burrow
+    dimension g (``floor(u D)``), ``D`` draws of a partial Fisher-Yates shuffle that picks
+    the ``ceil(r2 D)`` dimensions of c, and (``aro``) ``D`` uniforms re-drawing out-of-box
+    components. ``N (2, P)`` (``aro`` only): n1 and n2 ~ N(0, 1).
+    """
+    P, D = X.shape
+    Lw0 = math.e - math.exp(((t - 1) / T) ** 2)
+    Hs = (T - t + 1) / T
+    Xn = np.empty((P, D))
+    R = np.empty(D)
+    perm = np.empty(D, dtype=np.int64)
+    for i in range(P):
+        A = 4.0 * (1.0 - t / T) * math.log(1.0 / max(U[i, 0], 1e-300))     # ARO (15)
+        n_dims = int(math.ceil(U[i, 1] * D))                                # ARO (4)
+        for d in range(D):
+            perm[d] = d
+            R[d] = 0.0
+        Lw = Lw0 * math.sin(2.0 * math.pi * U[i, 2])                         # ARO (2)-(3)
+        for m in range(n_dims):
+            q = m + min(int(U[i, 8 + m] * (D - m)), D - m - 1)
+            perm[m], perm[q] = perm[q], perm[m]
+            R[perm[m]] = Lw
+        if A > 1.0:                                                           # detour
+            j = (i + 1 + min(int(U[i, 6] * (P - 1)), P - 2)) % P
+            if amnn:
+                for d in range(D):
+                    Xn[i, d] = X[i, d] + R[d] * (X[j, d] - X[i, d])            # ESM (15)
+            else:
+                jump = round(0.5 * (0.05 + U[i, 3])) * N[0, i]
+                for d in range(D):
+                    Xn[i, d] = X[j, d] + R[d] * (X[i, d] - X[j, d]) + jump     # ARO (1)
+        else:                                                                 # hiding
+            n2 = U[i, 4] if amnn else N[1, i]
+            H = Hs * n2                                                       # ARO (8)
+            g = min(int(U[i, 7] * D), D - 1)
+            r5 = U[i, 5]
+            for d in range(D):
+                b = X[i, d] + H * X[i, d] if d == g else X[i, d]              # ARO (13)
+                Xn[i, d] = X[i, d] + R[d] * (r5 * b - X[i, d])                # ARO (11)
+        for d in range(D):
+            x = Xn[i, d]
+            if x < lower[d] or x > upper[d]:
+                if amnn:
+                    x = min(max(x, lower[d]), upper[d])                       # ESM (19)
+                else:
+                    x = lower[d] + U[i, 8 + D + d] * (upper[d] - lower[d])    # re-draw
+            Xn[i, d] = x
+    return Xn

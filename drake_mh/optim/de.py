@@ -25,9 +25,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
+from drake_mh.optim._population_kernels import distinct_indices, greedy_replace
 from drake_mh.optim.base import Optimizer
 
 
@@ -67,23 +69,39 @@ class DE(Optimizer):
     def _ask(self) -> np.ndarray:
         if self.X is None:
             return self.initial_population()
-        c, P, D = self.config, self.pop_size, self.dim
-        X = self.X
-        r = self.donors(P, P)
-        V = X[r[:, 0]] + c.F * (X[r[:, 1]] - X[r[:, 2]])
-        cross = self.rng.random((P, D)) <= c.CR
-        cross[np.arange(P), self.randint(D, P)] = True
-        U = np.where(cross, V, X)
-        lo, hi = U < self.lower, U > self.upper
-        if lo.any() or hi.any():
-            U = np.where(lo, 0.5 * (X + self.lower), U)
-            U = np.where(hi, 0.5 * (X + self.upper), U)
-        return U
+        P, D = self.pop_size, self.dim
+        U = self.rng.random((P, D + 4))
+        r = distinct_indices(U[:, :3], P, True)              # r1, r2, r3 != i, distinct
+        return _trial(self.X, r, U, self.config.F, self.config.CR, self.lower, self.upper)
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         if self.X is None:
             self.X, self.F = X.copy(), F.copy()
             return
-        better = F <= self.F
-        np.copyto(self.X, X, where=better[:, None])
-        np.copyto(self.F, F, where=better)
+        greedy_replace(self.X, self.F, X, F, True)                               # eq. (6)
+
+
+@numba.njit(cache=True)
+def _trial(X, r, U, F, CR, lower, upper):
+    """Eqs. (4)-(5) and the midpoint bound repair for every target vector ``x_i``.
+
+    ``r (P, 3)``: the donors r1, r2, r3. ``U (P, D + 4)``: column 3 gives ``jrand``
+    (``floor(u D)``), columns ``4..`` the crossover draws ``rand_ij`` (columns 0-2 drew
+    the donors). Returns the trial vectors ``(P, D)``.
+    """
+    P, D = X.shape
+    Xt = np.empty((P, D))
+    for i in range(P):
+        jrand = min(int(U[i, 3] * D), D - 1)
+        a, b, c = r[i, 0], r[i, 1], r[i, 2]
+        for d in range(D):
+            x = X[i, d]
+            if U[i, 4 + d] <= CR or d == jrand:                              # eq. (5)
+                u = X[a, d] + F * (X[b, d] - X[c, d])                          # eq. (4)
+                if u < lower[d]:
+                    u = 0.5 * (x + lower[d])
+                elif u > upper[d]:
+                    u = 0.5 * (x + upper[d])
+                x = u
+            Xt[i, d] = x
+    return Xt

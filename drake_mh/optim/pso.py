@@ -20,9 +20,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
+from drake_mh.optim._population_kernels import greedy_replace
 from drake_mh.optim.base import Optimizer
 
 
@@ -74,33 +76,42 @@ class PSO(Optimizer):
         c = self.config
         w = c.w_start + (c.w_end - c.w_start) * self.progress()
         R = self.rng.random((2, self.pop_size, self.dim))
-        Xc, V = self.Xc, self.V
-        R[0] *= c.c1
-        R[0] *= self.Pb - Xc
-        R[1] *= c.c2
-        R[1] *= self.best_x - Xc
-        V *= w
-        V += R[0]
-        V += R[1]
-        np.maximum(V, -self.vmax, out=V)
-        np.minimum(V, self.vmax, out=V)
-        X = Xc + V
-        out = (X < self.lower) | (X > self.upper)
-        self.clip(X)
-        np.copyto(V, 0.0, where=out)                 # absorbing walls
-        return X
+        return _step(self.Xc, self.V, self.Pb, self.best_x, R, w, c.c1, c.c2, self.vmax,
+                     self.lower, self.upper)
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         if self.Xc is None:
             self.Xc, self.Pb, self.Pf = X, X.copy(), F.copy()
             return
         self.Xc = X
-        better = F < self.Pf
-        np.copyto(self.Pb, X, where=better[:, None])
-        np.copyto(self.Pf, F, where=better)
+        greedy_replace(self.Pb, self.Pf, X, F, False)
 
     def population(self):
         """Personal bests ``(P, D)`` and their values ``(P,)``."""
         if self.Xc is None:
             return None, None
         return self.Pb.copy(), self.Pf.copy()
+
+
+@numba.njit(cache=True)
+def _step(X, V, Pb, g, R, w, c1, c2, vmax, lower, upper):
+    """One PSO move: the velocity update, the Vmax clamp and the absorbing walls.
+
+    ``V (P, D)`` is updated in place; returns the new positions. ``R (2, P, D)`` holds
+    r1 and r2.
+    """
+    P, D = X.shape
+    Xn = np.empty((P, D))
+    for i in range(P):
+        for d in range(D):
+            v = (w * V[i, d] + c1 * R[0, i, d] * (Pb[i, d] - X[i, d])
+                 + c2 * R[1, i, d] * (g[d] - X[i, d]))
+            v = min(max(v, -vmax[d]), vmax[d])
+            x = X[i, d] + v
+            if x < lower[d]:
+                x, v = lower[d], 0.0
+            elif x > upper[d]:
+                x, v = upper[d], 0.0
+            V[i, d] = v
+            Xn[i, d] = x
+    return Xn

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drake_mh.optim import e3gsa, gsa
+from drake_mh.optim import ao, aro, de, e3gsa, gsa, pso
 from drake_mh.optim._population_kernels import distinct_indices, greedy_replace
 
 P, D = 13, 5
@@ -85,6 +85,121 @@ def test_greedy_replace(ties):
 
 
 # --- one test per optimizer ---------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_pso_step(seed):
+    rng, X, _, g, V = state(seed, spread=2.0)
+    Pb = LOWER + rng.random((P, D)) * WIDTH
+    R = rng.random((2, P, D))
+    w, c1, c2, vmax = 0.7, 2.0, 2.0, 0.6 * WIDTH
+    Vr = np.clip(w * V + c1 * R[0] * (Pb - X) + c2 * R[1] * (g - X), -vmax, vmax)
+    Xr = X + Vr
+    out = (Xr < LOWER) | (Xr > UPPER)
+    Xr, Vr[out] = np.clip(Xr, LOWER, UPPER), 0.0
+    assert out.any()
+    Xn = pso._step(X, V, Pb, g, R, w, c1, c2, vmax, LOWER, UPPER)
+    np.testing.assert_allclose(Xn, Xr, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(V, Vr, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("t, early", [(3, True), (25, False)])
+def test_ao_move(t, early):
+    rng, X, _, g, _ = state(5)
+    T, c = 30, ao.AOConfig()
+    R = rng.random((P, 5))
+    levy_rows = R[:, 0] > 0.5
+    n = int(levy_rows.sum())
+    Z = rng.standard_normal((2, n, D))
+    B = np.empty((0, D)) if early else rng.random((P - n, D))
+    sigma = ao.levy_sigma(c.beta)
+    L = np.zeros((P, D))
+    L[levy_rows] = c.s * Z[0] * sigma / np.abs(Z[1]) ** (1.0 / c.beta)      # (6)-(7), in order
+    D1 = np.arange(1, D + 1)
+    rad, theta = c.r1 + c.U * D1, -c.omega * D1 + 1.5 * np.pi
+    spiral = rad * np.cos(theta) - rad * np.sin(theta)
+    tau, XM, r = t / T, X.mean(axis=0), R[:, 1:2]
+    if early:
+        X1 = g * (1.0 - tau) + (XM - g * r)                                  # (3)
+        X2 = g * L + X[(R[:, 4] * P).astype(int)] + spiral * r               # (5)
+        Xr = np.where(levy_rows[:, None], X2, X1)
+    else:
+        box = np.zeros((P, D))
+        box[~levy_rows] = LOWER + WIDTH * B
+        X3 = (g - XM) * c.alpha - r + box * c.delta                          # (13)
+        QF = float(t) ** ((2.0 * R[:, 2:3] - 1.0) / (1.0 - T) ** 2)
+        G1 = 2.0 * R[:, 3:4] - 1.0
+        X4 = QF * g - G1 * X * r - 2.0 * (1.0 - tau) * L + r * G1           # (14)
+        Xr = np.where(levy_rows[:, None], X4, X3)
+    Xr = np.clip(Xr, LOWER, UPPER)
+    Xn = ao._move(X, g, R, Z, B, t, T, early, c.alpha, c.delta, c.s * sigma, 1.0 / c.beta, spiral,
+                  LOWER, UPPER)
+    np.testing.assert_allclose(Xn, Xr, rtol=1e-12, atol=1e-12)
+
+
+def test_de_trial():
+    rng, X, _, _, _ = state(6)
+    U = rng.random((P, D + 4))
+    U[:, 4:] = np.where(rng.random((P, D)) < 0.3, 0.95, U[:, 4:])           # some CR failures
+    r = distinct_indices(U[:, :3], P, True)
+    V = X[r[:, 0]] + 1.7 * (X[r[:, 1]] - X[r[:, 2]])                          # (4), big F: leaves the box
+    cross = U[:, 4:] <= 0.9
+    cross[np.arange(P), (U[:, 3] * D).astype(int)] = True                    # (5)
+    Ur = np.where(cross, V, X)
+    assert ((Ur < LOWER) | (Ur > UPPER)).any() and not cross.all()
+    Ur = np.where(Ur < LOWER, 0.5 * (X + LOWER), Ur)
+    Ur = np.where(Ur > UPPER, 0.5 * (X + UPPER), Ur)
+    Xt = de._trial(X, r, U, 1.7, 0.9, LOWER, UPPER)
+    np.testing.assert_allclose(Xt, Ur, rtol=0, atol=1e-12)
+    assert inside(Xt)
+
+
+def aro_reference(X, U, N, t, T, amnn):
+    """Per-rabbit loop over the module docstring's equations."""
+    Xr = np.empty_like(X)
+    for i in range(P):
+        u = U[i]
+        A = 4.0 * (1.0 - t / T) * math.log(1.0 / u[0])
+        n_dims = math.ceil(u[1] * D)
+        perm = list(range(D))                                 # partial Fisher-Yates
+        for m in range(n_dims):
+            q = m + int(u[8 + m] * (D - m))
+            perm[m], perm[q] = perm[q], perm[m]
+        c = np.zeros(D)
+        c[perm[:n_dims]] = 1.0
+        R = (math.e - math.exp(((t - 1) / T) ** 2)) * math.sin(2.0 * math.pi * u[2]) * c
+        j = (i + 1 + int(u[6] * (P - 1))) % P
+        if A > 1.0:
+            if amnn:
+                v = X[i] + R * (X[j] - X[i])
+            else:
+                v = X[j] + R * (X[i] - X[j]) + round(0.5 * (0.05 + u[3])) * N[0, i]
+        else:
+            g = np.zeros(D)
+            g[int(u[7] * D)] = 1.0
+            H = (T - t + 1) / T * (u[4] if amnn else N[1, i])
+            b = X[i] + H * g * X[i]
+            v = X[i] + R * (u[5] * b - X[i])
+        out = (v < LOWER) | (v > UPPER)
+        if amnn:
+            v = np.clip(v, LOWER, UPPER)
+        else:
+            v = np.where(out, LOWER + U[i, 8 + D:] * WIDTH, v)
+        Xr[i] = v
+    return Xr
+
+
+@pytest.mark.parametrize("amnn", [False, True])
+@pytest.mark.parametrize("t", [1, 20, 29])
+def test_aro_move(amnn, t):
+    rng, X, _, _, _ = state(7 + t)
+    X *= 3.0                                                   # hiding and jumps leave the box
+    X = np.clip(X, LOWER, UPPER)
+    U = rng.random((P, 8 + (D if amnn else 2 * D)))
+    N = np.empty((2, 0)) if amnn else rng.standard_normal((2, P)) * 3.0
+    Xn = aro._move(X, U, N, t, 30, amnn, LOWER, UPPER)
+    np.testing.assert_allclose(Xn, aro_reference(X, U, N, t, 30, amnn), rtol=1e-12, atol=1e-12)
+    assert inside(Xn)
 
 
 def gsa_acceleration_reference(X, F, W, G):
