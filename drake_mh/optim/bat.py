@@ -31,8 +31,10 @@ Bound handling: clip onto the box (the paper is silent; Yang's code clips).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
@@ -88,8 +90,8 @@ class BAT(Optimizer):
         c, P = self.config, self.pop_size
         self.X = None
         self.V = np.zeros((P, self.dim))
-        self.A = np.full(P, c.loudness) if c.loudness is not None else 1.0 + self.rng.random(P)
-        self.r0 = np.full(P, c.pulse_rate) if c.pulse_rate is not None else self.rng.random(P)
+        self.A = np.full(P, float(c.loudness)) if c.loudness is not None else 1.0 + self.rng.random(P)
+        self.r0 = np.full(P, float(c.pulse_rate)) if c.pulse_rate is not None else self.rng.random(P)
         self.r = self.r0.copy()
         self._t = 0
 
@@ -98,26 +100,59 @@ class BAT(Optimizer):
             return self.initial_population()
         c, P, D = self.config, self.pop_size, self.dim
         R = self.rng.random((P, D + 2 + (D if c.beta_per_dimension else 1)))
-        beta = R[:, D + 2:]
-        freq = c.f_min + (c.f_max - c.f_min) * beta                         # eq. (2)
-        V = self.V + (self.X - self.best_x) * freq                           # eq. (3)
-        np.clip(V, -self.width, self.width, out=V)
-        self.V = V
-        Xn = self.X + V                                                      # eq. (4)
-        local = R[:, D] > self.r                                             # eq. (5)
-        if local.any():
-            eps = 2.0 * R[local, :D] - 1.0
-            Xn[local] = self.best_x + eps * (c.local_scale * self.A.mean()) * self.width
         self._accept_draw = R[:, D + 1]
-        return self.clip(Xn)
+        return _move(self.X, self.V, self.best_x, R, c.f_min, c.f_max, self.r, self.A,
+                     c.local_scale, self.lower, self.upper, self.width)
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         if self.X is None:
             self.X, self.F = X.copy(), F.copy()
             return
         self._t += 1
-        acc = (F < self.F) & (self._accept_draw < self.A)                   # eq. (6)
-        np.copyto(self.X, X, where=acc[:, None])
-        np.copyto(self.F, F, where=acc)
-        self.A[acc] *= self.config.alpha
-        self.r[acc] = self.r0[acc] * (1.0 - np.exp(-self.config.gamma * self._t))
+        r_t = 1.0 - math.exp(-self.config.gamma * self._t)
+        _accept(self.X, self.F, X, F, self._accept_draw, self.A, self.r, self.r0,
+                self.config.alpha, r_t)
+
+
+@numba.njit(cache=True)
+def _move(X, V, g, R, f_min, f_max, r, A, local_scale, lower, upper, width):
+    """Eqs. (2)-(5) for every bat, then clip onto the box; ``V`` is updated in place.
+
+    ``R (P, D + 2 + nb)``: columns ``0..D-1`` the local-walk ``eps`` (as ``2 u - 1``),
+    ``D`` the pulse test of eq. (5), ``D + 1`` the acceptance draw (used by
+    :func:`_accept`), ``D + 2..`` beta (``nb = D`` per dimension, or 1 per bat).
+    Returns the new positions ``(P, D)``.
+    """
+    P, D = X.shape
+    per_dim = R.shape[1] - D - 2 == D
+    step = local_scale * A.mean()
+    Xn = np.empty((P, D))
+    for i in range(P):
+        local = R[i, D] > r[i]                                          # eq. (5)
+        for d in range(D):
+            beta = R[i, D + 2 + d] if per_dim else R[i, D + 2]
+            freq = f_min + (f_max - f_min) * beta                          # eq. (2)
+            v = V[i, d] + (X[i, d] - g[d]) * freq                          # eq. (3)
+            v = min(max(v, -width[d]), width[d])
+            V[i, d] = v
+            if local:
+                x = g[d] + (2.0 * R[i, d] - 1.0) * step * width[d]
+            else:
+                x = X[i, d] + v                                            # eq. (4)
+            Xn[i, d] = min(max(x, lower[d]), upper[d])
+    return Xn
+
+
+@numba.njit(cache=True)
+def _accept(X, F, Xn, Fn, draw, A, r, r0, alpha, r_t):
+    """Eq. (6) in place: bat ``i`` moves to ``Xn[i]`` if ``Fn[i] < F[i]`` and
+    ``draw[i] < A[i]``; then ``A_i <- alpha A_i`` and ``r_i <- r0_i r_t`` with
+    ``r_t = 1 - exp(-gamma t)``."""
+    P, D = X.shape
+    for i in range(P):
+        if Fn[i] < F[i] and draw[i] < A[i]:
+            for d in range(D):
+                X[i, d] = Xn[i, d]
+            F[i] = Fn[i]
+            A[i] *= alpha
+            r[i] = r0[i] * r_t

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
@@ -66,20 +67,39 @@ class WOA(Optimizer):
     def _ask(self) -> np.ndarray:
         if self.X is None:
             return self.initial_population()
-        c, P = self.config, self.pop_size
-        a = c.a_max * (1.0 - self.progress())
-        R = self.rng.random((P, 4))
-        A = (2.0 * a * R[:, 0] - a)[:, None]                      # (P, 1) scalar per whale
-        C = (2.0 * R[:, 1])[:, None]
-        p = R[:, 2]
-        l = (2.0 * R[:, 3] - 1.0)[:, None]
-        X, Xb = self.X, self.best_x
-        # encircling (|A| < 1) or search around a random whale (|A| >= 1)
-        ref = np.where(np.abs(A) < 1.0, Xb, X[self.randint(P, P)])
-        enc = ref - A * np.abs(C * ref - X)
-        spiral = np.abs(Xb - X) * np.exp(c.b * l) * np.cos(2.0 * np.pi * l) + Xb
-        Xn = np.where((p < 0.5)[:, None], enc, spiral)
-        return self.clip(Xn)
+        a = self.config.a_max * (1.0 - self.progress())
+        R = self.rng.random((self.pop_size, 5))
+        return _move(self.X, self.best_x, R, a, self.config.b, self.lower, self.upper)
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         self.X, self.F = X, F.copy()
+
+
+@numba.njit(cache=True)
+def _move(X, Xb, R, a, b, lower, upper):
+    """Eqs. (2.1)-(2.8) for every whale, then clip onto the box.
+
+    ``R (P, 5)`` per whale: r1, r2, p, l (as ``2 u - 1``) and the random whale
+    (``floor(u P)``). Returns the new positions ``(P, D)``.
+    """
+    P, D = X.shape
+    Xn = np.empty((P, D))
+    for i in range(P):
+        A = 2.0 * a * R[i, 0] - a                                   # (2.3)
+        C = 2.0 * R[i, 1]                                           # (2.4)
+        if R[i, 2] < 0.5:
+            if abs(A) < 1.0:                                        # (2.1)-(2.2): encircle X*
+                for d in range(D):
+                    Xn[i, d] = Xb[d] - A * abs(C * Xb[d] - X[i, d])
+            else:                                                   # (2.7)-(2.8): random whale
+                k = min(int(R[i, 4] * P), P - 1)
+                for d in range(D):
+                    Xn[i, d] = X[k, d] - A * abs(C * X[k, d] - X[i, d])
+        else:                                                       # (2.5): spiral
+            l = 2.0 * R[i, 3] - 1.0
+            s = np.exp(b * l) * np.cos(2.0 * np.pi * l)
+            for d in range(D):
+                Xn[i, d] = abs(Xb[d] - X[i, d]) * s + Xb[d]
+        for d in range(D):
+            Xn[i, d] = min(max(Xn[i, d], lower[d]), upper[d])
+    return Xn

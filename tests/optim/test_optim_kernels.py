@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drake_mh.optim import ao, aro, de, e3gsa, gsa, pso
+from drake_mh.optim import ao, aro, bat, de, e3gsa, gsa, pso, woa
 from drake_mh.optim._population_kernels import distinct_indices, greedy_replace
 
 P, D = 13, 5
@@ -101,6 +101,45 @@ def test_pso_step(seed):
     Xn = pso._step(X, V, Pb, g, R, w, c1, c2, vmax, LOWER, UPPER)
     np.testing.assert_allclose(Xn, Xr, rtol=0, atol=1e-12)
     np.testing.assert_allclose(V, Vr, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("per_dim", [True, False])
+def test_bat_move_and_accept(per_dim):
+    rng, X, F, g, V = state(3)
+    r, A = rng.random(P), 1.0 + rng.random(P)
+    R = rng.random((P, D + 2 + (D if per_dim else 1)))
+    freq = 0.0 + 2.0 * R[:, D + 2:]
+    Vr = np.clip(V + (X - g) * freq, -WIDTH, WIDTH)
+    Xr = X + Vr
+    local = R[:, D] > r
+    assert local.any() and not local.all()
+    Xr[local] = g + (2.0 * R[local, :D] - 1.0) * (0.01 * A.mean()) * WIDTH
+    Xr = np.clip(Xr, LOWER, UPPER)
+    Xn = bat._move(X, V, g, R, 0.0, 2.0, r, A, 0.01, LOWER, UPPER, WIDTH)
+    np.testing.assert_allclose(Xn, Xr, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(V, Vr, rtol=0, atol=1e-12)
+    # eq. (6)
+    Fn = F + rng.normal(size=P)
+    r0, draw = rng.random(P), R[:, D + 1]
+    acc = (Fn < F) & (draw < A)
+    Xa, Fa = np.where(acc[:, None], Xn, X), np.where(acc, Fn, F)
+    Aa, ra = np.where(acc, 0.9 * A, A), np.where(acc, r0 * 0.5, r)
+    bat._accept(X, F, Xn, Fn, draw, A, r, r0, 0.9, 0.5)
+    assert acc.any()
+    assert np.array_equal(X, Xa) and np.array_equal(F, Fa) and np.allclose(A, Aa) and np.allclose(r, ra)
+
+
+@pytest.mark.parametrize("a", [1.8, 0.4])
+def test_woa_move(a):
+    rng, X, _, g, _ = state(4)
+    R = rng.random((P, 5))
+    A, C = (2.0 * a * R[:, 0] - a)[:, None], (2.0 * R[:, 1])[:, None]
+    l = (2.0 * R[:, 3] - 1.0)[:, None]
+    ref = np.where(np.abs(A) < 1.0, g, X[(R[:, 4] * P).astype(int)])
+    enc = ref - A * np.abs(C * ref - X)                                      # (2.1), (2.7)
+    spiral = np.abs(g - X) * np.exp(l) * np.cos(2.0 * np.pi * l) + g         # (2.5)
+    Xr = np.clip(np.where((R[:, 2] < 0.5)[:, None], enc, spiral), LOWER, UPPER)
+    np.testing.assert_allclose(woa._move(X, g, R, a, 1.0, LOWER, UPPER), Xr, rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("t, early", [(3, True), (25, False)])
