@@ -31,7 +31,7 @@ import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.optim.base import Optimizer, batched_choice
+from drake_mh.optim.base import Optimizer
 
 
 @dataclass(frozen=True)
@@ -75,22 +75,18 @@ class ABC(Optimizer):
         self.phase = "init"
         self._all = np.arange(self.SN)
 
-    def _neighbours(self, idx: np.ndarray) -> np.ndarray:
-        """Eq. (1) candidates for the sources ``idx (n,)``: one coordinate moved each."""
-        U = self.rng.random((3, len(idx)))
-        return _neighbours_kernel(self.X, idx, U, self.lower, self.upper)
-
     def _ask(self) -> np.ndarray:
         if self.phase == "init":
             return self.initial_population(self.SN)
-        if self.phase == "employed":
-            self._idx = self._all
-        elif self.phase == "onlooker":
-            self._idx = batched_choice(self.rng, abc_fitness(self.F), self.SN)
-        else:  # scout
+        if self.phase == "scout":
             self._idx = np.array([self._scout])
             return self.lower + self.rng.random((1, self.dim)) * self.width       # eq. (3)
-        return self._neighbours(self._idx)
+        if self.phase == "employed":
+            self._idx = self._all
+        else:   # onlookers: roulette on Karaboga's fitness, eq. (2)
+            self._idx = _roulette_kernel(self.F, self.rng.random(self.SN))
+        U = self.rng.random((3, len(self._idx)))
+        return _neighbours_kernel(self.X, self._idx, U, self.lower, self.upper)  # eq. (1)
 
     def _greedy(self, idx: np.ndarray, V: np.ndarray, F: np.ndarray) -> None:
         _greedy_kernel(self.X, self.F, self.trial, idx, V, F, idx is self._all)
@@ -109,12 +105,37 @@ class ABC(Optimizer):
         if self.phase == "employed":
             self.phase = "onlooker"
             return
-        i = int(np.argmax(self.trial))
+        i = int(self.trial.argmax())
         if self.trial[i] > self.limit:
             self._scout = i
             self.phase = "scout"
         else:
             self.phase = "employed"
+
+
+@numba.njit(cache=True)
+def _roulette_kernel(F, u):
+    """Onlooker sources: for each uniform ``u[r]`` the source index drawn with probabilities
+    ``fit / sum(fit)``, ``fit`` = :func:`abc_fitness` of ``F`` (first cumulative fitness
+    ``> u[r] sum(fit)``)."""
+    SN = F.shape[0]
+    cum = np.empty(SN)
+    total = 0.0
+    for s in range(SN):
+        total += 1.0 / (1.0 + F[s]) if F[s] >= 0 else 1.0 + abs(F[s])
+        cum[s] = total
+    idx = np.empty(u.shape[0], dtype=np.int64)
+    for r in range(u.shape[0]):
+        x = u[r] * total
+        lo, hi = 0, SN - 1                    # binary search, clamped to the last source
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if cum[mid] > x:
+                hi = mid
+            else:
+                lo = mid + 1
+        idx[r] = lo
+    return idx
 
 
 @numba.njit(cache=True)

@@ -485,10 +485,3 @@ def run(opt: Optimizer, f: Callable[[np.ndarray], Any], target: float | None = N
                 message = "stopped by callback"
                 break
     return opt.result(_time.perf_counter() - t0, message)
-
-
-def batched_choice(rng: np.random.Generator, p: np.ndarray, size: int) -> np.ndarray:
-    """Roulette-wheel draws of ``size`` indices with probabilities ``p (n,)`` (vectorized)."""
-    c = np.cumsum(p)
-    idx = np.searchsorted(c, rng.random(size) * c[-1], side="right")
-    return np.minimum(idx, len(p) - 1)

@@ -33,7 +33,7 @@ import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.optim.base import Optimizer, batched_choice
+from drake_mh.optim.base import Optimizer
 
 CROSSOVERS = ("blend", "sbx")
 MUTATIONS = ("reset", "polynomial")
@@ -89,79 +89,110 @@ class GA(Optimizer):
         self.n_keep = min(max(2, math.ceil(self.config.selection_rate * N)), N - 1)
         ranks = np.arange(self.n_keep, 0, -1, dtype=float)
         self.p_rank = ranks / ranks.sum()
-
-    # -- operators ----------------------------------------------------------------------
-
-    def _blend(self, M: np.ndarray, Dd: np.ndarray) -> np.ndarray:
-        a = self.randint(M.shape[1], M.shape[0])
-        b = self.rng.random(M.shape[0])
-        return _blend_kernel(M, Dd, a, b)
-
-    def _sbx(self, M: np.ndarray, Dd: np.ndarray) -> np.ndarray:
-        u = self.rng.random(M.shape)
-        e = 1.0 / (self.config.eta_c + 1.0)
-        beta = np.where(u <= 0.5, (2.0 * u) ** e, (0.5 / (1.0 - u)) ** e)
-        swap = self.rng.random(M.shape) < 0.5                      # per-variable crossover
-        beta = np.where(swap, beta, 1.0)
-        C1 = 0.5 * ((1 + beta) * M + (1 - beta) * Dd)
-        C2 = 0.5 * ((1 - beta) * M + (1 + beta) * Dd)
-        return self.clip(np.concatenate([C1, C2]))
+        self._cum_rank = np.cumsum(self.p_rank)
+        self._blend = self.config.crossover == "blend"
+        self._reset = self.config.mutation == "reset"
 
     def _ask(self) -> np.ndarray:
         if self.X is None:
             return self.initial_population()
-        c, N, D, k = self.config, self.pop_size, self.dim, self.n_keep
-        n_off = N - k
-        pairs = math.ceil(n_off / 2)
-        parents = batched_choice(self.rng, self.p_rank, 2 * pairs)
-        M, Dd = self.X[parents[:pairs]], self.X[parents[pairs:]]
-        kids = self._blend(M, Dd) if c.crossover == "blend" else self._sbx(M, Dd)
-        Y = np.concatenate([self.X[:k], kids[:n_off]])
-        mask = self.rng.random((N - 1, D)) < c.mutation_rate
-        if mask.any():
-            body = Y[1:]
-            if c.mutation == "reset":
-                R = self.lower + self.rng.random((N - 1, D)) * self.width
-            else:
-                u = self.rng.random((N - 1, D))
-                e = 1.0 / (c.eta_m + 1.0)
-                delta = np.where(u < 0.5, (2.0 * u) ** e - 1.0, 1.0 - (2.0 * (1.0 - u)) ** e)
-                R = np.clip(body + delta * self.width, self.lower, self.upper)
-            np.copyto(body, R, where=mask)
-        changed = np.zeros(N, dtype=bool)
-        changed[k:] = True
-        changed[1:] |= mask.any(axis=1)
-        self._Y, self._changed = Y, np.flatnonzero(changed)
+        c, N, D = self.config, self.pop_size, self.dim
+        pairs = math.ceil((N - self.n_keep) / 2)
+        n_cross = 2 * pairs if self._blend else 2 * pairs * D
+        U = self.rng.random(2 * pairs + n_cross + 2 * (N - 1) * D)
+        Y, self._changed = _offspring(self.X, self.n_keep, self._cum_rank, U, self._blend, self._reset,
+                                      c.mutation_rate, c.eta_c, c.eta_m, self.lower, self.upper)
+        self._Y = Y
         return Y[self._changed]
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         if self.X is None:
-            Y, FY = X.copy(), F.copy()
-        else:
-            Y, FY = self._Y, self.F.copy()      # unchanged survivors keep their values
-            FY[self._changed] = F
-        order = np.argsort(FY, kind="stable")
-        self.X, self.F = Y[order], FY[order]
+            self.X, self.F = _sorted(X, F, np.arange(len(F)), F)
+        else:                                   # unchanged survivors keep their values
+            self.X, self.F = _sorted(self._Y, self.F, self._changed, F)
 
 
 @numba.njit(cache=True)
-def _blend_kernel(M, Dd, a, b):
-    """Haupt's single-point blend crossover for parent pairs ``(M[r], Dd[r])``.
+def _offspring(X, n_keep, cum_rank, U, blend, reset, mutation_rate, eta_c, eta_m, lower, upper):
+    """One generation's new population ``Y (N, D)`` and the indices of its changed rows.
 
-    Gene ``a[r]`` blends with weight ``b[r]``; the genes right of it are swapped. Returns
-    the ``2n`` children: first children of every pair, then second children.
+    ``X (N, D)`` is sorted by f. Rows ``0..n_keep-1`` of Y are the survivors, the rest the
+    children of parent pairs drawn by the rank roulette (cumulative probabilities
+    ``cum_rank``); then every gene of rows ``1..N-1`` mutates with probability
+    ``mutation_rate``. Uniforms in ``U``, in this order: ``2 pairs`` parent draws (mothers,
+    then fathers); the crossover's (blend: gene a and weight b per pair; SBX: ``u`` and
+    the per-variable crossover test, ``pairs x D`` each); the ``(N - 1) x D`` mutation
+    tests; the ``(N - 1) x D`` mutation values.
     """
-    n, D = M.shape
-    C = np.empty((2 * n, D))
-    for r in range(n):
+    N, D = X.shape
+    pairs = (N - n_keep + 1) // 2
+    Y = np.empty((N, D))
+    Y[:n_keep] = X[:n_keep]
+    C = np.empty((2 * pairs, D))             # first children of every pair, then second
+    o = 2 * pairs                            # offset of the crossover draws in U
+    for r in range(pairs):
+        m = _roulette(cum_rank, U[r])
+        f = _roulette(cum_rank, U[pairs + r])
+        if blend:                            # Haupt's single-point blend
+            a = min(int(U[o + r] * D), D - 1)
+            b = U[o + pairs + r]
+            for d in range(D):
+                if d > a:
+                    C[r, d], C[pairs + r, d] = X[f, d], X[m, d]
+                else:
+                    C[r, d], C[pairs + r, d] = X[m, d], X[f, d]
+            ma, da = X[m, a], X[f, a]
+            C[r, a] = ma - b * (ma - da)
+            C[pairs + r, a] = da + b * (ma - da)
+        else:                                # SBX, per-variable crossover with probability 0.5
+            e = 1.0 / (eta_c + 1.0)
+            for d in range(D):
+                u = U[o + r * D + d]
+                if U[o + pairs * D + r * D + d] < 0.5:
+                    beta = (2.0 * u) ** e if u <= 0.5 else (0.5 / (1.0 - u)) ** e
+                else:
+                    beta = 1.0
+                c1 = 0.5 * ((1.0 + beta) * X[m, d] + (1.0 - beta) * X[f, d])
+                c2 = 0.5 * ((1.0 - beta) * X[m, d] + (1.0 + beta) * X[f, d])
+                C[r, d] = min(max(c1, lower[d]), upper[d])
+                C[pairs + r, d] = min(max(c2, lower[d]), upper[d])
+    Y[n_keep:] = C[: N - n_keep]
+    o += 2 * pairs if blend else 2 * pairs * D
+    n_mut = (N - 1) * D                      # mutation tests at o, values at o + n_mut
+    changed = np.zeros(N, dtype=np.bool_)
+    changed[n_keep:] = True
+    e = 1.0 / (eta_m + 1.0)
+    for i in range(1, N):                    # row 0, the elite, never mutates
         for d in range(D):
-            if d > a[r]:
-                C[r, d] = Dd[r, d]
-                C[n + r, d] = M[r, d]
-            else:
-                C[r, d] = M[r, d]
-                C[n + r, d] = Dd[r, d]
-        ma, da = M[r, a[r]], Dd[r, a[r]]
-        C[r, a[r]] = ma - b[r] * (ma - da)
-        C[n + r, a[r]] = da + b[r] * (ma - da)
-    return C
+            q = (i - 1) * D + d
+            if U[o + q] < mutation_rate:
+                u = U[o + n_mut + q]
+                if reset:
+                    Y[i, d] = lower[d] + u * (upper[d] - lower[d])
+                else:                        # polynomial mutation
+                    delta = (2.0 * u) ** e - 1.0 if u < 0.5 else 1.0 - (2.0 * (1.0 - u)) ** e
+                    Y[i, d] = min(max(Y[i, d] + delta * (upper[d] - lower[d]), lower[d]), upper[d])
+                changed[i] = True
+    return Y, np.flatnonzero(changed)
+
+
+@numba.njit(cache=True)
+def _roulette(cum, u):
+    """Index drawn with probabilities ``diff(cum)`` by the uniform ``u`` (first ``cum > u cum[-1]``)."""
+    x = u * cum[-1]
+    n = cum.shape[0]
+    for i in range(n):
+        if cum[i] > x:
+            return i
+    return n - 1
+
+
+@numba.njit(cache=True)
+def _sorted(Y, FY, changed, F):
+    """``Y`` and its values sorted by value (stable); rows ``changed`` get the new values ``F``,
+    the others keep ``FY``."""
+    FY = FY.copy()
+    for r in range(changed.shape[0]):
+        FY[changed[r]] = F[r]
+    order = np.argsort(FY, kind="mergesort")
+    return Y[order], FY[order]

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drake_mh.optim import ao, aro, bat, de, e3gsa, gsa, pso, woa
+from drake_mh.optim import abc, ao, aro, bat, de, e3gsa, ga, gsa, pso, woa
 from drake_mh.optim._population_kernels import distinct_indices, greedy_replace
 
 P, D = 13, 5
@@ -293,3 +293,71 @@ def test_e3gsa_move(n_jump):
     np.testing.assert_allclose(Xn, Xr, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(V, Vr, rtol=1e-12, atol=1e-12)
     assert inside(Xn)
+
+
+def ga_reference(X, n_keep, p_rank, U, blend, reset, rate, eta_c=15.0, eta_m=20.0):
+    N = len(X)
+    pairs = math.ceil((N - n_keep) / 2)
+    u, U = U[: 2 * pairs], U[2 * pairs:]
+    c = np.cumsum(p_rank)
+    par = np.minimum(np.searchsorted(c, u * c[-1], side="right"), n_keep - 1)
+    M, Dd = X[par[:pairs]], X[par[pairs:]]
+    if blend:
+        a, b, U = (U[:pairs] * D).astype(int), U[pairs:2 * pairs], U[2 * pairs:]
+        right = np.arange(D)[None, :] > a[:, None]
+        C1, C2 = np.where(right, Dd, M), np.where(right, M, Dd)
+        rows = np.arange(pairs)
+        ma, da = M[rows, a], Dd[rows, a]
+        C1[rows, a], C2[rows, a] = ma - b * (ma - da), da + b * (ma - da)
+    else:
+        us, sw, U = U[:pairs * D].reshape(pairs, D), U[pairs * D:2 * pairs * D].reshape(pairs, D), U[2 * pairs * D:]
+        e = 1.0 / (eta_c + 1.0)
+        beta = np.where(us <= 0.5, (2.0 * us) ** e, (0.5 / (1.0 - us)) ** e)
+        beta = np.where(sw < 0.5, beta, 1.0)
+        C1 = np.clip(0.5 * ((1 + beta) * M + (1 - beta) * Dd), LOWER, UPPER)
+        C2 = np.clip(0.5 * ((1 - beta) * M + (1 + beta) * Dd), LOWER, UPPER)
+    Y = np.concatenate([X[:n_keep], np.concatenate([C1, C2])[: N - n_keep]])
+    mask = U[: (N - 1) * D].reshape(N - 1, D) < rate
+    v = U[(N - 1) * D:].reshape(N - 1, D)
+    if reset:
+        R = LOWER + v * WIDTH
+    else:
+        e = 1.0 / (eta_m + 1.0)
+        delta = np.where(v < 0.5, (2.0 * v) ** e - 1.0, 1.0 - (2.0 * (1.0 - v)) ** e)
+        R = np.clip(Y[1:] + delta * WIDTH, LOWER, UPPER)
+    Y[1:] = np.where(mask, R, Y[1:])
+    changed = np.zeros(N, dtype=bool)
+    changed[n_keep:] = True
+    changed[1:] |= mask.any(axis=1)
+    return Y, np.flatnonzero(changed)
+
+
+@pytest.mark.parametrize("blend, reset", [(True, True), (False, False), (True, False), (False, True)])
+@pytest.mark.parametrize("n_keep", [7, 6])          # odd and even number of children
+def test_ga_offspring_and_survivors(blend, reset, n_keep):
+    rng, X, F, _, _ = state(13)
+    order = np.argsort(F, kind="stable")
+    X, F = X[order], F[order]
+    ranks = np.arange(n_keep, 0, -1, dtype=float)
+    p_rank = ranks / ranks.sum()
+    pairs = math.ceil((P - n_keep) / 2)
+    U = rng.random(2 * pairs + (2 * pairs if blend else 2 * pairs * D) + 2 * (P - 1) * D)
+    Y, changed = ga._offspring(X, n_keep, np.cumsum(p_rank), U, blend, reset, 0.1, 15.0, 20.0, LOWER, UPPER)
+    Yr, cr = ga_reference(X, n_keep, p_rank, U, blend, reset, 0.1)
+    np.testing.assert_allclose(Y, Yr, rtol=1e-12, atol=1e-12)
+    assert np.array_equal(changed, cr) and inside(Y) and np.array_equal(Y[0], X[0])
+    Fc = rng.random(len(changed))
+    FY = F.copy()
+    FY[changed] = Fc
+    o = np.argsort(FY, kind="stable")
+    Xs, Fs = ga._sorted(Y, F, changed, Fc)
+    assert np.array_equal(Xs, Y[o]) and np.array_equal(Fs, FY[o])
+
+
+def test_abc_roulette_uses_karaboga_fitness():
+    rng = np.random.default_rng(14)
+    for F in (rng.random(9) * 10, rng.normal(size=9) * 10):
+        u = rng.random(500)
+        c = np.cumsum(abc.abc_fitness(F))
+        ref = np.minimum(np.searchsorted(c, u * c[-1], side="right"), len(F) - 1)
+        assert np.array_equal(abc._roulette_kernel(F, u), ref)
