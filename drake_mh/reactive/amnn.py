@@ -19,14 +19,22 @@ the P agents) and adds the ESM specifics here:
 * **Recurrence.** The last layer of step k is the first layer of step k + 1 (warm start,
   :func:`drake_mh.reactive.esm_solvers.warm_start_rows`).
 
-The paper runs L = 1000, P = 128 on a GPU at 30 Hz; a CPU core affords fewer layers (see
-``docs/esm.md`` for the measured budget).
+Two implementations of the same step: ``compiled=True`` runs all layers in one numba call
+(:mod:`drake_mh.reactive.amnn_compiled`); ``compiled=False`` runs ARO-amnn through the Python
+ask/tell loop. Both draw the same random numbers and return bit-identical steps.
+
+The paper runs L = 1000, P = 128 on a GPU at 30 Hz; ``docs/esm.md`` gives the rates
+measured on one CPU core (``studies/amnn_speed.py``).
 """
 
 from __future__ import annotations
 
+import time
+
 from drake_mh.errors import InvalidArgument
-from drake_mh.reactive.esm_solvers import MetaheuristicSolver
+from drake_mh.reactive import amnn_compiled
+from drake_mh.reactive.esm_problem import ESMObjective, ESMStep
+from drake_mh.reactive.esm_solvers import MetaheuristicSolver, StepSolution, _answer
 
 PAPER_LAYERS = 1000
 PAPER_AGENTS = 128
@@ -42,22 +50,38 @@ class AMNN(MetaheuristicSolver):
         warm_start: the previous step's last layer seeds this step's first layer.
         immigrants: fraction of that layer re-drawn uniformly in the box (0: the paper's
             recurrence, the last layer passed on unchanged).
+        compiled: run the layers in one compiled call (:mod:`drake_mh.reactive.amnn_compiled`)
+            instead of the Python ask/tell loop; same result.
 
     Raises:
-        InvalidArgument: ``layers < 1`` or ``agents < 2``.
+        InvalidArgument: ``layers < 1``, ``agents < 2`` or ``compiled`` not a bool.
     """
 
     def __init__(self, layers: int = 200, agents: int = 32, handling: str = "reject", warm_start: bool = True,
-                 immigrants: float = 0.0):
+                 immigrants: float = 0.0, compiled: bool = True):
         if not (isinstance(layers, int) and layers >= 1):
             raise InvalidArgument(f"AMNN layers L must be an integer >= 1; got {layers!r}")
         if not (isinstance(agents, int) and agents >= 2):
             raise InvalidArgument(f"AMNN agents P must be an integer >= 2 (eq. (15) needs j != i); got {agents!r}")
+        if not isinstance(compiled, bool):
+            raise InvalidArgument(f"AMNN compiled must be True or False; got {compiled!r}")
         super().__init__("aro", budget=(layers + 1) * agents, pop_size=agents, handling=handling,
                          warm_start=warm_start, immigrants=immigrants, variant="amnn")
         self.layers = layers
         self.agents = agents
+        self.compiled = compiled
         self.name = "amnn"
+
+    def solve(self, robot, step: ESMStep) -> StepSolution:
+        if not self.compiled:
+            return super().solve(robot, step)
+        t0 = time.perf_counter()
+        x0 = self._first_layer(step)
+        opt = self._optimizer(step, x0[: self.agents])
+        best_x, best_f, self.population, self.population_f = amnn_compiled.run_layers(robot, step, opt, self.handling)
+        objective = ESMObjective(robot, step, self.handling)
+        theta, F, feasible = _answer(robot, step, objective, best_x, best_f, x0[0])
+        return StepSolution(theta, F, feasible, self.budget, time.perf_counter() - t0, "budget exhausted")
 
     @property
     def budget_label(self) -> str:

@@ -145,6 +145,12 @@ class MetaheuristicSolver(StepSolver):
     def budget_label(self) -> str:
         return f"{self.budget} evaluations (P={self.pop_size or 'default'})"
 
+    def _first_layer(self, step: ESMStep) -> np.ndarray:
+        """The warm-start rows of this step (:func:`warm_start_rows`); row 0 is the fallback."""
+        if self.warm_start:
+            return warm_start_rows(step, self.population, self.population_f, self.immigrants, self.rng)
+        return warm_start_rows(step, None)
+
     def _optimizer(self, step: ESMStep, x0: np.ndarray):
         seed = int(self.rng.integers(2**63 - 1))
         return self.cls(step.bounds, budget=self.budget, seed=seed, pop_size=self.pop_size, x0=x0, **self.params)
@@ -154,10 +160,7 @@ class MetaheuristicSolver(StepSolver):
 
         t0 = time.perf_counter()
         objective = ESMObjective(robot, step, self.handling)
-        if self.warm_start:
-            x0 = warm_start_rows(step, self.population, self.population_f, self.immigrants, self.rng)
-        else:
-            x0 = warm_start_rows(step, None)
+        x0 = self._first_layer(step)
         opt = self._optimizer(step, x0[: opt_pop(self.cls, self.pop_size, step.lower.size)])
         result = run(opt, objective)
         if result.population is not None and len(result.population) > 1:
