@@ -25,9 +25,11 @@ Part ``"framework"``: the framework paper's regenerating follower (§3.4, Algori
 its Table 3 scenario (seed000_6dof, 50-point path, a sphere moved from (0.2, 0.2, 0.6) to
 (0.1, 0.15, 0.4) while the arm runs), scenario ``table3``, and ``table3_cut`` where the
 obstacle is also moved onto the path (§3.4.2 re-planning of the 3·nC points); any IK method
-(:func:`drake_mh.reactive.framework_scenario.run_framework_scenario`). Metrics: points
-regenerated, regeneration time per event, largest joint step (plan vs executed), exact
-clearance at and between the points.
+(:func:`drake_mh.reactive.framework_scenario.run_framework_scenario`), and
+``table3_cut_spread``: the same with the continuity repair ``FollowerConfig(spread_step=0.3)``
+(neighbours of a branch switch solved again; not in the paper). Metrics: points
+regenerated (and re-solved by the repair), regeneration time per event, largest joint step
+(plan vs executed), exact clearance at and between the points.
 
 Run: ``drake-mh study dynamic_obstacles [--quick]`` or ``python studies/dynamic_obstacles.py``.
 """
@@ -38,8 +40,8 @@ import numpy as np
 
 from drake_mh.study import Case, Fields, Study
 
-LAYERS, AGENTS = 200, 32                     # AMNN budget per control step (CPU, >= 30 Hz)
-QUICK_LAYERS = 100
+LAYERS, AGENTS = 1000, 128                   # the paper's AMNN budget per control step, every solver
+QUICK_LAYERS, QUICK_AGENTS = 100, 32
 OTHER_METHODS = ("pso", "de", "e3gsa")
 SEEDS, QUICK_SEEDS = 3, 1
 DURATION = {"self_motion": 4.5, "tracking": 15.0}
@@ -48,14 +50,14 @@ OPTIMUM_SAMPLE = 0.5                         # [s] between μ* samples on a movi
 H1 = {"self_motion": 10.0, "tracking": 100.0}  # tracking weight per scenario (module docstring)
 
 
-def _solver(method: str, layers: int):
+def _solver(method: str, layers: int, agents: int):
     from drake_mh.reactive import AMNN, MetaheuristicSolver, QPBaseline
 
     if method == "amnn":
-        return AMNN(layers=layers, agents=AGENTS)
+        return AMNN(layers=layers, agents=agents)
     if method == "qp":
         return QPBaseline()
-    return MetaheuristicSolver(method, budget=(layers + 1) * AGENTS, pop_size=AGENTS)
+    return MetaheuristicSolver(method, budget=(layers + 1) * agents, pop_size=agents)
 
 
 def _optimum(robot, scenario, t: np.ndarray) -> np.ndarray:
@@ -74,6 +76,8 @@ def _optimum(robot, scenario, t: np.ndarray) -> np.ndarray:
 
 FRAMEWORK_METHODS = ("e3gsa", "pso", "gsa", "woa", "bat", "ao", "hybrid")
 QUICK_FRAMEWORK_METHODS = ("e3gsa",)
+FRAMEWORK_SEEDS = 5                          # the moved sphere meets the arm on some IK branches only
+SPREAD_STEP = 0.3                            # [rad] continuity repair of scenario table3_cut_spread
 
 
 def run(case: Case) -> dict:
@@ -87,8 +91,12 @@ def run_framework(case: Case) -> dict:
     """The framework paper's scenario with one IK method (part "framework")."""
     from drake_mh.reactive.framework_scenario import PATH_EVENT, run_framework_scenario
 
-    event = PATH_EVENT if case["scenario"] == "table3_cut" else None
-    record = run_framework_scenario(case["method"], seed=case.seed, path_event=event)
+    from drake_mh.reactive.follower import FollowerConfig
+
+    scenario = case["scenario"]
+    event = PATH_EVENT if scenario.startswith("table3_cut") else None
+    config = FollowerConfig(spread_step=SPREAD_STEP if scenario.endswith("_spread") else None)
+    record = run_framework_scenario(case["method"], seed=case.seed, path_event=event, config=config)
     record.pop("seed", None)  # the runner records the case seed itself
     record.pop("method", None)
     record.setdefault("nfe", 0)
@@ -105,7 +113,7 @@ def run_esm_case(case: Case) -> dict:
     durations = QUICK_DURATION if case.quick else DURATION
     config = ESMConfig(h1=float(case["h1"]))
     scenario = get_scenario(case["scenario"], config=config, duration=durations[case["scenario"]])
-    solver = _solver(case["method"], QUICK_LAYERS if case.quick else LAYERS)
+    solver = _solver(case["method"], *((QUICK_LAYERS, QUICK_AGENTS) if case.quick else (LAYERS, AGENTS)))
     result = run_esm(robot, scenario, solver, seed=case.seed)
     reference = run_esm(robot, scenario, QPBaseline(), seed=0, verify=False)   # same process, right after
 
@@ -178,10 +186,10 @@ def _cases(quick: bool) -> list[dict]:
             cases += [{"part": "esm", "scenario": scenario, "h1": H1[scenario], "method": method, "rep": r}
                       for r in seeds]
     cases += [{"part": "esm", "scenario": "self_motion", "h1": 1.0, "method": "amnn", "rep": r} for r in seeds]
-    for scenario in ("table3", "table3_cut"):
+    for scenario in ("table3", "table3_cut", "table3_cut_spread"):
         for method in (QUICK_FRAMEWORK_METHODS if quick else FRAMEWORK_METHODS):
             cases += [{"part": "framework", "scenario": scenario, "h1": 0.0, "method": method, "rep": r}
-                      for r in seeds]
+                      for r in range(QUICK_SEEDS if quick else FRAMEWORK_SEEDS)]
     return cases
 
 
@@ -192,9 +200,9 @@ def _framework_table(records: list[dict]) -> str:
         groups.setdefault((r["scenario"], r["method"]), []).append(r)
     lines = ["Framework follower (part framework): medians over seeds; clearance by Drake's exact distance "
              "(refined capsule-box/cylinder pairs) at the path points and between them.", "",
-             "| scenario | method | runs | success | points regenerated | regeneration time [s] | "
+             "| scenario | method | runs | success | points regenerated (+ spread) | regeneration time [s] | "
              "largest joint step plan -> executed [rad] | min clearance at points / swept [m] | "
-             "clearance of the configuration occupied when the obstacle jumps [m] | min clearance after it [m] |",
+             "clearance of the configuration held when the move is seen, against the new position [m] | min clearance after it [m] |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for (scenario, method), group in groups.items():
         ok = [r for r in group if r.get("status") == "ok"]
@@ -206,7 +214,7 @@ def _framework_table(records: list[dict]) -> str:
             return float(np.median([r.get(key, np.nan) for r in ok]))
 
         lines.append(f"| {scenario} | {method} | {len(ok)} | {sum(bool(r['success']) for r in ok)}/{len(ok)} | "
-                     f"{med('points_regenerated'):.0f} | {med('time'):.3f} | {med('max_step_plan'):.2f} -> "
+                     f"{med('points_regenerated'):.0f} (+{med('points_spread'):.0f}) | {med('time'):.3f} | {med('max_step_plan'):.2f} -> "
                      f"{med('max_step_executed'):.2f} | {min(r['min_distance_executed'] for r in ok):.3f} / "
                      f"{min(r['min_distance_swept'] for r in ok):.3f} | {min(r['clearance_at_move'] for r in ok):.3f} | "
                      f"{min(r['min_distance_after_move'] for r in ok):.3f} |")

@@ -29,7 +29,8 @@ configuration must be verified by Drake with the larger ``ik_clearance`` (hyster
 flagged again by the next small obstacle motion). Each solve searches first within
 ``q_prev ± 0.3 rad`` (:class:`LocalIKProblem`), then on failure with a fresh seed within
 ``± 1 rad``, then over the whole joint range without the displacement penalty
-(``search_radii``): continuity first, but feasibility over continuity. After a solve,
+(``search_radii``): continuity first, but feasibility over continuity
+(:func:`drake_mh.paths.continuity.solve_near`, shared with ``ik_along_path``). After a solve,
 revolute joints are shifted by 2π toward the previous configuration (the range centre for
 the first point of a plan; same pose), joints the task does not see (whose reset to the
 previous value keeps the tool on its target and the arm clear; the 6-DOF arm's last joint)
@@ -50,7 +51,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drake_mh.errors import InvalidArgument, UnknownMethod
-from drake_mh.ik.problem import IKProblem
+from drake_mh.paths.continuity import LocalIKProblem, revolute_mask, solve_near, wrap_toward
 from drake_mh.paths.ik_path import joint_steps
 from drake_mh.reactive.replan import (ReplanConfig, ReplanResult, collision_runs, colliding_path_points,
                                       replan_points, replan_windows)
@@ -67,95 +68,6 @@ def largest_joint_step(Q) -> float:
     """``max_k max_j |Q[k+1, j] - Q[k, j]|`` [rad] of ``Q (N, nq)``; 0 for fewer than 2 rows."""
     steps = joint_steps(Q)
     return float(steps.max()) if len(steps) else 0.0
-
-
-@dataclass(frozen=True, eq=False)
-class LocalIKProblem(IKProblem):
-    """An :class:`~drake_mh.ik.IKProblem` whose search box is ``q_ref ± search_radius`` within the limits.
-
-    Every method of :func:`~drake_mh.ik.solve_ik` searches within ``problem.lower`` /
-    ``problem.upper`` (metaheuristic bounds, hybrid and Jacobian restarts and clamps);
-    verification still uses the robot's own limits. ``search_radius=None``: the limits.
-    Drake's ``InverseKinematics`` keeps the robot's limits but starts at ``q_ref``.
-    """
-
-    search_radius: float | None = None
-
-    @property
-    def lower(self) -> np.ndarray:
-        """``(nq,)`` lower end of the search box [rad]."""
-        if self.search_radius is None or self.q_ref is None:
-            return self.robot.lower
-        return np.maximum(self.robot.lower, self.q_ref - self.search_radius)
-
-    @property
-    def upper(self) -> np.ndarray:
-        """``(nq,)`` upper end of the search box [rad]."""
-        if self.search_radius is None or self.q_ref is None:
-            return self.robot.upper
-        return np.minimum(self.robot.upper, self.q_ref + self.search_radius)
-
-
-def revolute_mask(robot) -> np.ndarray:
-    """``(nq,)`` whether each joint is revolute (a 2π shift leaves its pose unchanged)."""
-    return np.array([robot.plant.GetJointByName(n).type_name() == "revolute" for n in robot.joint_names])
-
-
-def wrap_toward(robot, q, q_ref) -> np.ndarray:
-    """``q`` with each revolute joint shifted by a multiple of 2π to the value nearest ``q_ref`` within the limits.
-
-    The same pose (forward kinematics and collision geometry are unchanged); joints with a
-    range wider than 2π (the 6-DOF arm: ±260°, ±360°) otherwise start a path near a limit
-    and must later turn back a full revolution (measured: a 6.2 rad step on joint 3).
-    """
-    q = np.array(q, dtype=float)
-    revolute = revolute_mask(robot)
-    for j in np.flatnonzero(revolute & ~robot.continuous):
-        candidates = q[j] + 2.0 * np.pi * np.arange(-3, 4)
-        ok = candidates[(candidates >= robot.lower[j]) & (candidates <= robot.upper[j])]
-        if ok.size:
-            q[j] = ok[np.argmin(np.abs(ok - q_ref[j]))]
-    return q
-
-
-def _tidy(problem, result, q_prev):
-    """Continuity without changing what the task sees; the result is verified with Drake again.
-
-    1. Revolute joints are shifted by 2π toward ``q_prev`` (the range centre for a first point)
-       (:func:`wrap_toward`: same pose).
-    2. With a ``q_prev``, a joint whose reset to ``q_prev`` keeps the position within the
-       tolerance (batched FK) and the sphere-model clearance is reset — for the 6-DOF arm the
-       last joint, which does not move the tool point and which a whole-range search leaves
-       anywhere in ±2π.
-
-    If Drake does not verify the tidied configuration, the original result is returned.
-    """
-    import time as _time
-
-    from drake_mh.ik import verify
-
-    robot = problem.robot
-    ref = 0.5 * (robot.lower + robot.upper) if q_prev is None else q_prev
-    q = wrap_toward(robot, result.q, ref)
-    changed = bool(np.any(q != result.q))
-    if q_prev is not None:
-        for j in np.argsort(-np.abs(q - q_prev)):
-            if abs(q[j] - q_prev[j]) < 1e-9:
-                break
-            trial = q.copy()
-            trial[j] = q_prev[j]
-            e_p, e_o = problem.pose_errors(trial[None])
-            if e_p[0] > problem.position_tolerance or e_o[0] > problem.orientation_tolerance:
-                continue
-            if problem.has_obstacles and problem.scene.batch_min_distance(trial[None])[0] < problem.clearance:
-                continue
-            q, changed = trial, True
-    if not changed:
-        return result
-    start = _time.perf_counter() - result.time
-    tidy = verify(problem, q, method=result.method, start=start, nfe=result.nfe,
-                  message=result.message + "; tidied (2π shifts, unseen joints kept)")
-    return tidy if tidy.success else result
 
 
 @dataclass(frozen=True)
@@ -182,6 +94,14 @@ class FollowerConfig:
         prescreen: sphere-model pre-screen before Drake's exact check (the decision is
             Drake's either way).
         replan_path: re-plan path points the obstacle cuts (§3.4.2); ``False``: only §3.4.1.
+        spread_step: [rad] optional continuity repair (``None``, the default: the paper's
+            behaviour, only colliding/re-planned points change). When a regeneration leaves a
+            joint step larger than this next to a regenerated point — the local searches
+            failed and the whole-range search switched IK branch — the not-yet-reached points
+            before it (or after it, where a run rejoins the old plan) are solved again toward
+            the far side, ``ceil(step / spread_step) - 1`` of them, so the switch is spread
+            over several points. Those points change although they do not collide; each is
+            kept only if Drake verifies it (``RegenerationEvent.spread``).
         replan: :class:`~drake_mh.reactive.replan.ReplanConfig` of Algorithm 2.
         params: optimizer options for the metaheuristic IK, as ``((name, value), ...)``.
     """
@@ -196,6 +116,7 @@ class FollowerConfig:
     position_tolerance: float = 1e-3
     prescreen: bool = True
     replan_path: bool = True
+    spread_step: float | None = None
     replan: ReplanConfig = field(default_factory=ReplanConfig)
     params: tuple = ()
 
@@ -224,6 +145,9 @@ class FollowerConfig:
             raise InvalidArgument(f"ref_weight must be >= 0, got {self.ref_weight!r}")
         if not (np.isfinite(self.position_tolerance) and self.position_tolerance > 0):
             raise InvalidArgument(f"position_tolerance must be > 0 m, got {self.position_tolerance!r}")
+        if self.spread_step is not None and not (isinstance(self.spread_step, (int, float))
+                                                 and np.isfinite(self.spread_step) and self.spread_step > 0):
+            raise InvalidArgument(f"spread_step must be a positive joint step [rad] or None, got {self.spread_step!r}")
         if not isinstance(self.replan, ReplanConfig):
             raise InvalidArgument("replan must be a drake_mh.reactive.replan.ReplanConfig")
         object.__setattr__(self, "params", tuple(dict(self.params).items()))
@@ -243,6 +167,8 @@ class RegenerationEvent:
         replans: the :class:`~drake_mh.reactive.replan.ReplanResult` of each window.
         regenerated: indices whose IK was solved again (windows ∪ colliding).
         failed: regenerated indices whose configuration Drake did not verify.
+        spread: indices solved again by the continuity repair (``FollowerConfig.spread_step``;
+            not colliding, changed only where Drake verified the new configuration).
         detect_time, time: [s] prediction alone; the whole event (prediction + repair).
         max_step_before, max_step_after: largest joint step [rad] of the remaining motion
             (from the current configuration to the end) before and after.
@@ -265,6 +191,7 @@ class RegenerationEvent:
     max_step_after: float
     min_distance_after: float
     nfe: int
+    spread: np.ndarray = field(default_factory=lambda: _EMPTY)
 
     @property
     def replanned(self) -> np.ndarray:
@@ -283,6 +210,8 @@ class RegenerationEvent:
         parts = [f"{self.regenerated.size} points regenerated in {self.time:.2f} s"]
         if self.replans:
             parts.append(f"path re-planned at {self.replanned.size} points (3·nC, nC = {self.path_colliding.size})")
+        if self.spread.size:
+            parts.append(f"{self.spread.size} neighbours re-solved to spread a branch switch")
         if self.failed.size:
             parts.append(f"FAILED at {self.failed.tolist()}")
         parts.append(f"max step {self.max_step_after:.3f} rad")
@@ -341,30 +270,32 @@ class RegeneratingFollower:
              progress=None) -> RegeneratingFollower:
         """Solves IK at every point ("Generate solutions", §3.3) and returns a follower at point 0.
 
-        The same recurrence as :func:`drake_mh.paths.ik_along_path` (each point warm-started
-        from the previous solution with the displacement penalty), with the config's method,
-        budget, tolerance, ``ik_clearance`` and retries. Check ``follower.plan_failed``.
+        Runs :func:`drake_mh.paths.ik_along_path` (each point solved near the previous
+        solution: widening search boxes, displacement penalty, tidying) with the config's
+        method, budget, tolerance, ``ik_clearance``, ``ref_weight`` and ``search_radii``.
+        Check ``follower.plan_failed``.
 
         Args:
             robot, scene, points, config, seed: as for the constructor.
             q_start: configuration near which to solve the first point (``None``: free search).
             progress: ``progress(k, N)`` called after each point (the app's status line).
         """
+        from drake_mh.paths.ik_path import ik_along_path
+
         config = config if config is not None else FollowerConfig()
         P = np.array(getattr(points, "points", points), dtype=float)
-        q0 = robot.home if q_start is None else robot.check_q(q_start, "q_start")
-        follower = cls(robot, scene, P, np.tile(q0, (len(P), 1)), config, seed)
-        failed = []
-        for k in range(len(P)):
-            q_prev = follower.Q[k - 1] if k > 0 else (None if q_start is None else q0)
-            res, _ = follower._solve_point(k, -1, q_prev, None)
-            follower.Q[k] = res.q
-            if not res.success:
-                failed.append(k)
-            if progress is not None:
-                progress(k + 1, len(P))
-        follower.executed[0] = follower.Q[0]
-        follower.plan_failed = np.array(failed, dtype=int)
+        if P.ndim != 2 or P.shape[1] != 3 or len(P) < 2 or not np.all(np.isfinite(P)):
+            raise InvalidArgument(f"points must be a finite (N >= 2, 3) array [m], got shape {P.shape}")
+        if scene.robot is not robot:
+            raise InvalidArgument("the scene belongs to another Robot object; build it with Scene(robot)")
+        jp = ik_along_path(robot, P, config.method, seed, q_start=q_start, ref_weight=config.ref_weight,
+                           budget=config.budget, timeout=config.timeout,
+                           position_tolerance=config.position_tolerance, scene=scene,
+                           clearance=config.ik_clearance, search_radii=config.search_radii, progress=progress,
+                           **dict(config.params))
+        follower = cls(robot, scene, P, jp.q, config, seed)
+        failed = np.flatnonzero(~jp.success)
+        follower.plan_failed = failed.astype(int)
         return follower
 
     # --- state ------------------------------------------------------------------------------
@@ -434,38 +365,17 @@ class RegeneratingFollower:
     def _solve_point(self, k: int, event: int, q_prev, old_q) -> tuple[object, int]:
         """IK for point ``k`` near the reference ``q_prev`` (module docstring); ``(best IKResult, nfe)``.
 
-        ``event`` = -1 for the initial plan; ``q_prev`` = ``None``: no reference (first point).
-        In :meth:`react` the reference spreads the gap to the next unchanged configuration
+        The reference spreads the gap to the next unchanged configuration
         evenly over the run's remaining points.
         """
-        from drake_mh.ik import GRADIENT_METHODS, solve_ik
-
         cfg = self.config
-        extra = dict(cfg.params)
-        seeds = [q for q in (q_prev, old_q) if q is not None]
+        x0 = [q_prev, old_q]
         if old_q is not None and k + 1 < self.n_points:
-            seeds.append(self.Q[k + 1])
-        use_x0 = cfg.method not in GRADIENT_METHODS and bool(seeds)
-        best, nfe = None, 0
-        for attempt, radius in enumerate(cfg.search_radii):
-            local = q_prev is not None and radius is not None
-            problem = LocalIKProblem(self.robot, self.points[k], position_tolerance=cfg.position_tolerance,
-                                     scene=self.scene, clearance=cfg.ik_clearance, q_ref=q_prev,
-                                     ref_weight=cfg.ref_weight if local else 0.0,
-                                     search_radius=radius if local else None)
-            if use_x0:  # clipped into this attempt's search box
-                extra["x0"] = np.clip(np.array(seeds), problem.lower, problem.upper)
-            res = solve_ik(problem, cfg.method, seed=self._seed(event, k, attempt), budget=cfg.budget,
-                           timeout=cfg.timeout, **extra)
-            nfe += int(res.nfe)
-            if res.success:
-                res = _tidy(problem, res, q_prev)
-            score = (not res.success, res.position_error + max(0.0, cfg.ik_clearance - res.min_distance))
-            if best is None or score < best[0]:
-                best = (score, res)
-            if res.success:
-                break
-        return best[1], nfe
+            x0.append(self.Q[k + 1])
+        return solve_near(self.robot, self.points[k], q_prev, cfg.method, lambda a: self._seed(event, k, a),
+                          search_radii=cfg.search_radii, ref_weight=cfg.ref_weight,
+                          position_tolerance=cfg.position_tolerance, scene=self.scene, clearance=cfg.ik_clearance,
+                          budget=cfg.budget, timeout=cfg.timeout, x0=x0, params=dict(cfg.params))
 
     def react(self) -> RegenerationEvent:
         """Checks the remaining plan against the obstacles' current poses and repairs it.
@@ -494,22 +404,13 @@ class RegeneratingFollower:
             self.points[window] = result.new_points
             replans.append(result)
         todo = np.union1d(np.concatenate(windows) if windows else _EMPTY, colliding).astype(int)
-        failed, nfe = [], 0
-        anchors = {}  # k -> the first unchanged configuration after k's run (None at the path's end)
-        for a, b in collision_runs(todo):
-            for k in range(a, b + 1):
-                anchors[k] = (b, self.Q[b + 1].copy() if b + 1 < self.n_points else None)
-        for k in todo:  # increasing: Q[k-1] is final when k is solved
-            b, q_after = anchors[int(k)]
-            q_ref = self.Q[k - 1] if q_after is None else self.Q[k - 1] + (q_after - self.Q[k - 1]) / (b - k + 2)
-            res, used = self._solve_point(int(k), number, q_ref, self.Q[k].copy())
+        failed, nfe = self._solve_runs(todo, number, keep_failed=True)
+        spread = _EMPTY
+        if cfg.spread_step is not None and todo.size:
+            spread, used = self._spread_steps(lo, todo, number)
             nfe += used
-            self.Q[k] = res.q
-            self.regenerated_mask[k] = True
-            if not res.success:
-                failed.append(int(k))
-                logger.warning("point %d: no verified IK solution after %d attempts (%s)", k, len(cfg.search_radii),
-                               res.message)
+        self.regenerated_mask[todo] = True
+        self.regenerated_mask[spread] = True
         remaining = self.Q[lo:]
         min_after = (float(self.scene.exact_min_distance(remaining).min())
                      if remaining.size and self.scene.obstacles else np.inf)
@@ -519,7 +420,74 @@ class RegeneratingFollower:
             colliding=colliding, screened=screened, path_colliding=path_hits, replans=tuple(replans),
             regenerated=todo, failed=np.array(failed, dtype=int), detect_time=detect_time,
             time=time.perf_counter() - start, max_step_before=step_before,
-            max_step_after=self.remaining_max_step(), min_distance_after=min_after, nfe=nfe)
+            max_step_after=self.remaining_max_step(), min_distance_after=min_after, nfe=nfe, spread=spread)
         self.events.append(event)
         logger.info("event %d at point %d: %s", number, self.index, event.summary())
         return event
+
+    def _solve_runs(self, indices: np.ndarray, number: int, keep_failed: bool) -> tuple[list[int], int]:
+        """Solves IK again at ``indices`` (increasing), each run spreading the gap to its anchor.
+
+        A run ``[a, b]`` is anchored on the first configuration after it (module docstring).
+        ``keep_failed``: a point no attempt solved takes the best unverified result (and is
+        returned as failed); otherwise it keeps its configuration. Returns ``(failed, nfe)``.
+        """
+        failed, nfe = [], 0
+        anchors = {}  # k -> the first unchanged configuration after k's run (None at the path's end)
+        for a, b in collision_runs(indices):
+            for k in range(a, b + 1):
+                anchors[k] = (b, self.Q[b + 1].copy() if b + 1 < self.n_points else None)
+        for k in indices:  # increasing: Q[k-1] is final when k is solved
+            k = int(k)
+            b, q_after = anchors[k]
+            q_ref = self.Q[k - 1] if q_after is None else self.Q[k - 1] + (q_after - self.Q[k - 1]) / (b - k + 2)
+            res, used = self._solve_point(k, number, q_ref, self.Q[k].copy())
+            nfe += used
+            if res.success or keep_failed:
+                self.Q[k] = res.q
+            if not res.success:
+                failed.append(k)
+                if keep_failed:
+                    logger.warning("point %d: no verified IK solution after %d attempts (%s)", k,
+                                   len(self.config.search_radii), res.message)
+        return failed, nfe
+
+    def _spread_steps(self, lo: int, regenerated: np.ndarray, number: int) -> tuple[np.ndarray, int]:
+        """Continuity repair (``FollowerConfig.spread_step``); returns ``(points changed, nfe)``.
+
+        Scans the remaining steps ``Q[k-1] -> Q[k]`` in order. A step larger than ``spread_step``
+        into a regenerated point ``k`` is spread backwards over the ``m = ceil(step / spread_step)
+        - 1`` points before it (not before ``lo``), anchored on ``Q[k]``; a step out of a
+        regenerated point into an old one, forwards over ``k .. k + m - 1``, anchored on the
+        configuration after them (continuing the new branch at the path's end). The re-solved
+        points are kept only if the largest step of the stretch they span (with one neighbour
+        on each side) got smaller; else the stretch is restored.
+        """
+        limit = self.config.spread_step
+        touched = np.zeros(self.n_points, dtype=bool)
+        touched[regenerated] = True
+        changed = np.zeros(self.n_points, dtype=bool)
+        nfe = 0
+        for k in range(lo, self.n_points):
+            step = float(np.max(np.abs(self.Q[k] - self.Q[k - 1])))
+            if step <= limit:
+                continue
+            m = int(np.ceil(step / limit)) - 1
+            if touched[k]:
+                run = np.arange(max(lo, k - m), k)
+            elif touched[k - 1]:
+                run = np.arange(k, min(self.n_points, k + m))
+            else:
+                continue
+            if not run.size:
+                continue
+            stretch = slice(max(lo - 1, run[0] - 1), min(self.n_points, run[-1] + 2))
+            before = self.Q[stretch].copy()
+            _, used = self._solve_runs(run, number, keep_failed=False)
+            nfe += used
+            if largest_joint_step(self.Q[stretch]) < largest_joint_step(before):
+                moved = run[np.any(self.Q[run] != before[run - stretch.start], axis=1)]
+                changed[moved] = touched[moved] = True
+            else:
+                self.Q[stretch] = before
+        return np.flatnonzero(changed), nfe
