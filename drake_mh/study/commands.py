@@ -37,6 +37,9 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
     p.add_argument("--executor", default=None, metavar="URL", help="'local' (default), 'serial' or dask://HOST:PORT")
     p.add_argument("--out", default=None, metavar="DIR", help="results folder (default results/NAME, results/NAME-quick)")
     p.add_argument("--seed", type=_non_negative_int, default=None, help="study seed (default: the study's own)")
+    p.add_argument("--first-by", default=None, metavar="KEYS",
+                   help="comma-separated grid keys to run in order first, e.g. 'rep': every cell's first "
+                        "replicate before any second one (a partial run stays balanced)")
     p.add_argument("--no-report", action="store_true", help="do not write report.md / index.html at the end")
     p.add_argument("--strict", action="store_true", help="exit with code 1 when a case raised")
     p.set_defaults(func=cmd_study)
@@ -85,6 +88,7 @@ def run_and_print(name: str, args: argparse.Namespace, out=None, quick=None) -> 
             seed=args.seed,
             progress=progress,
             report=not getattr(args, "no_report", False),
+            first_by=tuple(k.strip() for k in args.first_by.split(",")) if getattr(args, "first_by", None) else None,
         )
     elapsed = time.perf_counter() - start
     quiet = getattr(args, "quiet", False)

@@ -127,6 +127,7 @@ def run_study(
     report: bool = True,
     source: StudySource | None = None,
     on_record: Callable[[dict[str, Any]], None] | None = None,
+    first_by: tuple[str, ...] | str | None = None,
 ) -> StudyResult:
     """Runs (or resumes) a study and writes its records, summary and report.
 
@@ -142,6 +143,9 @@ def run_study(
         report: write ``report.md`` and ``index.html`` at the end.
         source: the study file, when ``study`` is a Study object loaded from a file.
         on_record: called in this process with each newly stored record.
+        first_by: grid keys that order the cases to run (then grid order), e.g. ``"rep"``:
+            every cell's first replicate before any second one, so that a run stopped early
+            leaves a balanced partial result. Results do not depend on the order.
 
     Returns:
         The :class:`StudyResult`.
@@ -161,6 +165,12 @@ def run_study(
     store.prepare(_meta(study, specs, quick, study.seed, task_source))
     done = store.load()
     pending = [s for s in specs if s.key not in done]
+    if first_by:
+        keys = (first_by,) if isinstance(first_by, str) else tuple(first_by)
+        unknown = [k for k in keys if specs and k not in specs[0].params]
+        if unknown:
+            raise InvalidArgument(f"first_by: {unknown} not in the grid keys {list(specs[0].params)}")
+        pending.sort(key=lambda s: (tuple(str(s.params[k]).zfill(12) for k in keys), s.index))
     logger.info("study %s: %d cases, %d finished, %d to run -> %s", study.name, len(specs), len(done), len(pending), folder)
 
     n_new = 0

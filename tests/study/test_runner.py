@@ -32,6 +32,17 @@ def test_results_do_not_depend_on_worker_count(toy, tmp_path):
     assert comparable(other.records) != comparable(serial.records)
 
 
+def test_first_by_runs_every_cell_once_before_any_second_replicate(toy, tmp_path):
+    order = []
+    first = run_study(toy, out=tmp_path / "first", workers=0, report=False, first_by="rep",
+                      on_record=lambda r: order.append(r["rep"]))
+    assert order == sorted(order) and order[0] == 0 and order[-1] == 3       # 6 cells x 4 replicates
+    grid = run_study(toy, out=tmp_path / "grid", workers=0, report=False)
+    assert comparable(first.records) == comparable(grid.records)           # the order changes nothing else
+    with pytest.raises(InvalidArgument, match="first_by"):
+        run_study(toy, out=tmp_path / "bad", workers=0, report=False, first_by="nope")
+
+
 def test_instance_draws_are_shared_by_methods(toy, tmp_path):
     result = run_study(toy, out=tmp_path / "o", workers=0, report=False)
     by_block = {}
