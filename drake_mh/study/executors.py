@@ -71,6 +71,31 @@ def parse_executor(spec: str | None) -> tuple[str, str | None]:
     )
 
 
+#: thread-count variables of the BLAS/OpenMP libraries numpy and scipy may load
+BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+@contextmanager
+def _one_blas_thread_per_worker():
+    """Worker processes started meanwhile use one BLAS thread each (variables a user set are kept).
+
+    Measured: with two workers and other jobs on 2 cores, OpenBLAS's threaded ``eigh`` of a
+    30 x 30 matrix took 4.4 ms instead of ~0.2 ms (threads spinning against each other);
+    pycma's CMA-ES at D = 30 ran 7x slower (30.4 s vs 4.2 s for 60,000 evaluations).
+    """
+    saved = {name: os.environ.get(name) for name in BLAS_THREAD_VARIABLES}
+    for name in BLAS_THREAD_VARIABLES:
+        os.environ.setdefault(name, "1")
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
 @contextmanager
 def open_executor(spec: str | None = None, workers: int | None = None) -> Iterator[tuple[Executor, int]]:
     """Opens an executor and closes it afterwards.
@@ -96,11 +121,12 @@ def open_executor(spec: str | None = None, workers: int | None = None) -> Iterat
         count = workers if workers else default_workers()
         # spawn: workers start clean (no forked Drake/threads state), same on every OS
         context = multiprocessing.get_context("spawn")
-        executor = ProcessPoolExecutor(max_workers=count, mp_context=context)
-        try:
-            yield executor, count
-        finally:
-            executor.shutdown(wait=True, cancel_futures=True)
+        with _one_blas_thread_per_worker():
+            executor = ProcessPoolExecutor(max_workers=count, mp_context=context)
+            try:
+                yield executor, count
+            finally:
+                executor.shutdown(wait=True, cancel_futures=True)
         return
     try:
         from distributed import Client

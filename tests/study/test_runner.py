@@ -145,3 +145,17 @@ def test_a_case_that_kills_its_worker_is_isolated_and_recorded(tmp_path):
     assert result.complete
     raised = {r["i"]: r["exception_type"] for r in result.records if r["status"] == "error"}
     assert raised == {3: "WorkerDied"}
+
+
+def test_worker_processes_use_one_blas_thread(monkeypatch):
+    import os
+
+    from drake_mh.study.executors import BLAS_THREAD_VARIABLES, open_executor
+
+    for name in BLAS_THREAD_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setenv("MKL_NUM_THREADS", "3")                       # a user's choice is kept
+    with open_executor("local", 1) as (pool, _):
+        seen = pool.submit(os.getenv, "OPENBLAS_NUM_THREADS").result(), pool.submit(os.getenv, "MKL_NUM_THREADS").result()
+    assert seen == ("1", "3")
+    assert "OPENBLAS_NUM_THREADS" not in os.environ                    # the parent's environment is restored
