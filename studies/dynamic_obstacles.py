@@ -96,7 +96,9 @@ def run_framework(case: Case) -> dict:
     scenario = case["scenario"]
     event = PATH_EVENT if scenario.startswith("table3_cut") else None
     config = FollowerConfig(spread_step=SPREAD_STEP if scenario.endswith("_spread") else None)
-    record = run_framework_scenario(case["method"], seed=case.seed, path_event=event, config=config)
+    # seed = replicate: every method and scenario variant of replicate r solves the same IK
+    # seeds, so table3_cut and table3_cut_spread start from the same plan (paired comparison)
+    record = run_framework_scenario(case["method"], seed=int(case["rep"]), path_event=event, config=config)
     record.pop("seed", None)  # the runner records the case seed itself
     record.pop("method", None)
     record.setdefault("nfe", 0)
