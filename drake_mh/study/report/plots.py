@@ -48,7 +48,9 @@ def _render(fig) -> bytes:
 
 
 def _colors(methods: list[str]) -> dict[str, str]:
-    cycle = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"]
+    # tab10, then darker tones: 16 methods before a colour repeats (12 optimizers in one study)
+    cycle = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
+             "#000000", "#393b79", "#637939", "#8c6d31", "#843c39", "#7b4173"]
     return {m: cycle[i % len(cycle)] for i, m in enumerate(methods)}
 
 
