@@ -54,26 +54,30 @@ def esm_values(T, J, r_d, h1, h2, F_out, e_out, mu_out):
             F_out[i] = np.inf
 
 
+@numba.njit(cache=True, inline="always")
+def _satisfies_rows(X, i, A, c, tol):
+    """Whether row ``i`` of ``X`` satisfies ``A x <= c + tol`` (sums over the joints in order)."""
+    n = X.shape[1]
+    for k in range(A.shape[0]):
+        s = 0.0
+        for j in range(n):
+            s += A[k, j] * X[i, j]
+        if s > c[k] + tol:
+            return False
+    return True
+
+
 @numba.njit(cache=True)
 def feasible(X, A, c, lower, upper, tol, out):
     """``out[i]``: row i of ``X`` lies in the box and satisfies ``A x <= c + tol``."""
     P, n = X.shape
-    K = A.shape[0]
     for i in range(P):
         ok = True
         for j in range(n):
             if X[i, j] < lower[j] or X[i, j] > upper[j]:
                 ok = False
                 break
-        if ok:
-            for k in range(K):
-                s = 0.0
-                for j in range(n):
-                    s += A[k, j] * X[i, j]
-                if s > c[k] + tol:
-                    ok = False
-                    break
-        out[i] = ok
+        out[i] = ok and _satisfies_rows(X, i, A, c, tol)
 
 
 @numba.njit(cache=True)
@@ -117,15 +121,7 @@ def repair(X, A, c, lower, upper, sweeps, tol, out):
                     X[i, j] = lower[j]
                 elif X[i, j] > upper[j]:
                     X[i, j] = upper[j]
-        ok = True
-        for k in range(K):
-            s = 0.0
-            for j in range(n):
-                s += A[k, j] * X[i, j]
-            if s > c[k] + tol:
-                ok = False
-                break
-        out[i] = ok
+        out[i] = _satisfies_rows(X, i, A, c, tol)
 
 
 @numba.njit(cache=True)

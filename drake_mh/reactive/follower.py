@@ -284,9 +284,7 @@ class RegeneratingFollower:
 
         config = config if config is not None else FollowerConfig()
         P = np.array(getattr(points, "points", points), dtype=float)
-        if P.ndim != 2 or P.shape[1] != 3 or len(P) < 2 or not np.all(np.isfinite(P)):
-            raise InvalidArgument(f"points must be a finite (N >= 2, 3) array [m], got shape {P.shape}")
-        if scene.robot is not robot:
+        if scene.robot is not robot:  # before the plan, not after it (the constructor checks the rest)
             raise InvalidArgument("the scene belongs to another Robot object; build it with Scene(robot)")
         jp = ik_along_path(robot, P, config.method, seed, q_start=q_start, ref_weight=config.ref_weight,
                            budget=config.budget, timeout=config.timeout,
