@@ -123,7 +123,7 @@ def capsule_inertia(p_A, p_B, radius: float, density: float):
     """
     p_A, p_B = np.asarray(p_A, float), np.asarray(p_B, float)
     axis = p_B - p_A
-    length = float(np.linalg.norm(axis))
+    length = math.hypot(*axis)  # not np.linalg.norm: its result depends on the BLAS kernel
     r = float(radius)
     m_c = density * math.pi * r**2 * length
     m_h = density * 2.0 / 3.0 * math.pi * r**3
@@ -144,11 +144,26 @@ def _combine(parts):
     inertia = np.zeros((3, 3))
     for m, c, i_c in parts:
         d = c - com
-        inertia += i_c + m * (d @ d * np.eye(3) - np.outer(d, d))
+        inertia += i_c + m * (math.fsum(d * d) * np.eye(3) - np.outer(d, d))  # no BLAS (see _mul)
     return mass, com, inertia
 
 
 # --- DH transforms --------------------------------------------------------------------
+
+
+def _mul(*mats) -> np.ndarray:
+    """Product of 4x4 matrices, each entry an exactly rounded sum (``math.fsum``), no BLAS.
+
+    The generated URDF text must not depend on the CPU: numpy's ``@`` goes through BLAS, whose
+    kernels (AVX2 vs AVX-512) round differently in the last bit, which then shows in the
+    printed numbers. Products of IEEE doubles and ``fsum`` are the same on every CPU.
+    """
+    out = np.asarray(mats[0], float)
+    for M in mats[1:]:
+        M = np.asarray(M, float)
+        out = np.array([[math.fsum(out[i, k] * M[k, j] for k in range(4)) for j in range(4)]
+                        for i in range(4)])
+    return out
 
 
 def _rx(t):
@@ -175,9 +190,9 @@ def dh_transform(a: float, alpha: float, d: float, theta: float, convention="sta
     values, i.e. Craig's ``a_{i-1}, alpha_{i-1}`` (as in the Panda table of REFERENCES.md).
     """
     if convention == "standard":
-        return _rz(theta) @ _tr(0, 0, d) @ _tr(a, 0, 0) @ _rx(alpha)
+        return _mul(_rz(theta), _tr(0, 0, d), _tr(a, 0, 0), _rx(alpha))
     if convention == "modified":
-        return _rx(alpha) @ _tr(a, 0, 0) @ _rz(theta) @ _tr(0, 0, d)
+        return _mul(_rx(alpha), _tr(a, 0, 0), _rz(theta), _tr(0, 0, d))
     raise InvalidDHTable(f"unknown DH convention {convention!r}; use one of {CONVENTIONS}")
 
 
@@ -387,12 +402,12 @@ def dh_to_urdf(
     origins, paths = [], []
     for i in range(n):
         if convention == "standard":
-            prev = np.eye(4) if i == 0 else _tr(a[i - 1], 0, d[i - 1]) @ _rx(alpha[i - 1])
-            origins.append(prev @ _rz(offset[i]))
+            prev = np.eye(4) if i == 0 else _mul(_tr(a[i - 1], 0, d[i - 1]), _rx(alpha[i - 1]))
+            origins.append(_mul(prev, _rz(offset[i])))
         else:
-            origins.append(_rx(alpha[i]) @ _tr(a[i], 0, 0) @ _tr(0, 0, d[i]) @ _rz(offset[i]))
-    X_LnN = _tr(a[-1], 0, d[-1]) @ _rx(alpha[-1]) if convention == "standard" else np.eye(4)
-    X_LnE = X_LnN @ tool
+            origins.append(_mul(_rx(alpha[i]), _tr(a[i], 0, 0), _tr(0, 0, d[i]), _rz(offset[i])))
+    X_LnN = _mul(_tr(a[-1], 0, d[-1]), _rx(alpha[-1])) if convention == "standard" else np.eye(4)
+    X_LnE = _mul(X_LnN, tool)
     for i in range(n):
         if convention == "standard":
             pts = [(0, 0, 0), (0, 0, d[i]), (a[i], 0, d[i])]
@@ -412,8 +427,8 @@ def dh_to_urdf(
         if not isinstance(spec, LinkSpec):
             raise InvalidArgument(f"links[{i}] must be a LinkSpec or None, got {type(spec).__name__}")
         pts = paths[i]
-        segs = [(p, q) for p, q in zip(pts, pts[1:]) if np.linalg.norm(q - p) > 1e-12]
-        path_len.append(sum(float(np.linalg.norm(q - p)) for p, q in segs))
+        segs = [(p, q) for p, q in zip(pts, pts[1:]) if math.hypot(*(q - p)) > 1e-12]
+        path_len.append(sum(math.hypot(*(q - p)) for p, q in segs))
         default = tuple(Capsule(tuple(p), tuple(q), float(radius[i])) for p, q in segs) or (
             Sphere((0.0, 0.0, 0.0), float(radius[i])),
         )
@@ -453,7 +468,7 @@ def dh_to_urdf(
             torque, reach = 0.0, 0.0
             for j in range(i, n):
                 m_j, com_j, _ = inertials[j]
-                torque += GRAVITY * m_j * (reach + float(np.linalg.norm(com_j)))
+                torque += GRAVITY * m_j * (reach + math.hypot(*com_j))
                 reach += path_len[j]
             eff[i] = _round_up(effort_margin * torque)
 
@@ -542,12 +557,13 @@ def _shape_xml(shapes, link: str, robot: str) -> list[str]:
             kind = "sphere"
         else:
             A, B = np.asarray(s.p_LA, float), np.asarray(s.p_LB, float)
-            u = (B - A) / np.linalg.norm(B - A)
+            length = math.hypot(*(B - A))
+            u = (B - A) / length
             X = np.eye(4)
             X[:3, :3] = _z_to(u)
             X[:3, 3] = (A + B) / 2
             origin = _origin(X)
-            geom = f'<capsule radius="{_num(s.radius)}" length="{_num(np.linalg.norm(B - A))}"/>'
+            geom = f'<capsule radius="{_num(s.radius)}" length="{_num(length)}"/>'
             kind = "capsule"
         for tag in ("collision", "visual"):
             mat = f'<material name="{robot}_colour"/>' if tag == "visual" else ""
@@ -572,7 +588,7 @@ def _z_to(u):
             return _rx(-math.copysign(math.pi / 2, u[1]))[:3, :3]
     z = u
     x = np.cross([0.0, 0.0, 1.0], z)
-    x /= np.linalg.norm(x)
+    x /= math.hypot(*x)
     return np.column_stack([x, np.cross(z, x), z])
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -265,6 +266,27 @@ def build_all() -> dict[str, str]:
     return {fname: make() for fname, make in MODELS.items()}
 
 
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def model_difference(old: str, new: str, rtol: float = 1e-12, atol: float = 1e-14) -> str | None:
+    """Where two model texts differ beyond float rounding, or ``None`` when they agree.
+
+    The words must be equal and every number equal to ``atol + rtol * |number|``: the last
+    printed digit may differ between CPUs (BLAS kernels, libm), the model may not.
+    """
+    words_old, words_new = _NUMBER.split(old), _NUMBER.split(new)
+    if words_old != words_new:
+        for line_old, line_new in zip(old.splitlines(), new.splitlines()):
+            if _NUMBER.split(line_old) != _NUMBER.split(line_new):
+                return f"text differs: {line_old.strip()!r} vs {line_new.strip()!r}"
+        return "the texts have different lengths"
+    for a, b in zip(_NUMBER.findall(old), _NUMBER.findall(new)):
+        if abs(float(a) - float(b)) > atol + rtol * abs(float(a)):
+            return f"number {a} vs {b}"
+    return None
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="only report stale files (exit 1)")
@@ -272,7 +294,7 @@ def main(argv=None) -> int:
     stale = []
     for fname, text in build_all().items():
         path = URDF_DIR / fname
-        if path.exists() and path.read_text() == text:
+        if path.exists() and model_difference(path.read_text(), text) is None:
             continue
         stale.append(fname)
         if not args.check:
