@@ -49,6 +49,17 @@ class PinvResult:
     limit_excess: np.ndarray
     tracking_error: np.ndarray
 
+    def __repr__(self) -> str:
+        """A few lines: sizes and the worst figures (not the recorded arrays)."""
+        B, C = self.closure.shape
+        return (f"PinvResult({B} start(s), {C} cycle(s), {self.q.shape[1]} recorded samples, "
+                f"{self.q.shape[2]} joints)\n"
+                f"  closure max {self.closure.max(initial=0.0):.3g} rad, drift max "
+                f"{self.drift.max(initial=0.0):.3g} rad, limit excess max {self.limit_excess.max(initial=0.0):.3g} "
+                f"rad, tracking error max {self.tracking_error.max(initial=0.0):.3g} m")
+
+    __str__ = __repr__
+
 
 def _rates(robot, path, t: float, Q: np.ndarray, gain: float):
     X, J = robot.batch.fk_jacobian(Q)

@@ -32,6 +32,7 @@ from drake_mh.cyclic.problem import InfeasibleComponent, ThreeLinkProblem
 from drake_mh.cyclic.task import CyclicTask, ThreeLinkComponent, TwoLinkComponent
 from drake_mh.cyclic.three_link import three_link_ik
 from drake_mh.errors import InvalidArgument
+from drake_mh.optim.base import summarize_array
 
 logger = logging.getLogger(__name__)
 
@@ -131,6 +132,13 @@ class ComponentResult:
     search: tuple
     result: object = None
 
+    def __repr__(self) -> str:
+        """One line: name, k, eq. (1) fitness and the optimizer's run (not its history)."""
+        r = self.result
+        run = "k given" if r is None else f"{r.method or 'optimizer'}: nfe {r.nfe}, {r.time:.3g} s"
+        return (f"ComponentResult({self.name!r}, k = {self.k:.6g} rad, fitness = {self.fitness:.6g}, "
+                f"{len(self.intervals)} feasible interval(s), {run})")
+
 
 @dataclass(frozen=True)
 class CyclicPlan:
@@ -147,6 +155,17 @@ class CyclicPlan:
     @property
     def period(self) -> float:
         return self.task.period
+
+    def __repr__(self) -> str:
+        """A few lines: the task, the k values, the fitness and one line per 3-link component."""
+        lines = [f"CyclicPlan({self.task.name!r}: {self.task.n} joints, period {self.period:.6g} s, "
+                 f"{len(self.task.obstacles)} obstacle(s))",
+                 f"  fitness (eq. (1), sum) = {self.fitness:.6g}",
+                 f"  ks = {summarize_array(np.asarray(self.ks, dtype=float))} rad"]
+        lines += [f"  {c!r}" for c in self.components]
+        return "\n".join(lines)
+
+    __str__ = __repr__
 
     @property
     def fitness(self) -> float:

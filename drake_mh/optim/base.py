@@ -46,6 +46,7 @@ logger = logging.getLogger(__name__)
 __all__ = [
     "Optimizer",
     "OptimizeResult",
+    "summarize_array",
     "OptimizerState",
     "as_bounds",
     "check_budget",
@@ -89,6 +90,23 @@ class OptimizeResult:
     def success(self) -> bool:
         """``True`` when the run ended because the target was reached."""
         return self.message == "target reached"
+
+    def __repr__(self) -> str:
+        """A few lines: method, f, nfe, nit, time, ``x`` summarized (not the history's rows)."""
+        x = np.asarray(self.x)
+        pop = "" if self.population is None else f", last population {np.shape(self.population)}"
+        return (f"OptimizeResult(method={self.method!r}, seed={self.seed!r}, message={self.message!r})\n"
+                f"  f = {self.f:.6g}, nfe = {self.nfe}, nit = {self.nit}, time = {self.time:.3g} s\n"
+                f"  x = {summarize_array(x)} (D = {x.size})\n"
+                f"  history: {len(self.history)} rows (nfe, best f){pop}")
+
+    __str__ = __repr__
+
+
+def summarize_array(a, edgeitems: int = 3, precision: int = 4) -> str:
+    """One line for an array of any length: its first and last ``edgeitems`` values beyond 8."""
+    return np.array2string(np.asarray(a), precision=precision, threshold=8, edgeitems=edgeitems,
+                           separator=", ", max_line_width=10_000).replace("\n", "")
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,10 @@ joint and quantity, the largest ratio of the value to its limit and the time whe
   :class:`~drake_mh.trajectories.dynamics.BatchDynamics` (the RNEA compiled from the plant,
   equal to Drake's inverse dynamics to ~1e-13; ``torque_backend="drake"`` calls Drake).
 
-Limits that the model does not declare (``inf``) give ratio 0.
+Limits that the model does not declare (``inf``) give ratio 0; :meth:`Certificate.table` shows
+"no limit" there. A quantity certified but not enforced by whoever made the trajectory (toppra's
+jerk: :func:`~drake_mh.trajectories.retime.retime` passes ``enforced``) is labelled "not
+enforced" in the table: its ``inf`` is reported, not a failed check.
 """
 
 from __future__ import annotations
@@ -44,6 +47,9 @@ class Certificate:
         duration: trajectory duration [s].
         scale: the ratios of velocity, acceleration, jerk and torque are relative to
             ``scale x`` the robot's limits (positions always to the full range).
+        enforced: the quantities the trajectory's maker enforced (``None``: unknown, every
+            certified quantity counts); the others are reported only.
+        limited: quantity -> ``(nq,)`` whether the robot declares a finite limit there.
     """
 
     joint_names: tuple[str, ...]
@@ -53,6 +59,8 @@ class Certificate:
     samples: int = 0
     duration: float = 0.0
     scale: float = 1.0
+    enforced: tuple | None = None
+    limited: dict = field(default_factory=dict)
 
     def max_ratio(self, quantities=None) -> float:
         """Largest ratio over joints and the given quantities (default all certified ones)."""
@@ -88,12 +96,19 @@ class Certificate:
         return list(quantities)
 
     def table(self) -> str:
-        """Markdown table: one row per quantity, one column per joint (ratio @ time)."""
+        """Markdown table: one row per quantity, one column per joint (ratio @ time).
+
+        A quantity outside :attr:`enforced` reads "jerk (not enforced)" (toppra's ``inf`` jerk
+        is reported, not a failure); a joint without a finite limit reads "no limit".
+        """
         head = "| quantity | " + " | ".join(self.joint_names) + " |"
         lines = [head, "|" + "---|" * (len(self.joint_names) + 1)]
         for q in self.ratios:
-            cells = [f"{r:.4f} @ {t:.3f} s" for r, t in zip(self.ratios[q], self.times[q])]
-            lines.append(f"| {q} | " + " | ".join(cells) + " |")
+            limited = self.limited.get(q, np.ones(len(self.ratios[q]), dtype=bool))
+            cells = [f"{r:.4f} @ {t:.3f} s" if ok else "no limit"
+                     for r, t, ok in zip(self.ratios[q], self.times[q], limited)]
+            label = q if self.enforced is None or q in self.enforced else f"{q} (not enforced)"
+            lines.append(f"| {label} | " + " | ".join(cells) + " |")
         return "\n".join(lines)
 
     def as_dict(self) -> dict:
@@ -118,7 +133,8 @@ def sample_times(trajectory, samples_per_piece: int = 8, min_samples: int = 1000
 
 
 def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8,
-            min_samples: int = 1000, torque_backend: str = "rnea", scale: float = 1.0) -> Certificate:
+            min_samples: int = 1000, torque_backend: str = "rnea", scale: float = 1.0,
+            enforced=None) -> Certificate:
     """Certify ``trajectory`` against ``robot``'s limits by dense sampling.
 
     Args:
@@ -132,6 +148,8 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
             (``robot.inverse_dynamics`` per sample, slower; the reference).
         scale: certify against ``scale x`` the velocity, acceleration, jerk and torque limits
             (a safety margin; ``retime(..., scale=...)`` passes its own).
+        enforced: quantities the trajectory's maker enforced, for :meth:`Certificate.table`
+            (``None``, the default: all of ``quantities``); ``retime`` passes its own.
 
     Returns:
         A :class:`Certificate` (never raises for a violation; call ``.check()`` for that).
@@ -147,6 +165,10 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
         raise InvalidArgument(f"trajectory has {trajectory.nq} joints, robot {robot.name} has {robot.nq}")
     if not (0.0 < scale <= 1.0):
         raise InvalidArgument(f"scale must be in (0, 1], got {scale}")
+    if enforced is not None:
+        enforced = tuple(enforced)
+        if any(q not in QUANTITIES for q in enforced):
+            raise InvalidArgument(f"enforced must be a subset of {QUANTITIES}, got {enforced}")
     if torque_backend not in ("rnea", "drake"):
         raise InvalidArgument(f"torque_backend must be 'rnea' or 'drake', got {torque_backend!r}")
     breaks, tau = sample_times(trajectory, samples_per_piece, min_samples)
@@ -179,8 +201,9 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
                 if np.isfinite(robot.jerk_limits[j]):
                     ratios[quantity][j] = np.inf
                     times[quantity][j] = tb[np.argmax(jumps[:, j])]
+    limited = {q: ~robot.continuous if q == "position" else np.isfinite(_limits(robot, q)) for q in quantities}
     return Certificate(tuple(robot.joint_names), ratios, times, excess, int(T.size), trajectory.duration,
-                       float(scale))
+                       float(scale), enforced, limited)
 
 
 _ORDER = {"position": 0, "velocity": 1, "acceleration": 2, "jerk": 3, "torque": 2}

@@ -130,7 +130,7 @@ def retime(path, robot, method: str = "toppra", *, limits=None, gridpoints: int 
         else:
             traj = _toppra_like(W, robot, method, factors, gridpoints, bc_type, check_points)
         solve_time = time.perf_counter() - start
-        cert = certify(traj, robot, quantities=reported, scale=scale)
+        cert = certify(traj, robot, quantities=reported, scale=scale, enforced=quantities)
         if not cert.ok(quantities, tol) and method != "ruckig":
             traj, cert = _slow_down(traj, robot, cert, quantities, reported, tol)
         traj.info.update(certificate=cert, attempts=attempts, solve_time=solve_time, limits=limits,
@@ -170,7 +170,7 @@ def _slow_down(traj, robot, cert, quantities, reported, tol):
     lam *= 1.0 - 1e-9
     slowed = traj.time_scaled(lam)
     slowed.info["time_scaling"] = lam
-    return slowed, certify(slowed, robot, quantities=reported, scale=cert.scale)
+    return slowed, certify(slowed, robot, quantities=reported, scale=cert.scale, enforced=cert.enforced)
 
 
 def _limit(robot, quantity: str) -> np.ndarray:
