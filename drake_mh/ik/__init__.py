@@ -22,7 +22,7 @@ Drake verification), ``metaheuristic.py``, ``lm.py`` (batched least-squares kern
 
 from drake_mh.ik.problem import IKProblem, ReachBound, reach_bound
 from drake_mh.ik.result import IKResult, verify
-from drake_mh.ik.solve import GRADIENT_METHODS, available_ik_methods, solve_ik
+from drake_mh.ik.solve import GRADIENT_METHODS, available_ik_methods, prepare, solve_ik
 
 __all__ = ["IKProblem", "IKResult", "ReachBound", "reach_bound", "solve_ik", "available_ik_methods",
-           "verify", "GRADIENT_METHODS"]
+           "verify", "prepare", "GRADIENT_METHODS"]

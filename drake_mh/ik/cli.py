@@ -68,7 +68,8 @@ def cmd_ik(args: argparse.Namespace) -> int:
         print(json.dumps(data))
     else:
         state = "success" if result.success else "FAILED"
-        print(f"{state}: {result.method} on {robot.name} in {result.time * 1e3:.2f} ms ({result.message})")
+        loading = f"; {result.prepare_time:.2f} s loading kernels first" if result.prepare_time else ""
+        print(f"{state}: {result.method} on {robot.name} in {result.time * 1e3:.2f} ms{loading} ({result.message})")
         print(f"  q = [{', '.join(f'{v:.6f}' for v in result.q)}]")
         print(f"  position error {result.position_error:.3g} m (tol {tol_p:g}), orientation error "
               f"{result.orientation_error:.3g} rad (tol {tol_o:g}), within limits: {result.within_limits}")

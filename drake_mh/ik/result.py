@@ -46,6 +46,10 @@ class IKResult:
         attempts: local-solver starts (restarts), where the method has them.
         history_nfe, history_best: ``(K,)`` best-so-far objective against evaluations
             (metaheuristics; empty otherwise).
+        prepare_time: [s] spent before the solve's clock started, loading what the method
+            needs (compiled kernels, Drake programs, the reach bound; see
+            :func:`drake_mh.ik.prepare`); 0 when everything was loaded already. Not part of
+            ``time``, so a ``timeout`` measures solving only.
     """
 
     q: np.ndarray
@@ -61,6 +65,7 @@ class IKResult:
     attempts: int = 0
     history_nfe: np.ndarray = field(default_factory=lambda: np.zeros(0))
     history_best: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    prepare_time: float = 0.0
 
     def to_dict(self) -> dict:
         """JSON-friendly dict (``q`` as a list, histories left out)."""
@@ -76,6 +81,7 @@ class IKResult:
             "method": self.method,
             "message": self.message,
             "attempts": int(self.attempts),
+            "prepare_time": float(self.prepare_time),
         }
 
 

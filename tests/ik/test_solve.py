@@ -127,3 +127,19 @@ def reach_radius_of_ee(robot) -> float:
     from drake_mh.ik import reach_bound
 
     return reach_bound(robot).radius
+
+
+def test_prepare_runs_once_and_stays_out_of_the_clock(panda):
+    """Loading happens in prepare (timed apart), once per robot and kind of problem."""
+    from drake_mh.ik import prepare
+    from drake_mh.ik.solve import _PREPARED
+
+    target = panda.fk(panda.random_configurations(1, rng=3)[0])
+    problem = IKProblem(panda, target, position_tolerance=1e-5, orientation_tolerance=1e-5)
+    _PREPARED.pop(panda, None)
+    first = solve_ik(problem, "dls", seed=0, budget=2000)
+    again = solve_ik(problem, "dls", seed=0, budget=2000)
+    assert first.prepare_time > 0 and again.prepare_time == 0.0
+    assert first.to_dict()["prepare_time"] == first.prepare_time
+    assert first.success == again.success and np.array_equal(first.q, again.q)   # warm-up changes nothing
+    assert prepare(problem, "dls") == 0.0 and prepare(problem, "pinv") > 0
