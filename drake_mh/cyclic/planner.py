@@ -31,7 +31,7 @@ import numpy as np
 from drake_mh.cyclic.problem import InfeasibleComponent, ThreeLinkProblem
 from drake_mh.cyclic.task import CyclicTask, ThreeLinkComponent, TwoLinkComponent
 from drake_mh.cyclic.three_link import three_link_ik
-from drake_mh.errors import InvalidArgument
+from drake_mh.errors import InvalidArgument, NoFiniteValue
 from drake_mh.optim.base import summarize_array
 
 logger = logging.getLogger(__name__)
@@ -281,11 +281,12 @@ def plan(task: CyclicTask, method: str = "woa", budget: int = 2000, seed=0, pop_
         objective = problem.objective
         if k_decimals is not None:
             objective = _rounded(problem.objective, int(k_decimals))
-        res = minimize(objective, [search], method=method, budget=budget, seed=_child_seed(seed, j),
-                       pop_size=pop_size, **params)
-        if not np.isfinite(res.f):
+        try:
+            res = minimize(objective, [search], method=method, budget=budget, seed=_child_seed(seed, j),
+                           pop_size=pop_size, **params)
+        except NoFiniteValue:
             raise InfeasibleComponent(comp.name, f"{method} found no feasible k in {search} within {budget} "
-                                      f"evaluations (feasible intervals: {intervals}); raise the budget")
+                                      f"evaluations (feasible intervals: {intervals}); raise the budget") from None
         k = float(np.round(res.x[0], k_decimals)) if k_decimals is not None else float(res.x[0])
         results.append(_finish(task, i, problem, k, intervals, search, res, converged_n))
         ks.append(k)

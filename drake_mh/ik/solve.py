@@ -30,6 +30,7 @@ import numpy as np
 from drake_mh.errors import InvalidArgument, InvalidIKProblem, UnknownMethod
 from drake_mh.ik.problem import IKProblem
 from drake_mh.ik.result import IKResult, verify
+from drake_mh.optim.base import make_rng
 
 __all__ = ["solve_ik", "prepare", "available_ik_methods", "GRADIENT_METHODS", "DEFAULT_LOCAL_BUDGET"]
 
@@ -65,6 +66,21 @@ def _check_limits(budget, timeout):
         if not np.isfinite(timeout) or timeout <= 0:
             raise InvalidArgument(f"timeout must be a positive number of seconds or None; got {timeout!r}")
     return budget, timeout
+
+
+def _check_config(name: str, config) -> None:
+    """``config`` must be ``None`` or the configuration class of method ``name``."""
+    if config is None or name not in GRADIENT_METHODS:
+        return
+    if name == "hybrid":
+        from drake_mh.ik.hybrid import HybridConfig as expected
+    elif name in ("pinv", "dls"):
+        from drake_mh.ik.jacobian import JacobianConfig as expected
+    else:
+        from drake_mh.ik.drake import DrakeIKConfig as expected
+    if not isinstance(config, expected):
+        raise InvalidArgument(f"config of {name} must be a {expected.__name__} (or None); "
+                              f"got {type(config).__name__}")
 
 
 def solve_ik(problem: IKProblem, method: str = "hybrid", seed=0, budget: int | None = None,
@@ -105,6 +121,8 @@ def solve_ik(problem: IKProblem, method: str = "hybrid", seed=0, budget: int | N
     if name not in methods:
         raise UnknownMethod(str(method), methods, what="IK method")
     budget, timeout = _check_limits(budget, timeout)
+    make_rng(seed)  # a bad seed fails here, with a message, not deep inside numpy
+    _check_config(name, config)
     if params and name in GRADIENT_METHODS:
         raise InvalidArgument(f"{name} takes no optimizer options ({sorted(params)}); pass config=... instead")
     if config is not None and name not in GRADIENT_METHODS:

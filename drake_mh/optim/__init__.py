@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from drake_mh.errors import UnknownMethod
+from drake_mh.errors import NoFiniteValue, UnknownMethod
 from drake_mh.optim.abc import ABC
 from drake_mh.optim.ao import AO
 from drake_mh.optim.aro import ARO
@@ -97,8 +97,15 @@ def minimize(f: Callable[[np.ndarray], Any], bounds: Any, method: str = "pso", b
     Raises:
         UnknownMethod: unknown ``method``.
         InvalidArgument: bad bounds, budget, pop_size, x0, target or hyper-parameters.
-        InvalidObjective: ``f`` does not return shape ``(P,)``.
+        InvalidObjective: ``f`` does not return shape ``(P,)``, or modifies ``X`` in place.
+        NoFiniteValue: ``f`` returned NaN or +inf at every evaluated point (no best point).
     """
     cls = get_method(method)
     opt = cls(bounds, budget=budget, seed=seed, pop_size=pop_size, x0=x0, **params)
-    return run(opt, f, target=target, callback=callback)
+    result = run(opt, f, target=target, callback=callback)
+    if not np.isfinite(result.f):
+        raise NoFiniteValue(
+            f"{method}: the objective returned NaN or +inf at all {result.nfe} evaluated points, so "
+            "there is no best point; return finite values (e.g. a large penalty instead of inf or "
+            "NaN) or raise the budget if finite values are rare")
+    return result

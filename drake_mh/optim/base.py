@@ -173,6 +173,13 @@ def as_bounds(bounds: Any) -> tuple[np.ndarray, np.ndarray]:
         )
     if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
         raise InvalidArgument("bounds must be finite: every variable needs a finite box [lower, upper]")
+    with np.errstate(over="ignore"):
+        wide = np.flatnonzero(~np.isfinite(upper - lower))
+    if wide.size:
+        i = int(wide[0])
+        raise InvalidArgument(
+            f"bounds of variable {i} ([{lower[i]}, {upper[i]}]) are too wide: upper - lower overflows a "
+            "double; rescale the variable so its box spans less than 1e308")
     bad = np.flatnonzero(~(lower < upper))
     if bad.size:
         i = int(bad[0])
@@ -182,6 +189,24 @@ def as_bounds(bounds: Any) -> tuple[np.ndarray, np.ndarray]:
             "fixed variable from the search"
         )
     return lower, upper
+
+
+def make_rng(seed: Any, what: str = "seed") -> np.random.Generator:
+    """``numpy.random.default_rng(seed)``, or :class:`InvalidArgument` naming what was wrong.
+
+    Args:
+        seed: ``None``, an integer >= 0, a sequence of such integers, a ``SeedSequence``, a
+            ``BitGenerator`` or a ``Generator``.
+        what: the argument's name in the message.
+    """
+    if isinstance(seed, bool) or isinstance(seed, (float, complex, str, bytes)):
+        raise InvalidArgument(f"{what} must be an integer >= 0, a numpy SeedSequence/Generator or None; "
+                              f"got {seed!r}")
+    try:
+        return np.random.default_rng(seed)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgument(f"{what} must be an integer >= 0, a numpy SeedSequence/Generator or None; "
+                              f"got {seed!r} ({exc})") from None
 
 
 def check_budget(budget: Any) -> int:
@@ -224,7 +249,17 @@ def evaluate(f: Callable[[np.ndarray], Any], X: np.ndarray) -> np.ndarray:
     Raises:
         InvalidObjective: the objective returned a wrong shape or a non-numeric value.
     """
-    F = f(X)
+    X_view = X.view()
+    X_view.flags.writeable = False  # an objective must not change the candidates it scores
+    try:
+        F = f(X_view)
+    except ValueError as exc:
+        if "read-only" not in str(exc):
+            raise
+        raise InvalidObjective(
+            "the objective modified the population X in place (it is read-only, so that the "
+            "returned x is the point that scored f); work on a copy, e.g. X = X.copy()"
+        ) from exc
     try:
         F = np.asarray(F, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -281,7 +316,7 @@ class Optimizer(abc.ABC):
         self.dim = self.lower.size
         self.budget = check_budget(budget)
         self.seed = seed
-        self.rng = np.random.default_rng(seed)
+        self.rng = make_rng(seed)
         self.config = self._make_config(params)
         if pop_size is None:
             pop_size = self.default_pop_size(self.dim)
@@ -369,6 +404,10 @@ class Optimizer(abc.ABC):
                 f"tell() expects the first k <= {len(pending)} asked rows X (k, {self.dim}) and their "
                 f"values F (k,); got X {np.shape(X)} and F ({k},)"
             )
+        if not np.array_equal(X, pending[:k], equal_nan=True):
+            raise AskTellError(
+                "tell() got other candidates than ask() returned: report the values of the asked "
+                "rows X, unchanged and in order")
         if k > self.budget - self.nfe:
             raise AskTellError(
                 f"telling {k} values would exceed the budget ({self.budget - self.nfe} evaluations left)"

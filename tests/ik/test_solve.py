@@ -143,3 +143,20 @@ def test_prepare_runs_once_and_stays_out_of_the_clock(panda):
     assert first.to_dict()["prepare_time"] == first.prepare_time
     assert first.success == again.success and np.array_equal(first.q, again.q)   # warm-up changes nothing
     assert prepare(problem, "dls") == 0.0 and prepare(problem, "pinv") > 0
+
+
+@pytest.mark.parametrize("seed", ["abc", 1.5, -1])
+def test_bad_seed_is_named(panda, seed):
+    problem = IKProblem(panda, [0.5, 0.1, 0.4])
+    with pytest.raises(InvalidArgument, match="seed must be"):
+        solve_ik(problem, "hybrid", seed=seed, budget=100)
+
+
+@pytest.mark.parametrize("method", ["hybrid", "dls", "drake_snopt"])
+def test_config_of_another_method_is_refused(panda, method):
+    from drake_mh.ik.jacobian import JacobianConfig
+
+    problem = IKProblem(panda, [0.5, 0.1, 0.4])
+    bad = "abc" if method == "dls" else JacobianConfig()
+    with pytest.raises(InvalidArgument, match="config of"):
+        solve_ik(problem, method, config=bad, budget=100)
