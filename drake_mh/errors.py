@@ -38,7 +38,7 @@ class UnknownRobot(DrakeMhError, LookupError):
         self.available = sorted(available)
         super().__init__(
             f"unknown robot {name!r}: bundled robots are {_names(self.available)}; "
-            "or pass the path of a .urdf file"
+            "or pass the path of a model file (.urdf, .xacro, .sdf, MJCF .xml)"
         )
 
     def __str__(self) -> str:  # LookupError would quote the message otherwise
@@ -61,6 +61,60 @@ class InvalidURDF(DrakeMhError, ValueError):
 
 class UnsupportedModel(DrakeMhError, ValueError):
     """The model loads but is not a kind of robot drake_mh supports (e.g. floating base)."""
+
+
+class MeshNotFound(DrakeMhError, FileNotFoundError):
+    """A mesh (or other file) referenced by a robot model cannot be found.
+
+    Attributes:
+        uri: the reference as written in the model (``package://...``, relative path ...).
+        searched: every place that was looked at, in order.
+        source: the model that refers to it.
+    """
+
+    def __init__(self, uri: str, searched: Iterable[str], source: str = "", hint: str = ""):
+        self.uri = uri
+        self.searched = list(searched)
+        self.source = source
+        where = "; ".join(self.searched) if self.searched else "(nowhere)"
+        super().__init__(
+            f"{source + ': ' if source else ''}cannot find {uri!r}; searched: {where}. "
+            + (hint or "Pass the folder of the package with packages={'NAME': '/path/to/NAME'} "
+               "(shell: --package NAME=DIR) or set ROS_PACKAGE_PATH"))
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+
+class UnknownPackage(MeshNotFound):
+    """A ``package://NAME/...`` reference names a package that no search place provides.
+
+    Attributes:
+        package: the package name.
+    """
+
+    def __init__(self, package: str, uri: str, searched: Iterable[str], source: str = ""):
+        self.package = package
+        super().__init__(
+            uri, searched, source,
+            hint=f"unknown package {package!r}: pass packages={{{package!r}: '/path/to/{package}'}} "
+                 f"(shell: --package {package}=DIR), or set ROS_PACKAGE_PATH / AMENT_PREFIX_PATH")
+
+
+class MeshConversionError(DrakeMhError, ValueError):
+    """A mesh file exists but cannot be read or turned into a convex hull.
+
+    Attributes:
+        path: the mesh file.
+        reason: what the mesh reader said.
+    """
+
+    def __init__(self, path: str, reason: str):
+        self.path = path
+        self.reason = reason
+        super().__init__(
+            f"cannot convert mesh {path}: {reason}; export it as .obj or .stl from your CAD tool, "
+            "or replace the <collision> geometry by primitives (box, cylinder, sphere)")
 
 
 class FrameNotFound(DrakeMhError, LookupError):
@@ -220,6 +274,10 @@ class AskTellError(DrakeMhError, RuntimeError):
 
 class InvalidObjective(DrakeMhError, ValueError):
     """An objective returned something other than one float per row of the population ``(P,)``."""
+
+
+class NoFiniteValue(InvalidObjective):
+    """Every point a run evaluated scored NaN or +inf: there is no best point to return."""
 
 
 # --- visualisation (drake_mh.viz) --------------------------------------------------------------
