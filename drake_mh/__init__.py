@@ -17,6 +17,7 @@ _LAZY = {
     "Robot": "drake_mh.robot",
     "load_robot": "drake_mh.robot",
     "available_robots": "drake_mh.robot",
+    "register_robot": "drake_mh.robot",
     "BatchKinematics": "drake_mh.kinematics",
     "Scene": "drake_mh.scene",
     "Sphere": "drake_mh.scene",

@@ -265,6 +265,11 @@ class NoResults(DrakeMhError, FileNotFoundError):
     """A folder holds no study results (``records.jsonl``) to report on."""
 
 
+class ResultsLocked(DrakeMhError, RuntimeError):
+    """Another process is writing into the same results folder (two runs would record every
+    case twice)."""
+
+
 # --- optimizer protocol (drake_mh.optim) ----------------------------------------------------
 
 

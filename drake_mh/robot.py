@@ -14,14 +14,21 @@ Conventions:
       expressed in W, for the origin of E.
 
 Only fixed-base arms made of revolute, continuous, prismatic and fixed joints are supported.
-A URDF whose root link is not welded to ``world`` is welded at its origin (a floating base
-would add quaternion coordinates that the rest of the library does not handle).
+A model whose root link is not welded to ``world`` is welded at its default pose (a floating
+base would add quaternion coordinates that the rest of the library does not handle).
+
+Models with meshes load as shipped: :func:`load_robot` reads URDF, xacro, SDFormat and MJCF
+files, resolves ``package://`` and relative mesh references (:mod:`drake_mh.packages`),
+turns collision meshes into cached convex hulls (:mod:`drake_mh.meshes`) and locks the joints
+that are not on the way to the end effector (:mod:`drake_mh.robot_chain`); see
+``docs/robots.md``, "Your own robot".
 """
 
 from __future__ import annotations
 
 import functools
 import logging
+import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -46,6 +53,33 @@ DRAKE_MH_NS = "https://github.com/drake-mh/ns"
 """XML namespace of drake_mh's own URDF attributes (e.g. ``drake_mh:jerk``); Drake ignores it."""
 
 _SUPPORTED_JOINTS = {"revolute", "continuous", "prismatic", "fixed"}
+_MODEL_SUFFIXES = (".urdf", ".xacro", ".sdf", ".xml")
+
+
+_REGISTERED: dict[str, dict] = {}
+
+
+def register_robot(name: str, path: str | Path, *, ee_frame: str | None = None, packages=None,
+                   locked: dict[str, float] | None = None,
+                   xacro_args: dict[str, str] | None = None) -> None:
+    """Give a model file and its load options a name that :func:`load_robot` accepts.
+
+    Code that loads robots by name (the app, studies, process-pool workers that re-register
+    in their initializer) then uses your robot: ``register_robot("my_arm", "arm.urdf",
+    ee_frame="tool0")``, then ``load_robot("my_arm")``. Registering a path under its own text
+    attaches options to that path. The file is loaded (and checked) on first use.
+
+    Raises:
+        InvalidArgument: ``name`` is empty or a bundled robot's name.
+    """
+    if not isinstance(name, str) or not name.strip():
+        raise InvalidArgument(f"register_robot: name must be a non-empty string, got {name!r}")
+    if name in available_robots():
+        raise InvalidArgument(f"register_robot: {name!r} is a bundled robot; choose another name")
+    _REGISTERED[name] = dict(name_or_path=str(Path(path).expanduser()), ee_frame=ee_frame,
+                             packages=dict(packages) if packages else None,
+                             locked=dict(locked) if locked else None,
+                             xacro_args=dict(xacro_args) if xacro_args else None)
 
 
 def available_robots() -> list[str]:
@@ -53,78 +87,171 @@ def available_robots() -> list[str]:
     return sorted(p.stem for p in URDF_DIR.glob("*.urdf"))
 
 
-def load_robot(name_or_path: str | Path, ee_frame: str | None = None) -> Robot:
-    """Load a bundled robot by name, or any URDF file by path.
+def load_robot(name_or_path: str | Path, ee_frame: str | None = None, packages=None,
+               locked: dict[str, float] | None = None,
+               xacro_args: dict[str, str] | None = None) -> Robot:
+    """Load a bundled robot by name, or a robot model file (with its meshes) by path.
 
     Args:
         name_or_path: a bundled name (see :func:`available_robots`, e.g. ``"panda"``) or the
-            path of a ``.urdf`` file.
-        ee_frame: name of the end-effector frame; default: the unique tip link of the chain.
+            path of a model: URDF (``.urdf``), xacro (``.xacro``), SDFormat (``.sdf``) or MJCF
+            (``.xml`` whose root is ``<mujoco>``).
+        ee_frame: name of the end-effector frame; default: the unique moving tip link (a model
+            with several tips, e.g. an arm with a two-finger hand, needs it).
+        packages: ``{"NAME": "/folder"}`` for ``package://NAME/...`` references; otherwise
+            they are found through ``package.xml`` files up the tree, ``ROS_PACKAGE_PATH`` /
+            ``AMENT_PREFIX_PATH``, then the model's folder and its parents.
+        locked: ``{"joint": value}`` [rad or m] for joints to hold fixed. Joints off the path
+            from the root to ``ee_frame`` are always locked (at 0 clipped into their limits
+            unless given here); :attr:`Robot.locked_joints` says which.
+        xacro_args: ``name:=value`` arguments of a ``.xacro`` file.
 
     Returns:
-        The loaded :class:`Robot`.
+        The loaded :class:`Robot` (it pickles by these arguments, so process pools reload it).
 
     Raises:
         UnknownRobot: the name is neither bundled nor an existing file.
-        InvalidURDF: the file cannot be read or parsed.
-        FrameNotFound: ``ee_frame`` is not a frame of the model.
+        InvalidURDF: the file cannot be read, parsed or evaluated (xacro).
+        MeshNotFound, UnknownPackage: a mesh reference resolves nowhere (the message lists
+            every place searched and how to pass ``packages=``).
+        MeshConversionError: a collision mesh cannot be turned into a convex hull.
+        FrameNotFound: ``ee_frame`` (or a ``locked`` joint) is not in the model.
+        InvalidArgument: no ``ee_frame`` and several tip links (listed in the message).
     """
     text = str(name_or_path)
-    path = Path(text).expanduser()
-    if text in available_robots():
-        path = URDF_DIR / f"{text}.urdf"
-    elif not (path.suffix.lower() == ".urdf" or path.exists()):
+    if text in _REGISTERED:
+        options = dict(_REGISTERED[text])
+        given = dict(ee_frame=ee_frame, packages=packages, locked=locked, xacro_args=xacro_args)
+        options.update({k: v for k, v in given.items() if v is not None})
+        return _load_file(**options)
+    return _load_file(text, ee_frame, packages, locked, xacro_args)
+
+
+def _load_file(name_or_path, ee_frame=None, packages=None, locked=None, xacro_args=None) -> Robot:
+    """:func:`load_robot` without the registry look-up."""
+    from drake_mh.packages import UriResolver
+    from drake_mh.robot_loading import read_model
+
+    text = str(name_or_path)
+    bundled = text in available_robots()
+    path = URDF_DIR / f"{text}.urdf" if bundled else Path(text).expanduser()
+    if not bundled and not path.exists():
+        if path.suffix.lower() in _MODEL_SUFFIXES or os.sep in text:
+            raise InvalidURDF(str(path), "no such file (give an existing model path or a bundled "
+                              "name: " + ", ".join(available_robots()) + ")")
         raise UnknownRobot(text, available_robots())
     if not path.is_file():
-        raise InvalidURDF(str(path), "no such file (give an existing .urdf path or a bundled name: "
-                          + ", ".join(available_robots()) + ")")
-    try:
-        urdf_text = path.read_text()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InvalidURDF(str(path), f"cannot read the file ({exc})") from exc
-    return Robot(urdf_text, ee_frame=ee_frame, source=str(path), name=path.stem)
+        raise InvalidURDF(str(path), "not a file (give a .urdf, .xacro, .sdf or MJCF .xml file)")
+    path = path.resolve()
+    resolver = UriResolver(path.parent, packages, str(path))
+    model = read_model(path, resolver, xacro_args)
+    reload = dict(name_or_path=text if bundled else str(path), ee_frame=ee_frame,
+                  packages=dict(packages) if packages else None,
+                  locked=dict(locked) if locked else None,
+                  xacro_args=dict(xacro_args) if xacro_args else None)
+    return Robot(model.text, ee_frame=ee_frame, source=str(path), name=model.name,
+                 packages=packages, locked=locked, model_format=model.format,
+                 model_dir=model.model_dir, _resolver=resolver, _reload=reload)
+
+
+def _reload_robot(spec: dict) -> Robot:
+    """Unpickle a file-based :class:`Robot` by loading it again (see ``Robot.__reduce__``)."""
+    return _load_file(**spec)
+
+
+def _rebuild_robot(spec: dict) -> Robot:
+    """Unpickle a text-based :class:`Robot`."""
+    return Robot(**spec)
 
 
 class Robot:
     """A fixed-base robot arm backed by a Drake ``MultibodyPlant`` + ``SceneGraph``.
 
     Not thread-safe: the queries reuse one Drake context. Use one ``Robot`` per thread or
-    process (it pickles by its URDF text, so process pools receive a fresh copy).
+    process (it pickles by how it was loaded — file path and arguments, or its model text —
+    so process pools receive a fresh copy).
+
+    Args:
+        urdf: the model text (URDF unless ``model_format`` says ``"sdf"`` or ``"mjcf"``).
+        ee_frame: end-effector frame; default the unique moving tip link.
+        source: where the text came from, for messages.
+        name: model name.
+        packages: ``{"NAME": folder}`` for ``package://`` references (see :func:`load_robot`).
+        locked: ``{"joint": value}`` joints to hold fixed (see :func:`load_robot`).
+        model_format: ``"urdf"``, ``"sdf"`` or ``"mjcf"``.
+        model_dir: folder relative mesh paths resolve against (``None``: only absolute,
+            ``file://`` and ``package://`` references resolve).
 
     Attributes:
         name: model name.
-        source: where the URDF came from (path or ``"<string>"``).
-        urdf: the URDF text.
+        source: where the model came from (path or ``"<string>"``).
+        urdf: the model text as given; ``model_text`` is what Drake parsed (meshes rewritten,
+            locked joints fixed).
+        model_format: ``"urdf"``, ``"sdf"`` or ``"mjcf"``.
         plant, scene_graph, diagram: the Drake systems.
         nq: number of joints (generalized positions).
         joint_names: ``(nq,)`` names in the order of ``q``.
+        locked_joints: ``{name: value}`` [rad or m] of the joints held fixed (off the chain to
+            the end effector, or asked for); empty when none.
         lower, upper: ``(nq,)`` position limits [rad or m]; continuous joints get ∓π.
         continuous: ``(nq,)`` bool, joints without position limits in the URDF.
         velocity_limits, acceleration_limits, jerk_limits, effort_limits: ``(nq,)`` symmetric
             magnitudes [rad/s, rad/s², rad/s³, N·m]; ``inf`` where the model declares none.
         ee_frame_name: name of the end-effector frame.
+        mesh_files: ``{"collision": [(uri, file used)], "visual": [...]}`` of the model's meshes.
     """
 
     def __init__(self, urdf: str, ee_frame: str | None = None, source: str = "<string>",
-                 name: str | None = None):
-        # local import keeps `import drake_mh` cheap
-        from pydrake.multibody.parsing import Parser
-        from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
-        from pydrake.systems.framework import DiagramBuilder
+                 name: str | None = None, *, packages=None, locked: dict[str, float] | None = None,
+                 model_format: str = "urdf", model_dir: str | Path | None = None,
+                 _resolver=None, _reload: dict | None = None):
+        from drake_mh.packages import UriResolver
+        from drake_mh.robot_chain import default_ee, plan_locks, read_tree
+        from drake_mh.robot_loading import (
+            FORMATS, MeshReport, dedupe_urdf_materials, lock_joints, parse_xml, rewrite_meshes, strip_mimics, to_text,
+            urdf_mimics,
+        )
 
-        root = _parse_xml(urdf, source)
+        if model_format not in FORMATS:
+            raise InvalidArgument(f"model_format must be one of {FORMATS}, got {model_format!r}")
+        if not isinstance(urdf, str) or not urdf.strip():
+            raise InvalidURDF(source, "the model text is empty")
+        self._init_args = dict(urdf=urdf, ee_frame=ee_frame, source=source, name=name,
+                               packages=dict(packages) if packages else None,
+                               locked=dict(locked) if locked else None, model_format=model_format,
+                               model_dir=str(model_dir) if model_dir is not None else None)
+        self._reload = _reload
         self.urdf = urdf
         self.source = source
+        self.model_format = model_format
+        root = parse_xml(urdf, source)
+        if model_format == "urdf":
+            _check_urdf(root, source)
         self.name = name or root.get("name") or "robot"
-        extra = _read_extra_limits(root, source)
+        extra = _read_extra_limits(root, source) if model_format == "urdf" else {"jerk": {}, "effort": {}}
+        resolver = _resolver or UriResolver(Path(model_dir) if model_dir is not None else None,
+                                            packages, source)
+        report = MeshReport()
+        changed = rewrite_meshes(root, model_format, resolver, report)
+        if model_format == "urdf" and dedupe_urdf_materials(root):
+            changed = True
+        mimics = urdf_mimics(root) if model_format == "urdf" else {}
+        if mimics:
+            strip_mimics(root)
+            changed = True
+        self.mesh_files = {"collision": report.collision, "visual": report.visual}
+        text = to_text(root) if changed else urdf
 
-        builder = DiagramBuilder()
-        plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
-        try:
-            models = Parser(plant).AddModelsFromString(urdf, "urdf")
-        except Exception as exc:  # Drake raises RuntimeError/ValueError with a parser message
-            raise InvalidURDF(source, str(exc).strip().splitlines()[-1]) from exc
-        _weld_root_links(plant, models, root)
+        builder, plant, scene_graph = _parse_model(text, model_format, resolver, source)
+        tree = read_tree(plant)
+        self.ee_frame_name = ee_frame if ee_frame is not None else default_ee(tree, source)
+        self.locked_joints = plan_locks(tree, self.ee_frame_name, locked, mimics, source)
+        if self.locked_joints:
+            lock_joints(root, model_format, self.locked_joints, source)
+            text = to_text(root)
+            builder, plant, scene_graph = _parse_model(text, model_format, resolver, source)
+        self.model_text = text
+        _weld_free_bodies(plant)
         plant.Finalize()
         # a geometry source for obstacles added at run time by drake_mh.scene.Scene
         self.obstacle_source_id = scene_graph.RegisterSource("drake_mh.obstacles")
@@ -139,7 +266,8 @@ class Robot:
                 "velocities (floating or ball joints); only fixed-base arms are supported")
         self.nq = plant.num_positions()
         if self.nq == 0:
-            raise UnsupportedModel(f"{source}: the model has no movable joint")
+            raise UnsupportedModel(f"{source}: the model has no movable joint on the chain to "
+                                   f"{self.ee_frame_name!r}")
 
         self._joints = _ordered_joints(plant)
         self.joint_names = [j.name() for j in self._joints]
@@ -159,7 +287,6 @@ class Robot:
                 raise InvalidLimits(f"{source}: {what} limits must be positive; joints {bad}")
 
         self._frames = {f.name(): f for f in _all_frames(plant)}
-        self.ee_frame_name = ee_frame if ee_frame is not None else _default_ee(plant, source)
         if self.ee_frame_name not in self._frames:
             raise FrameNotFound(self.ee_frame_name, self._frames)
         self.ee_frame = self._frames[self.ee_frame_name]
@@ -186,10 +313,30 @@ class Robot:
         return cls(urdf, ee_frame=ee_frame, source=f"<DH table {name}>", name=name)
 
     def __reduce__(self):
-        return (Robot, (self.urdf, self.ee_frame_name, self.source, self.name))
+        if self._reload is not None:
+            return (_reload_robot, ({**self._reload, "ee_frame": self.ee_frame_name},))
+        return (_rebuild_robot, ({**self._init_args, "ee_frame": self.ee_frame_name},))
 
     def __repr__(self) -> str:
-        return f"Robot({self.name!r}, nq={self.nq}, ee={self.ee_frame_name!r})"
+        locked = f", locked={sorted(self.locked_joints)}" if self.locked_joints else ""
+        return f"Robot({self.name!r}, nq={self.nq}, ee={self.ee_frame_name!r}{locked})"
+
+    def collision_summary(self) -> dict[str, dict[str, int]]:
+        """Collision geometries per link by shape: ``{link: {"Convex": 1, "Capsule": 2}}``."""
+        from pydrake.multibody.tree import BodyIndex
+
+        inspector = self.scene_graph.model_inspector()
+        out: dict[str, dict[str, int]] = {}
+        for i in range(1, self.plant.num_bodies()):
+            body = self.plant.get_body(BodyIndex(i))
+            body_name = body.name()
+            counts: dict[str, int] = {}
+            for gid in self.plant.GetCollisionGeometriesForBody(body):
+                kind = type(inspector.GetShape(gid)).__name__
+                counts[kind] = counts.get(kind, 0) + 1
+            if counts:
+                out[body_name] = counts
+        return out
 
     def _effort_limits(self, urdf_effort: dict[str, float]) -> np.ndarray:
         """Effort limits per joint: Drake's actuators first, else the URDF ``<limit effort>``."""
@@ -355,14 +502,8 @@ class Robot:
 # --- URDF helpers -------------------------------------------------------------------------------
 
 
-def _parse_xml(urdf: str, source: str) -> ET.Element:
-    """Parse and sanity-check the URDF before Drake sees it (Drake may abort on some input)."""
-    if not isinstance(urdf, str) or not urdf.strip():
-        raise InvalidURDF(source, "the URDF text is empty")
-    try:
-        root = ET.fromstring(urdf)
-    except ET.ParseError as exc:
-        raise InvalidURDF(source, f"malformed XML ({exc})") from exc
+def _check_urdf(root: ET.Element, source: str) -> None:
+    """Sanity-check a URDF before Drake sees it (Drake may abort on some input)."""
     if root.tag != "robot":
         raise InvalidURDF(source, f"the root element is <{root.tag}>, expected <robot>")
     links = {link.get("name") for link in root.findall("link")}
@@ -384,7 +525,49 @@ def _parse_xml(urdf: str, source: str) -> ET.Element:
             if lo > hi:
                 raise InvalidLimits(
                     f"{source}: joint {jname!r} has lower limit {lo} > upper limit {hi}; swap them")
-    return root
+
+
+class _DrakeLogCapture(logging.Filter):
+    """Turns Drake's parser warnings (unsupported tags ...) into drake_mh INFO messages."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        logger.info("drake: %s", record.getMessage())
+        return False
+
+
+def _parse_model(text: str, model_format: str, resolver, source: str):
+    """Parse ``text`` into a new plant + scene graph (not finalized): ``(builder, plant, sg)``."""
+    from pydrake.multibody.parsing import Parser
+    from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+    from pydrake.systems.framework import DiagramBuilder
+
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
+    parser = Parser(plant)
+    resolver.populate(parser.package_map())
+    drake_logger = logging.getLogger("drake")
+    capture = _DrakeLogCapture()
+    drake_logger.addFilter(capture)
+    try:
+        parser.AddModels(file_contents=text, file_type={"mjcf": "xml"}.get(model_format, model_format))
+    except Exception as exc:  # Drake raises RuntimeError/ValueError with a parser message
+        message = " ".join(line.strip() for line in str(exc).strip().splitlines())
+        raise InvalidURDF(source, message[:800]) from exc
+    finally:
+        drake_logger.removeFilter(capture)
+    return builder, plant, scene_graph
+
+
+def _weld_free_bodies(plant) -> None:
+    """Weld every body with no inboard joint to the world at its default pose (fixed base)."""
+    from pydrake.multibody.tree import BodyIndex, JointIndex
+
+    children = {plant.get_joint(JointIndex(i)).child_body().index() for i in range(plant.num_joints())}
+    for i in range(1, plant.num_bodies()):
+        body = plant.get_body(BodyIndex(i))
+        if body.index() not in children:
+            logger.info("welding root link %r to the world (fixed base)", body.name())
+            plant.WeldFrames(plant.world_frame(), body.body_frame(), plant.GetDefaultFloatingBaseBodyPose(body))
 
 
 def _read_extra_limits(root: ET.Element, source: str) -> dict[str, dict[str, float]]:
@@ -405,19 +588,6 @@ def _read_extra_limits(root: ET.Element, source: str) -> dict[str, dict[str, flo
     return {"jerk": jerk, "effort": effort}
 
 
-def _weld_root_links(plant, models, root: ET.Element) -> None:
-    """Weld every root link that is not attached to ``world`` at the world origin."""
-    children = {j.find("child").get("link") for j in root.findall("joint") if j.find("child") is not None}
-    for link in root.findall("link"):
-        name = link.get("name")
-        if name == "world" or name in children:
-            continue
-        for model in models:
-            if plant.HasBodyNamed(name, model):
-                logger.info("welding root link %r to the world (fixed base)", name)
-                plant.WeldFrames(plant.world_frame(), plant.GetBodyByName(name, model).body_frame())
-
-
 def _ordered_joints(plant) -> list:
     """Single-DOF joints sorted by their position index."""
     from pydrake.multibody.tree import JointIndex
@@ -434,17 +604,3 @@ def _all_frames(plant) -> list:
     from pydrake.multibody.tree import FrameIndex
 
     return [plant.get_frame(FrameIndex(i)) for i in range(plant.num_frames())]
-
-
-def _default_ee(plant, source: str) -> str:
-    """The unique leaf link of the kinematic tree (a link that is no joint's parent)."""
-    from pydrake.multibody.tree import BodyIndex, JointIndex
-
-    parents = {plant.get_joint(JointIndex(i)).parent_body().index() for i in range(plant.num_joints())}
-    leaves = [plant.get_body(BodyIndex(i)).name() for i in range(1, plant.num_bodies())
-              if BodyIndex(i) not in parents]
-    if len(leaves) != 1:
-        raise InvalidArgument(
-            f"{source}: cannot choose the end effector, the model has {len(leaves)} tip links "
-            f"({', '.join(leaves)}); pass ee_frame=<one of them>")
-    return leaves[0]
