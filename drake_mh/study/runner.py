@@ -217,6 +217,7 @@ def run_study(
         from drake_mh.study.report import write_report
 
         report_path = write_report(folder)
+    store.close()  # the folder's writer lock (also released if this process dies)
     return StudyResult(
         study=study.name,
         folder=folder,

@@ -9,26 +9,37 @@ attachments are written first (temporary file + ``os.replace``), then the line i
 with a single ``os.write`` on an ``O_APPEND`` descriptor followed by ``fsync``. A process
 killed at any instant therefore leaves either the whole line or a torn last line without
 newline, which :meth:`RecordStore.load` drops (the case then simply runs again).
+
+Damage from outside (a block of NUL bytes after a power loss, a truncated ``.npz``) costs only
+the damaged cases: :meth:`RecordStore.load` skips unreadable lines and records whose arrays
+cannot be opened, lists them in :attr:`RecordStore.damaged`, and those cases run again.
+
+One writer at a time: :meth:`RecordStore.prepare` takes an exclusive lock (``flock`` on
+``.lock`` in the folder, released when the store is closed or its process ends, even by
+``kill -9``); a second run into the same folder gets :class:`ResultsLocked`.
 """
 
 from __future__ import annotations
 
+import fcntl
 import io
 import json
 import logging
 import os
+import zipfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from drake_mh.errors import NoResults, ResultsMismatch
+from drake_mh.errors import NoResults, ResultsLocked, ResultsMismatch
 
 logger = logging.getLogger(__name__)
 
 RECORDS = "records.jsonl"
 META = "study.json"
+LOCK = ".lock"
 #: settings of study.json that must match to resume into a folder
 _RESUME_KEYS = ("name", "seed", "quick", "cases_digest")
 
@@ -75,6 +86,9 @@ class RecordStore:
 
     def __init__(self, folder: str | os.PathLike):
         self.folder = Path(folder)
+        #: ``(where, why)`` of every damaged line or arrays file the last :meth:`load` skipped
+        self.damaged: list[tuple[str, str]] = []
+        self._lock = None
 
     @property
     def records_path(self) -> Path:
@@ -99,8 +113,10 @@ class RecordStore:
 
         Raises:
             ResultsMismatch: the folder was made by another study / seed / quick flag / grid.
+            ResultsLocked: another process is writing into the folder.
         """
         self.folder.mkdir(parents=True, exist_ok=True)
+        self.lock()
         old = self.read_meta()
         if old is not None:
             diff = {k: (old.get(k), meta.get(k)) for k in _RESUME_KEYS if old.get(k) != meta.get(k)}
@@ -110,6 +126,30 @@ class RecordStore:
         else:
             merged = dict(meta)
         write_atomic(self.meta_path, json.dumps(merged, indent=2, default=_json_default).encode())
+
+    def lock(self) -> None:
+        """Takes the folder's writer lock (idempotent).
+
+        Raises:
+            ResultsLocked: another process holds it.
+        """
+        if self._lock is not None:
+            return
+        handle = open(self.folder / LOCK, "a+")  # noqa: SIM115 - held until close()
+        try:
+            fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handle.close()
+            raise ResultsLocked(
+                f"{self.folder} is being written by another run (lock {self.folder / LOCK}); wait for "
+                "it to finish, or give this run another folder with --out DIR") from None
+        self._lock = handle
+
+    def close(self) -> None:
+        """Releases the writer lock (also released when the process ends)."""
+        if self._lock is not None:
+            self._lock.close()
+            self._lock = None
 
     # --- records ------------------------------------------------------------------------
 
@@ -145,8 +185,13 @@ class RecordStore:
             os.fsync(handle.fileno())
 
     def load(self) -> dict[str, dict[str, Any]]:
-        """Returns ``{key: record}`` of every complete record (first one wins on duplicates)."""
+        """Returns ``{key: record}`` of every complete, readable record (first one wins on duplicates).
+
+        Unreadable lines (NUL blocks, garbage) and records whose arrays file cannot be opened
+        are skipped, logged and listed in :attr:`damaged`; their cases count as not run.
+        """
         records: dict[str, dict[str, Any]] = {}
+        self.damaged = []
         if not self.records_path.is_file():
             return records
         with open(self.records_path, "rb") as handle:
@@ -154,16 +199,45 @@ class RecordStore:
                 if not line.endswith(b"\n"):
                     logger.warning("ignoring torn last line %d of %s", number, self.records_path)
                     break
+                where = f"{RECORDS} line {number}"
+                text = line.lstrip(b"\x00")  # a zero-filled block may precede a good record
+                if not text.strip():
+                    if len(text) < len(line):
+                        self._damage(where, "NUL bytes")
+                    continue
                 try:
-                    record = json.loads(line)
-                except json.JSONDecodeError:
-                    logger.warning("ignoring unreadable line %d of %s", number, self.records_path)
+                    record = json.loads(text.decode("utf-8"))
+                except ValueError as exc:  # JSONDecodeError and UnicodeDecodeError
+                    self._damage(where, f"unreadable ({type(exc).__name__})")
                     continue
                 key = record.get("key") if isinstance(record, dict) else None
-                if key is None:
+                if key is None or key in records:
                     continue
-                records.setdefault(key, record)
+                why = self._arrays_damage(record)
+                if why:
+                    self._damage(f"{record.get('arrays')} of case {key}", why)
+                    continue
+                records[key] = record
         return records
+
+    def _damage(self, where: str, why: str) -> None:
+        self.damaged.append((where, why))
+        logger.warning("%s: skipping %s (%s); the case runs again", self.folder, where, why)
+
+    def _arrays_damage(self, record: Mapping[str, Any]) -> str:
+        """Why a record's arrays file cannot be used ('' when it can): missing or not a whole zip."""
+        relative = record.get("arrays")
+        if not relative:
+            return ""
+        path = self.folder / relative
+        try:
+            with zipfile.ZipFile(path) as archive:  # reads the central directory at the end
+                archive.namelist()
+        except FileNotFoundError:
+            return "missing"
+        except (OSError, zipfile.BadZipFile, ValueError) as exc:
+            return f"damaged ({exc})"
+        return ""
 
     def records(self) -> list[dict[str, Any]]:
         """Returns all complete records.
@@ -231,6 +305,6 @@ class RecordStore:
         try:
             with np.load(path, allow_pickle=False) as data:
                 return {name: data[name] for name in data.files}
-        except (OSError, ValueError) as exc:
+        except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
             logger.warning("cannot read arrays %s: %s", path, exc)
             return {}

@@ -6,6 +6,7 @@ pools (spawn) and Dask workers alike.
 
 from __future__ import annotations
 
+import json
 import logging
 import time
 import traceback
@@ -68,7 +69,7 @@ def split_result(result: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, n
     for name, value in _flatten(result).items():
         if value is None or isinstance(value, (bool, int, float, str)):
             scalars[name] = value
-        elif isinstance(value, np.generic):
+        elif isinstance(value, np.generic) and isinstance(value.item(), (bool, int, float, str)):
             scalars[name] = value.item()
         elif isinstance(value, (np.ndarray, list, tuple)):
             array = np.asarray(value)
@@ -108,6 +109,7 @@ def run_case_task(source: StudySource, spec: CaseSpec) -> CaseOutcome:
         for name, value in scalars.items():
             if name in spec.params and value != spec.params[name]:
                 raise KeyError(f"the case returned {name!r}={value!r} which differs from its grid value")
+        json.dumps(scalars)  # anything that cannot be stored fails here, as this case's error
         record.update(scalars)
         record["status"] = "ok"
     except (Exception, SystemExit) as exc:  # noqa: BLE001 - a failing case must not kill the study

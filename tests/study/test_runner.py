@@ -159,3 +159,32 @@ def test_worker_processes_use_one_blas_thread(monkeypatch):
         seen = pool.submit(os.getenv, "OPENBLAS_NUM_THREADS").result(), pool.submit(os.getenv, "MKL_NUM_THREADS").result()
     assert seen == ("1", "3")
     assert "OPENBLAS_NUM_THREADS" not in os.environ                    # the parent's environment is restored
+
+
+def test_unstorable_result_is_that_cases_error_and_the_study_goes_on(tmp_path):
+    path = tmp_path / "dates.py"
+    path.write_text(
+        "import numpy as np\n"
+        "from drake_mh.study import Study\n"
+        "def run(case):\n"
+        "    if case['i'] == 1:\n"
+        "        return {'when': np.datetime64('2026-01-01')}\n"
+        "    return {'value': float(case['i'])}\n"
+        "study = Study(name='dates', run=run, grid={'i': range(3)})\n")
+    result = run_study(path, out=tmp_path / "out", workers=0, report=False)
+    assert result.complete and result.n_errors == 1
+    bad = [r for r in result.records if r["status"] == "error"][0]
+    assert bad["i"] == 1 and "datetime64" in bad["exception"]
+    again = run_study(path, out=tmp_path / "out", workers=0, report=False)   # a re-run works too
+    assert again.n_new == 0 and again.complete
+
+
+def test_second_run_into_the_same_folder_is_refused(toy, tmp_path):
+    from drake_mh.errors import ResultsLocked
+    from drake_mh.study.store import RecordStore
+
+    holder = RecordStore(tmp_path / "out")
+    holder.prepare({"name": "toy"})            # another process writing (same lock)
+    with pytest.raises(ResultsLocked):
+        run_study(toy, out=tmp_path / "out", workers=0, report=False)
+    holder.close()

@@ -53,3 +53,48 @@ def test_prepare_refuses_other_settings(tmp_path):
 def test_records_of_empty_folder_raises(tmp_path):
     with pytest.raises(NoResults, match="drake-mh study"):
         RecordStore(tmp_path).records()
+
+
+def test_nul_block_and_garbage_lines_are_skipped_and_reported(tmp_path):
+    store = RecordStore(tmp_path)
+    store.append(_record(0))
+    with open(store.records_path, "ab") as handle:    # a zero-filled block after a power loss
+        handle.write(b"\x00" * 4096 + b"\n" + b"\xff\xfe garbage\n")
+    store.append(_record(1))
+    with open(store.records_path, "ab") as handle:    # NULs glued to the front of a good line
+        handle.write(b"\x00" * 16 + json.dumps(_record(2)).encode() + b"\n")
+    assert sorted(store.load()) == ["k=0", "k=1", "k=2"]
+    assert [why for _, why in store.damaged] == ["NUL bytes", "unreadable (UnicodeDecodeError)"]
+
+
+def test_record_with_truncated_arrays_runs_again(tmp_path):
+    store = RecordStore(tmp_path)
+    store.append(_record(0), {"h": np.arange(50)})
+    store.append(_record(1), {"h": np.arange(50)})
+    path = tmp_path / "arrays/k1.npz"
+    path.write_bytes(path.read_bytes()[:40])           # truncated by a crash of the file system
+    assert sorted(store.load()) == ["k=0"]             # k=1 counts as not run
+    assert store.damaged and "k=1" in store.damaged[0][0]
+    assert store.load_arrays({"arrays": "arrays/k1.npz"}) == {}
+    store.append(_record(1), {"h": np.arange(50)})     # the re-run's line wins over the damaged one
+    assert sorted(store.load()) == ["k=0", "k=1"] and not store.damaged
+
+
+def test_second_writer_is_refused_until_the_first_closes(tmp_path):
+    from drake_mh.errors import ResultsLocked
+
+    first, second = RecordStore(tmp_path), RecordStore(tmp_path)
+    first.prepare({"name": "x"})
+    with pytest.raises(ResultsLocked, match="another run"):
+        second.prepare({"name": "x"})
+    first.close()
+    second.prepare({"name": "x"})
+    second.close()
+
+
+def test_case_returning_an_unstorable_value_is_that_cases_error():
+    from drake_mh.study.worker import split_result
+
+    with pytest.raises(TypeError, match="datetime64"):
+        split_result({"when": np.datetime64("2026-01-01")})
+    assert split_result({"n": np.int64(3)})[0] == {"n": 3}
