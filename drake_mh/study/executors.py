@@ -96,6 +96,28 @@ def _one_blas_thread_per_worker():
                 os.environ[name] = value
 
 
+def exit_with_parent(parent_pid: int, interval: float = 0.5) -> None:
+    """Worker initializer: the worker exits as soon as its parent process is gone.
+
+    After ``kill -9`` of ``drake-mh study`` nothing tells the pool's workers to stop (they
+    would go on running and holding ports); a daemon thread polls the parent's pid and ends
+    the worker with ``os._exit`` once it was re-parented.
+
+    Args:
+        parent_pid: ``os.getpid()`` of the process that made the pool.
+        interval: [s] between polls.
+    """
+    import threading
+    import time
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(interval)
+        os._exit(3)
+
+    threading.Thread(target=watch, name="drake_mh-exit-with-parent", daemon=True).start()
+
+
 @contextmanager
 def open_executor(spec: str | None = None, workers: int | None = None) -> Iterator[tuple[Executor, int]]:
     """Opens an executor and closes it afterwards.
@@ -122,7 +144,8 @@ def open_executor(spec: str | None = None, workers: int | None = None) -> Iterat
         # spawn: workers start clean (no forked Drake/threads state), same on every OS
         context = multiprocessing.get_context("spawn")
         with _one_blas_thread_per_worker():
-            executor = ProcessPoolExecutor(max_workers=count, mp_context=context)
+            executor = ProcessPoolExecutor(max_workers=count, mp_context=context,
+                                           initializer=exit_with_parent, initargs=(os.getpid(),))
             try:
                 yield executor, count
             finally:

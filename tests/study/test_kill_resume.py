@@ -20,6 +20,22 @@ def _lines(path):
     return path.read_text().splitlines() if path.exists() else []
 
 
+def _workers_exit_by_themselves(group: int, wait: float = 15.0) -> bool:
+    """Whether every process of the killed run's session is gone within ``wait`` seconds."""
+    deadline = time.monotonic() + wait
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(group, 0)
+        except ProcessLookupError:
+            return True
+        time.sleep(0.1)
+    try:
+        os.killpg(group, signal.SIGKILL)  # clean up before failing
+    except ProcessLookupError:
+        pass
+    return False
+
+
 def test_sigkill_mid_study_loses_and_repeats_nothing(tmp_path):
     study = write_toy(tmp_path, sleep=0.15, reps=5)  # 30 cases
     out = tmp_path / "out"
@@ -32,10 +48,7 @@ def test_sigkill_mid_study_loses_and_repeats_nothing(tmp_path):
         time.sleep(0.02)
     process.send_signal(signal.SIGKILL)
     process.wait(timeout=10)
-    try:  # the orphaned workers of the pool: clean them up
-        os.killpg(process.pid, signal.SIGKILL)
-    except ProcessLookupError:
-        pass
+    assert _workers_exit_by_themselves(process.pid), "orphaned workers still running 15 s after the kill"
     before = _lines(records)
     assert process.returncode == -signal.SIGKILL
     assert 6 <= len(before) < 30, "the kill should land mid-study"
