@@ -194,13 +194,34 @@ class Trajectory:
 
     # --- evaluation -------------------------------------------------------------------------------
 
+    def _check_times(self, t) -> np.ndarray:
+        """``t`` as a float array within ``[start_time, end_time]``, or :class:`InvalidArgument`.
+
+        A polynomial evaluated past its last piece extrapolates (measured: -48,000 rad a few
+        seconds after a toppra trajectory's end), so times outside the trajectory are refused;
+        round-off of ``1e-9 · duration`` beyond an end is clipped onto it.
+        """
+        try:
+            t = np.atleast_1d(np.asarray(t, dtype=float))
+        except (TypeError, ValueError):
+            raise InvalidArgument(f"times must be numbers [s], got {t!r}") from None
+        if not np.all(np.isfinite(t)):
+            raise InvalidArgument("times must be finite numbers [s]")
+        t0, t1 = self.start_time, self.end_time
+        slack = 1e-9 * max(t1 - t0, 1.0)
+        if t.size and (t.min() < t0 - slack or t.max() > t1 + slack):
+            raise InvalidArgument(
+                f"times must lie within the trajectory [{t0:g}, {t1:g}] s; got {t.min():g} .. {t.max():g} s "
+                "(hold the end state yourself, e.g. traj(min(t, traj.end_time)), if that is meant)")
+        return np.clip(t, t0, t1)
+
     def derivatives(self, t, order: int = 3) -> list[np.ndarray]:
         """``[q, q', ..., q^(order)]``, each ``(len(t), nq)``, at times ``t`` [s].
 
         At a break the value of the piece to the right is returned (scipy's convention);
         use :meth:`evaluate_piece` for one-sided values.
         """
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = self._check_times(t)
         if order < 0 or order > 3:
             raise InvalidArgument(f"order must be 0..3, got {order}")
         if self.timing is None:
