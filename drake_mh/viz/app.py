@@ -16,6 +16,12 @@ A status line ("Setup: ..." / "Status: ...", inert buttons at the bottom of the 
 has no text element) reports what happened. ``status_file`` receives the same state as JSON
 (rewritten atomically on every change) for scripts and tests; ``max_seconds`` ends the loop.
 
+The page a user opens is the app's own (:mod:`drake_mh.viz.app_page`): the status box and the
+controls first, in Table 1's order, and Meshcat's 3-D view beside them (Meshcat's own panel
+lists the controls after its Scene / Animations folders, below the fold). The obstacle is drawn
+translucent red, distinct from the (orange) robots. :func:`run_app` is ``drake-mh app``: it
+prints the page's URL, runs the loop, and ends with its own "app stopped" line on Ctrl-C.
+
 Everything runs in the thread that created Meshcat (Drake requires it): one loop polls the
 controls, moves the obstacle, regenerates and poses the robot at ``fps``. Generation blocks
 the loop (the status shows the progress); the browser stays connected.
@@ -28,6 +34,7 @@ import hashlib
 import json
 import logging
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,13 +42,19 @@ from pathlib import Path
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.viz.app_controls import Controls, SliderSpec
+from drake_mh.viz.app_controls import SECTIONS, Controls, SliderSpec
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["AppConfig", "PlannerApp", "POINT_NAMES"]
+__all__ = ["AppConfig", "PlannerApp", "POINT_NAMES", "run_app"]
 
 POINT_NAMES = ("start", "via 1", "via 2", "end")
+
+OBSTACLE_COLOUR = (0.9, 0.08, 0.08, 0.4)
+"""Translucent red ``(r, g, b, a)``: the bundled robots are orange, the path blue, the points green."""
+EDITED_POINT_COLOUR = (0.55, 0.1, 0.95, 1.0)
+"""The path point the Point X/Y/Z sliders edit (violet); the others are green."""
+POINT_COLOUR = (0.1, 0.75, 0.2, 0.9)
 
 
 @dataclass(frozen=True)
@@ -57,7 +70,8 @@ class AppConfig:
         obstacle_radius: [m] of the spherical obstacle (default 0.2, as the scenario).
         seed: seed of generation and regeneration; budget: per IK solve (``None``: default).
         fps: frame rate of the loop [Hz]; speed: playback speed (1 = the path's own timing).
-        port: Meshcat port (``None``: first free from 7000; 0: any).
+        port: Meshcat port (``None``: first free from 7000; 0: any); the app's page takes the
+            first free port after Meshcat's (0: any).
         status_file: JSON status written on every change (``None``: none).
     """
 
@@ -103,14 +117,25 @@ class PlannerApp:
     Args:
         config: :class:`AppConfig`.
         meshcat: a Meshcat instance (default: this thread's localhost server).
+        page: serve the app's page (:attr:`page_url`); ``False``: Meshcat's page only.
     """
 
-    def __init__(self, config: AppConfig = AppConfig(), meshcat=None):
+    def __init__(self, config: AppConfig = AppConfig(), meshcat=None, page: bool = True):
         from drake_mh.ik import available_ik_methods
         from drake_mh.viz.server import get_meshcat
 
         self.config = config
-        self.meshcat = meshcat if meshcat is not None else get_meshcat(config.port)
+        if meshcat is None:  # the app prints its own page's URL: no "open Meshcat" lines
+            import pydrake.geometry  # noqa: F401 - pydrake ties the "drake" logger to Drake's on import
+
+            drake_log = logging.getLogger("drake")
+            level = drake_log.level
+            drake_log.setLevel(max(logging.WARNING, drake_log.getEffectiveLevel()))
+            try:
+                meshcat = get_meshcat(config.port, announce=False)
+            finally:
+                drake_log.setLevel(level)
+        self.meshcat = meshcat
         self.methods = available_ik_methods()
         self.method = config.method.lower()
         self.robot_index = 0
@@ -143,8 +168,26 @@ class PlannerApp:
             SliderSpec("Obstacle radius [m]", 0.01, 0.5, 0.01, config.obstacle_radius),
         ]
         self.controls = Controls(self.meshcat, sliders)
-        self.meshcat.SetCameraPose([1.9, -1.3, 1.3], [0.45, 0.3, 0.25])  # the Table 3 workspace
+        self.page = None
+        if page:
+            from drake_mh.viz.app_page import AppPage, page_html
+
+            html = page_html(self.meshcat.port(), SECTIONS, [s.name for s in sliders],
+                             primary=("Generate / Regenerate solutions", "Run"),
+                             wide=("Generate / Regenerate solutions",))
+            self.page = AppPage(html, port=0 if config.port == 0 else None, first=self.meshcat.port() + 1)
+        self.meshcat.SetCameraPose([1.55, -1.05, 1.05], [0.45, 0.35, 0.3])  # the Table 3 workspace
         self.show_environment()
+
+    @property
+    def page_url(self) -> str:
+        """URL of the app's page (controls and 3-D view), or Meshcat's when no page is served."""
+        return self.page.url if self.page is not None else self.meshcat.web_url()
+
+    def close(self) -> None:
+        """Stops serving the page (Meshcat itself lives on with its thread)."""
+        if self.page is not None:
+            self.page.close()
 
     # --- model -----------------------------------------------------------------------------
 
@@ -186,12 +229,12 @@ class PlannerApp:
     def show_environment(self) -> None:
         """Draws the path, its stop points, the obstacle and the robot (Table 1 part 3)."""
         view = self.view
-        view.add_obstacles(self.scene)
+        view.add_obstacles(self.scene, colour=OBSTACLE_COLOUR)
         points = self.follower.points if self.follower is not None else self.path.points
         view.add_path(points, "path")
         for i, p in enumerate(self.points):
             view.add_target(p, f"point{i}", radius=0.025 if i == self.edit else 0.015,
-                            colour=(0.9, 0.2, 0.2, 0.9) if i == self.edit else (0.1, 0.75, 0.2, 0.9))
+                            colour=EDITED_POINT_COLOUR if i == self.edit else POINT_COLOUR)
         view.set_q(self.follower.q if self.follower is not None else self.robot.home)
 
     def _pose_along(self, t: float) -> None:
@@ -283,11 +326,11 @@ class PlannerApp:
             p = self.scene.obstacles["obstacle"].position
             self.scene.remove("obstacle")
             self.scene.add("obstacle", Sphere(self._radius), p)
-            self.view.add_obstacles(self.scene)
+            self.view.add_obstacles(self.scene, colour=OBSTACLE_COLOUR)
         if position is not None:
             self._obstacle_p = tuple(float(v) for v in position)
             self.scene.move("obstacle", position)
-            self.view.update_obstacles(self.scene)
+            self.view.update_obstacles(self.scene, colour=OBSTACLE_COLOUR)
         if self.follower is None:
             self.message = "obstacle moved (no solutions yet)"
             return
@@ -370,7 +413,7 @@ class PlannerApp:
         f = self.follower
         obstacle = self.scene.obstacles.get("obstacle")
         return {
-            "url": self.meshcat.web_url(), "robot": self.robot_name, "method": self.method, "mode": self.mode,
+            "url": self.meshcat.web_url(), "page_url": self.page_url, "robot": self.robot_name, "method": self.method, "mode": self.mode,
             "message": self.message, "editing": POINT_NAMES[self.edit], "points": self.points.tolist(),
             "n_points": len(self.path.points),
             "obstacle": None if obstacle is None else obstacle.position.tolist(),
@@ -411,3 +454,51 @@ class PlannerApp:
             time.sleep(max(0.0, period - (time.monotonic() - now)))
         self._status()
         return self.state()
+
+
+def run_app(config: AppConfig, *, generate: bool = False, run: bool = False, max_seconds: float | None = None,
+            out=None) -> int:
+    """``drake-mh app``: starts the app, prints its URL, runs until Ctrl-C or ``max_seconds``.
+
+    Args:
+        config: :class:`AppConfig`.
+        generate: generate solutions before the loop; run: then start running (implies generate).
+        max_seconds: wall-clock seconds from the printed URL to the end (the start-up generation
+            included; a generation under way finishes first); ``None``: until Ctrl-C.
+        out: where the two lines go (default ``sys.stdout``).
+
+    Returns:
+        0: the app ended normally, by ``max_seconds`` or by Ctrl-C (it prints "app stopped").
+    """
+    out = out if out is not None else sys.stdout
+    app = None
+    reason = "stopped by Ctrl-C"
+    try:
+        app = PlannerApp(config)
+        started = time.monotonic()
+        print(f"drake-mh app: open {app.page_url} in a browser (controls and 3-D view; Meshcat alone at "
+              f"{app.meshcat.web_url()}; localhost only; Ctrl-C to stop)", file=out, flush=True)
+        if generate or run:
+            app.generate()
+        if run:
+            app.play("run")
+        left = None if max_seconds is None else max(0.0, float(max_seconds) - (time.monotonic() - started))
+        app.run(left)
+        reason = "stopped" if max_seconds is None else f"stopped after --max-seconds {max_seconds:g}"
+    except KeyboardInterrupt:
+        pass
+    finally:
+        if app is not None:
+            app.close()
+    if app is None:
+        print("drake-mh app: app stopped by Ctrl-C while starting", file=out, flush=True)
+        return 0
+    try:
+        app._status(f"app {reason}: start drake-mh app again to continue")
+    except Exception:  # noqa: BLE001 - Ctrl-C may have left the loop inside a Meshcat call
+        logger.debug("could not write the final status", exc_info=True)
+    state = app.state()
+    fps = state["run_fps"]
+    print(f"drake-mh app: app {reason} ({state['elapsed']:.0f} s, {state['events']} regeneration events"
+          + (f", {fps:.1f} frames/s while running)" if fps else ")"), file=out, flush=True)
+    return 0

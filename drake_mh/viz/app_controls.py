@@ -10,6 +10,10 @@ drop-down and no text element (pydrake 1.51: checked with ``dir(Meshcat)``). So:
 * the status is shown as the label of two inert buttons at the bottom of the panel
   ("Setup: ..." and "Status: ..."); a new text deletes and re-adds them (they stay last).
 
+Meshcat lists these controls below its own folders; the app's page
+(:mod:`drake_mh.viz.app_page`) shows them first, grouped by :data:`SECTIONS`, with the status
+lines as a status box on top.
+
 :class:`Controls` polls clicks and slider changes without callbacks (Meshcat has none): the
 app's loop calls :meth:`Controls.clicked` and :meth:`Controls.changed` every frame, in the
 thread that created the Meshcat instance (a Drake requirement).
@@ -19,7 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Controls", "SliderSpec", "BUTTONS"]
+__all__ = ["Controls", "SliderSpec", "BUTTONS", "SECTIONS", "STATUS_PREFIXES"]
 
 #: the app's buttons in panel order (framework paper Table 1: parts 1, 2, 4, 5/7)
 BUTTONS = (
@@ -32,6 +36,17 @@ BUTTONS = (
     "Run",
     "Stop",
 )
+
+#: the app page's sections (Table 1's parts) and their controls, in order
+SECTIONS = (
+    ("1 · Robot and algorithm", ("Next robot", "Next algorithm")),
+    ("2 · Path", ("Edit next point", "Point X [m]", "Point Y [m]", "Point Z [m]", "Points in path")),
+    ("3-5, 7 · Solve and run", ("Generate / Regenerate solutions", "Test run", "Run", "Stop", "Show environment")),
+    ("6 · Obstacle (moves live)", ("Obstacle X [m]", "Obstacle Y [m]", "Obstacle Z [m]", "Obstacle radius [m]")),
+)
+
+#: labels of the inert status buttons start with these (the page shows them as its status box)
+STATUS_PREFIXES = ("Setup: ", "Status: ")
 
 
 @dataclass(frozen=True)

@@ -46,22 +46,24 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
     p.add_argument("--budget", type=int, default=None, help="per IK solve (default: the method's)")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate of the loop [Hz] (default 30)")
     p.add_argument("--speed", type=float, default=1.0, help="playback speed (default 1: the path's timing)")
-    p.add_argument("--port", type=int, default=None, help="Meshcat port (default: first free from 7000; 0: any)")
+    p.add_argument("--port", type=int, default=None,
+                   help="Meshcat port (default: first free from 7000; 0: any); the app's page takes the next "
+                        "free port")
     p.add_argument("--generate", action="store_true", help="generate solutions at start")
     p.add_argument("--run", action="store_true", help="start running at once (implies --generate)")
-    p.add_argument("--max-seconds", type=float, default=None, help="quit after this many seconds (headless use)")
+    p.add_argument("--max-seconds", type=float, default=None, metavar="S",
+                   help="stop the app S seconds (wall clock) after it prints its URL, solution generation at "
+                        "start included, and exit 0 (for scripts and tests; default: run until Ctrl-C)")
     p.add_argument("--status-file", default=None, metavar="PATH",
                    help="write the app's state as JSON on every change (for scripts and tests)")
     p.set_defaults(func=cmd_app)
 
 
 def cmd_app(args: argparse.Namespace) -> int:
-    """``drake-mh app``: returns 0 when the loop ends."""
-    import sys
-
+    """``drake-mh app``: returns 0 when the app ends (``--max-seconds`` or Ctrl-C: "app stopped")."""
     import drake_mh
     from drake_mh.errors import InvalidArgument, UnknownRobot
-    from drake_mh.viz.app import AppConfig, PlannerApp
+    from drake_mh.viz.app import AppConfig, run_app
 
     robots = tuple(args.robot) if args.robot else AppConfig.robots
     for name in robots:
@@ -78,14 +80,4 @@ def cmd_app(args: argparse.Namespace) -> int:
                        obstacle=None if args.no_obstacle else tuple(args.obstacle),
                        obstacle_radius=args.obstacle_radius, seed=args.seed, budget=args.budget, fps=args.fps,
                        speed=args.speed, port=args.port, status_file=args.status_file)
-    app = PlannerApp(config)
-    print(f"drake-mh app: open {app.meshcat.web_url()} in a browser (localhost only; Ctrl-C to quit)", flush=True)
-    if args.generate or args.run:
-        app.generate()
-    if args.run:
-        app.play("run")
-    state = app.run(args.max_seconds)
-    fps = state["run_fps"]
-    print(f"drake-mh app: stopped after {state['elapsed']:.0f} s ({state['events']} regeneration events"
-          + (f", {fps:.1f} frames/s while running)" if fps else ")"), file=sys.stdout, flush=True)
-    return 0
+    return run_app(config, generate=args.generate, run=args.run, max_seconds=args.max_seconds)
