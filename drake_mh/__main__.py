@@ -1,7 +1,8 @@
 """``python -m drake_mh [COMMAND ...]``: the ``drake-mh`` command line.
 
 Without arguments it prints the robot catalogue with the FK/Jacobian/distance smoke test
-and the list of commands (``python -m drake_mh demo`` runs the demo).
+and one line naming the commands (``python -m drake_mh demo`` runs the demo;
+``python -m drake_mh --help`` prints the usage).
 """
 
 import sys

@@ -90,44 +90,94 @@ def build_parser() -> argparse.ArgumentParser:
 # --- robots -------------------------------------------------------------------------------
 
 
+def add_robot_options(p: argparse.ArgumentParser, robot_help: str | None = None) -> None:
+    """``--ee-frame NAME`` and ``--package NAME=DIR`` (repeatable), for robot-taking commands."""
+    p.add_argument("--ee-frame", default=None, metavar="NAME",
+                   help="end-effector frame of the robot (needed when the model has several tip "
+                        "links, e.g. an arm with a hand); joints not on the way to it are locked")
+    p.add_argument("--package", action="append", default=None, metavar="NAME=DIR",
+                   help="folder of the package that package://NAME/... mesh references name "
+                        "(repeatable; default: package.xml up the tree, ROS_PACKAGE_PATH, "
+                        "AMENT_PREFIX_PATH, the model's folder and its parents)")
+
+
+def load_robot_from_args(args: argparse.Namespace, name: str | None = None):
+    """``load_robot(args.robot or name, ee_frame=args.ee_frame, packages=--package ...)``."""
+    import drake_mh
+    from drake_mh.packages import parse_package_option
+
+    return drake_mh.load_robot(name if name is not None else args.robot,
+                               ee_frame=getattr(args, "ee_frame", None),
+                               packages=parse_package_option(getattr(args, "package", None)) or None)
+
+
+def register_robot_options(names, args: argparse.Namespace) -> None:
+    """Check robot names/paths of a command and attach ``--ee-frame``/``--package`` to the paths.
+
+    Commands that load robots later by name (the app's robot cycling) then get the options:
+    each model path is registered under its own text with :func:`drake_mh.robot.register_robot`.
+
+    Raises:
+        UnknownRobot: a name is neither bundled nor an existing file.
+    """
+    from pathlib import Path
+
+    import drake_mh
+    from drake_mh.errors import UnknownRobot
+    from drake_mh.packages import parse_package_option
+    from drake_mh.robot import register_robot
+
+    packages = parse_package_option(getattr(args, "package", None)) or None
+    for name in names:
+        if name in drake_mh.available_robots():
+            continue
+        if not Path(name).expanduser().is_file():
+            raise UnknownRobot(name, drake_mh.available_robots())
+        register_robot(str(name), name, ee_frame=getattr(args, "ee_frame", None), packages=packages)
+
+
 def register(subparsers, common: argparse.ArgumentParser) -> None:
     """Adds the ``robots`` subcommand."""
     p = subparsers.add_parser(
         "robots",
         parents=[common],
-        help="list the bundled robots (or show one)",
-        description="List the bundled robots with their joint count and limits; with NAME, "
-        "show one robot (a bundled name or a .urdf path); --check runs the FK/Jacobian/distance "
-        "smoke test against Drake.",
+        help="the robot catalogue and smoke test, or one robot's entry (bundled name or model file)",
+        description="Without NAME: the catalogue of the bundled robots and the smoke test (batched "
+        "kernel vs Drake FK/Jacobian, sphere model vs exact distances). With NAME (a bundled name or "
+        "the path of a .urdf, .xacro, .sdf or MJCF .xml file): that robot's entry: DOF, joints and "
+        "limits, end effector, locked joints, collision geometry per link, sphere model and bound.",
     )
-    p.add_argument("name", nargs="?", help="bundled robot name or path to a .urdf file")
-    p.add_argument("--check", action="store_true", help="run the smoke test (FK, Jacobian, distances)")
+    p.add_argument("name", nargs="?", metavar="PATH_OR_NAME", help="bundled robot name or model file")
+    add_robot_options(p)
+    p.add_argument("--check", action="store_true",
+                   help="also run the smoke test (FK, Jacobian, distances) on that robot")
     p.set_defaults(func=cmd_robots)
 
 
-def _robot_line(name: str) -> str:
-    import numpy as np
-
-    import drake_mh
-
-    robot = drake_mh.load_robot(name)
-    limits = ", ".join(f"[{lo:+.2f}, {hi:+.2f}]" for lo, hi in zip(np.asarray(robot.lower), np.asarray(robot.upper)))
-    return f"{name:<16} nq={robot.nq:<3} limits [rad]: {limits}"
-
-
 def cmd_robots(args: argparse.Namespace) -> int:
-    """``drake-mh robots [NAME] [--check]``."""
-    import drake_mh
+    """``drake-mh robots [PATH_OR_NAME] [--ee-frame NAME] [--package NAME=DIR] [--check]``."""
+    from drake_mh.errors import InvalidArgument
+    from drake_mh.smoke import _short, catalogue_entry, kernel_errors, run_smoke, sphere_check
 
-    if args.check:
-        smoke = _smoke()
-        if smoke is None:
-            raise DrakeMhError("the smoke test (drake_mh.smoke.run_smoke) is not available in this version")
-        smoke(out=print)
+    if args.name is None:
+        if args.ee_frame or args.package:
+            raise InvalidArgument("--ee-frame and --package describe one robot: give its PATH_OR_NAME "
+                                  "(drake-mh robots path/to/robot.urdf --ee-frame tool0)")
+        run_smoke(out=print)
         return 0
-    names = [args.name] if args.name else drake_mh.available_robots()
-    for name in names:
-        print(_robot_line(name))
+    robot = load_robot_from_args(args, args.name)
+    for line in catalogue_entry(robot):
+        print(line)
+    if args.check:
+        fk_err, jac_err = kernel_errors(robot)
+        print(f"  smoke test, batched kernel vs Drake on 200 random configurations: max|ΔFK| "
+              f"{fk_err:.1e}, max|ΔJ| {jac_err:.1e}")
+        try:
+            s = sphere_check(robot)
+            print(f"  sphere model vs exact distance to a sphere obstacle (50 configurations): worst "
+                  f"gap {s['worst_gap']:.4f} m, {s['collisions']} collisions, {s['missed']} missed")
+        except DrakeMhError as exc:
+            print(f"  sphere model vs exact distance: not available ({_short(exc)})")
     return 0
 
 
@@ -137,17 +187,20 @@ def _smoke():
 
 
 def _no_command(parser: argparse.ArgumentParser) -> int:
-    """Without a subcommand: the robot catalogue / smoke test, then the usage."""
+    """Without a subcommand: the robot catalogue and smoke test, then one line on the commands."""
     smoke = _smoke()
     try:
         if smoke is not None:
             smoke(out=print)
-        else:
-            cmd_robots(argparse.Namespace(name=None, check=False))
     except DrakeMhError as exc:
         print(f"{PROG}: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # `python -m drake_mh | head`
+        return 0
+    commands = ", ".join(parser._subparsers._group_actions[0].choices)  # noqa: SLF001
     print()
-    parser.print_help()
+    print(f"Commands: {commands}. `{PROG} --help` or `{PROG} COMMAND --help` for usage; "
+          f"`{PROG} demo` runs a short end-to-end comparison with a report.")
     return 0
 
 

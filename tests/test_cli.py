@@ -92,7 +92,7 @@ def test_robots_lists_bundled_models(capsys):
     out = capsys.readouterr().out
     for name in drake_mh.available_robots():
         assert name in out
-    assert "nq=7" in out
+    assert "Smoke test" in out and "max|ΔFK|" in out  # the catalogue and the smoke test
 
 
 def test_study_runs_records_errors_and_reports(toy, tmp_path, capsys):
@@ -131,6 +131,7 @@ def test_python_m_drake_mh_and_console_script(tmp_path):
     result = _run_cli(cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert "panda" in result.stdout and "demo" in result.stdout
+    assert "Smoke test" in result.stdout and "usage:" not in result.stdout  # no usage dump
     script = Path(sys.executable).with_name("drake-mh")
     if script.exists():
         bad = subprocess.run([str(script), "study", "nope"], capture_output=True, text=True, timeout=120)

@@ -3,6 +3,7 @@
 Example::
 
     drake-mh ik --robot panda --position 0.5 0.1 0.4 --rpy 3.1416 0 0 --method hybrid --json
+    drake-mh ik --robot path/to/ur5.urdf --ee-frame tool0 --package ur_description=DIR --position 0.4 0.1 0.3
 
 Prints the verified result (``--json``: one JSON object). Exit code 0 when the result is
 verified successful, 1 when the method failed to find a solution, 2 for bad input (unknown
@@ -28,7 +29,11 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
         "'drake_snopt', 'drake_ipopt'. Success is verified with Drake (FK, limits). Exit code 0: "
         "verified solution; 1: no solution found; 2: bad input.",
     )
-    p.add_argument("--robot", default="panda", help="bundled robot name or .urdf path (default panda)")
+    p.add_argument("--robot", default="panda",
+                   help="bundled robot name or model file: .urdf, .xacro, .sdf, MJCF .xml (default panda)")
+    from drake_mh.cli import add_robot_options
+
+    add_robot_options(p)
     p.add_argument("--position", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"),
                    help="target position of the end effector in the world frame [m]")
     p.add_argument("--rpy", nargs=3, type=float, default=None, metavar=("R", "P", "Y"),
@@ -54,7 +59,9 @@ def cmd_ik(args: argparse.Namespace) -> int:
     methods = available_ik_methods()
     if args.method.lower() not in methods:  # before loading the robot: fail fast
         raise UnknownMethod(args.method, methods, what="IK method")
-    robot = drake_mh.load_robot(args.robot)
+    from drake_mh.cli import load_robot_from_args
+
+    robot = load_robot_from_args(args)
     pose = args.rpy is not None
     tol_p = args.position_tolerance if args.position_tolerance is not None else (1e-5 if pose else 1e-3)
     tol_o = args.orientation_tolerance if args.orientation_tolerance is not None else (1e-5 if pose else 1e-2)

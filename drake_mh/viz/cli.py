@@ -30,8 +30,12 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
         "where the obstacle cuts it (§3.4.2). The server listens on localhost only.",
     )
     p.add_argument("--robot", action="append", default=None, metavar="NAME",
-                   help="robot(s) the 'Next robot' button cycles through; the first is loaded "
+                   help="robot(s) (bundled names or model files) the 'Next robot' button cycles through; "
+                        "the first is loaded "
                         "(default seed000_6dof, panda)")
+    from drake_mh.cli import add_robot_options
+
+    add_robot_options(p)
     p.add_argument("--method", default="e3gsa", help="IK / planner algorithm (default e3gsa, the paper's)")
     p.add_argument("--start", nargs=3, type=float, default=None, metavar=("X", "Y", "Z"), help="start point [m]")
     p.add_argument("--via", nargs=3, type=float, action="append", default=None, metavar=("X", "Y", "Z"),
@@ -61,14 +65,12 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
 
 def cmd_app(args: argparse.Namespace) -> int:
     """``drake-mh app``: returns 0 when the app ends (``--max-seconds`` or Ctrl-C: "app stopped")."""
-    import drake_mh
-    from drake_mh.errors import InvalidArgument, UnknownRobot
+    from drake_mh.cli import register_robot_options
+    from drake_mh.errors import InvalidArgument
     from drake_mh.viz.app import AppConfig, run_app
 
     robots = tuple(args.robot) if args.robot else AppConfig.robots
-    for name in robots:
-        if name not in drake_mh.available_robots() and not str(name).endswith(".urdf"):
-            raise UnknownRobot(name, drake_mh.available_robots())
+    register_robot_options(robots, args)  # model paths get --ee-frame / --package
     defaults = AppConfig.points
     via = args.via or [defaults[1], defaults[2]]
     if len(via) != 2:
