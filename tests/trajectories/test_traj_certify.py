@@ -139,3 +139,29 @@ def test_certificate_table_and_record(panda):
     assert "panda_joint7" in table and "torque" in table
     rec = cert.as_dict()
     assert set(rec) >= {"velocity_ratio", "torque_ratio", "max_ratio", "position_excess"}
+
+
+def test_peak_sampled_on_its_flanks_is_found():
+    """A 1.001x velocity peak whose samples read 0.999, beside two 0.9995x peaks sampled at
+    their tops: ranking peaks by sampled value refined only the decoys (reported 0.9995)."""
+    robot = _robot("planar2r")
+    L, pieces, h = robot.velocity_limits[0], 200, 0.01
+    c = np.zeros((4, pieces, 2))
+    c[2, :, 0] = 0.5 * L
+    a = 0.002 * 196 / h**2                   # the samples next to the middle one read 0.999
+    for i, (peak, u_c) in {50: (0.9995, 3 / 7 * h), 100: (1.001, 0.5 * h), 150: (0.9995, 4 / 7 * h)}.items():
+        c[:, i, 0] = [-L * a / 3, L * a * u_c, L * (peak - a * u_c**2), 0.0]   # q' = L (peak - a (u - u_c)^2)
+    cert = certify(Trajectory(PPoly(c, np.arange(pieces + 1) * h)), robot, quantities=("velocity",))
+    assert cert.ratios["velocity"][0] == pytest.approx(1.001, abs=1e-6)
+    assert cert.times["velocity"][0] == pytest.approx(100.5 * h, abs=1e-4)
+    with pytest.raises(LimitViolation):
+        cert.check()
+
+
+def test_check_skips_quantities_the_maker_did_not_enforce(panda):
+    traj = retime(np.array([panda.home, panda.home + 0.3]), panda, method="toppra")
+    cert = traj.info["certificate"]
+    assert np.isinf(cert.ratios["jerk"]).any()                # toppra: acceleration jumps
+    assert cert.check() is cert                               # jerk reported, not failed
+    with pytest.raises(LimitViolation, match="jerk"):
+        cert.check(["jerk"])                                  # asked for explicitly: checked
