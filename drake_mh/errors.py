@@ -265,6 +265,10 @@ class NoResults(DrakeMhError, FileNotFoundError):
     """A folder holds no study results (``records.jsonl``) to report on."""
 
 
+class ResultsFolderError(DrakeMhError, OSError):
+    """A results folder cannot be used: a file is in the way, no permission, damaged study.json."""
+
+
 class ResultsLocked(DrakeMhError, RuntimeError):
     """Another process is writing into the same results folder (two runs would record every
     case twice)."""

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from drake_mh.errors import NoResults, ResultsLocked, ResultsMismatch
+from drake_mh.errors import NoResults, ResultsFolderError, ResultsLocked, ResultsMismatch
 
 logger = logging.getLogger(__name__)
 
@@ -103,10 +103,23 @@ class RecordStore:
     # --- metadata -----------------------------------------------------------------------
 
     def read_meta(self) -> dict[str, Any] | None:
-        """Returns ``study.json`` or ``None`` when absent."""
+        """Returns ``study.json`` or ``None`` when absent.
+
+        Raises:
+            ResultsFolderError: ``study.json`` exists but cannot be read (truncated, not JSON).
+        """
         if not self.meta_path.is_file():
             return None
-        return json.loads(self.meta_path.read_text(encoding="utf-8"))
+        try:
+            meta = json.loads(self.meta_path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise ResultsFolderError(
+                f"{self.meta_path} is damaged ({type(exc).__name__}: {exc}); the records are safe in "
+                f"{RECORDS}: delete or fix {META} (it is rewritten on the next run) or use another --out"
+            ) from None
+        if not isinstance(meta, dict):
+            raise ResultsFolderError(f"{self.meta_path} does not hold a JSON object; delete it or use another --out")
+        return meta
 
     def prepare(self, meta: Mapping[str, Any]) -> None:
         """Creates the folder and ``study.json``, or checks that an existing one matches.
@@ -115,7 +128,13 @@ class RecordStore:
             ResultsMismatch: the folder was made by another study / seed / quick flag / grid.
             ResultsLocked: another process is writing into the folder.
         """
-        self.folder.mkdir(parents=True, exist_ok=True)
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            if not os.access(self.folder, os.W_OK | os.X_OK):
+                raise PermissionError(f"no write permission on {self.folder}")
+        except OSError as exc:
+            what = "is a file, not a folder" if self.folder.is_file() else f"cannot be created or written ({exc})"
+            raise ResultsFolderError(f"results folder {self.folder} {what}; pass another --out DIR") from None
         self.lock()
         old = self.read_meta()
         if old is not None:
@@ -135,7 +154,11 @@ class RecordStore:
         """
         if self._lock is not None:
             return
-        handle = open(self.folder / LOCK, "a+")  # noqa: SIM115 - held until close()
+        try:
+            handle = open(self.folder / LOCK, "a+")  # noqa: SIM115 - held until close()
+        except OSError as exc:
+            raise ResultsFolderError(f"cannot write into results folder {self.folder} ({exc}); "
+                                     "pass another --out DIR") from None
         try:
             fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:

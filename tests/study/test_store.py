@@ -98,3 +98,17 @@ def test_case_returning_an_unstorable_value_is_that_cases_error():
     with pytest.raises(TypeError, match="datetime64"):
         split_result({"when": np.datetime64("2026-01-01")})
     assert split_result({"n": np.int64(3)})[0] == {"n": 3}
+
+
+def test_unusable_folders_are_named(tmp_path):
+    from drake_mh.errors import ResultsFolderError
+
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(ResultsFolderError, match="is a file"):
+        RecordStore(tmp_path / "afile").prepare({"name": "x"})
+    store = RecordStore(tmp_path / "out")
+    store.prepare({"name": "x"})
+    store.close()
+    store.meta_path.write_text('{"name": "x", "se')          # truncated study.json
+    with pytest.raises(ResultsFolderError, match="damaged"):
+        RecordStore(tmp_path / "out").prepare({"name": "x"})
