@@ -29,7 +29,7 @@ logger = logging.getLogger(__name__)
 MESHCAT_VISUAL_SUFFIXES = (".obj", ".gltf", ".dae")
 """Mesh formats Drake's Meshcat displays (measured with drake 1.51: ``.stl`` is not shown)."""
 
-_VERSION = "1"  # bump when the conversion changes, so old cache entries are not reused
+_VERSION = "2"  # bump when the conversion changes, so old cache entries are not reused
 
 
 def _load_trimesh(path: Path):
@@ -42,11 +42,32 @@ def _load_trimesh(path: Path):
         mesh = trimesh.load(str(path), force="mesh", process=False)
     except Exception as exc:  # trimesh raises many kinds (ValueError, KeyError, ImportError ...)
         raise MeshConversionError(str(path), f"{type(exc).__name__}: {exc}") from exc
+    if path.suffix.lower() == ".dae":
+        scale = _collada_unit(path)
+        if scale != 1.0:  # ROS tools (assimp) scale by <unit meter>; trimesh does not
+            mesh.apply_scale(scale)
     vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=float)
     if vertices.ndim != 2 or vertices.shape[0] < 4 or not np.all(np.isfinite(vertices)):
         raise MeshConversionError(str(path), f"the file holds {len(vertices)} finite vertices, "
                                   "a convex hull needs at least 4 that are not coplanar")
     return mesh
+
+
+def _collada_unit(path: Path) -> float:
+    """The ``<unit meter="...">`` of a COLLADA file's asset (1 when absent or unreadable)."""
+    import re
+
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(16384).decode("utf-8", "replace")
+    except OSError:
+        return 1.0
+    match = re.search(r"<unit\b[^>]*\bmeter\s*=\s*[\"']([^\"']+)[\"']", head)
+    try:
+        value = float(match.group(1)) if match else 1.0
+    except ValueError:
+        return 1.0
+    return value if np.isfinite(value) and value > 0 else 1.0
 
 
 def _obj_bytes(vertices: np.ndarray, faces: np.ndarray, comment: str) -> bytes:

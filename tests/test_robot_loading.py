@@ -377,3 +377,48 @@ def test_text_robot_with_relative_mesh_says_to_load_the_file(tmp_path):
     robot = drake_mh.Robot(path.read_text(), ee_frame="hand", model_dir=path.parent)
     assert robot.nq == 2
     assert pickle.loads(pickle.dumps(robot)).nq == 2
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj", ".ply", ".off", ".dae"])
+def test_collision_meshes_of_any_format_become_hulls(tmp_path, suffix):
+    import re
+
+    import trimesh
+
+    from drake_mh.meshes import collision_hull, visual_mesh
+
+    box = trimesh.creation.box(extents=(0.1, 0.2, 0.3))
+    path = tmp_path / f"part{suffix}"
+    box.export(str(path))
+    expected = np.array([[-0.05, -0.1, -0.15], [0.05, 0.1, 0.15]])
+    if suffix == ".dae":  # a CAD export in millimetres: ROS tools scale by <unit meter>
+        text = path.read_text()
+        text = text.replace("<asset>", '<asset><unit name="millimeter" meter="0.001"/>', 1) \
+            if "<unit" not in text else re.sub(r"<unit[^>]*/>", '<unit meter="0.001"/>', text)
+        path.write_text(text)
+        expected = expected * 1e-3
+    hull = collision_hull(path)
+    assert hull.suffix == ".obj" and hull == collision_hull(path)  # same cache entry
+    np.testing.assert_allclose(trimesh.load(str(hull)).bounds, expected, atol=1e-12)
+    shown = visual_mesh(path)
+    assert shown == path if suffix in (".obj", ".dae") else shown.suffix == ".obj"
+
+
+def test_unreadable_or_flat_collision_mesh(tmp_path):
+    from drake_mh.errors import MeshConversionError
+    from drake_mh.meshes import collision_hull
+
+    junk = tmp_path / "junk.stl"
+    junk.write_bytes(b"not a mesh")
+    with pytest.raises(MeshConversionError, match="junk.stl"):
+        collision_hull(junk)
+    flat = tmp_path / "flat.obj"
+    flat.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n")
+    with pytest.raises(MeshConversionError, match="flat|hull"):
+        collision_hull(flat)
+
+
+def test_visual_stl_meshes_are_converted_for_meshcat():
+    robot = _erd("xarm7")
+    assert robot.mesh_files["visual"] and all(f.endswith("_visual.obj") for _, f in robot.mesh_files["visual"])
+    assert all(f.endswith("_hull.obj") for _, f in robot.mesh_files["collision"])
