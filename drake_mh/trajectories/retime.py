@@ -34,6 +34,7 @@ then :class:`~drake_mh.errors.LimitViolation` is raised.
 from __future__ import annotations
 
 import logging
+import numbers
 import time
 
 import numpy as np
@@ -106,13 +107,14 @@ def retime(path, robot, method: str = "toppra", *, limits=None, gridpoints: int 
     if bad:
         raise InvalidArgument(f"{method} cannot enforce {bad}; it supports {sorted(_SUPPORTED[method])}"
                               + ("; use method='ruckig' for jerk limits" if "jerk" in bad else ""))
-    if not (0.0 < scale <= 1.0):
-        raise InvalidArgument(f"scale must be in (0, 1], got {scale}")
+    _check_options(scale, tol, max_attempts, gridpoints, check_points, bc_type)
     missing = [q for q in limits if not np.any(np.isfinite(_limit(robot, q)))]
     if missing:
         raise InvalidArgument(f"robot {robot.name} declares no {missing} limits; leave them out of `limits`")
     W = check_waypoints(path, robot, method)
     factors = {q: float(scale) for q in limits}
+    if method == "ruckig" and "torque" in limits:
+        _check_gravity_on_segments(W, robot, factors["torque"])
     if method != "ruckig":  # head-room for what the check points miss (see _FIRST_MARGIN)
         for q in ("velocity", "acceleration"):
             if q in factors:
@@ -153,6 +155,32 @@ def retime(path, robot, method: str = "toppra", *, limits=None, gridpoints: int 
                 factors["acceleration"] = factors.get("acceleration", 1.0) * (1.0 - 1e-3) / r
             else:
                 factors[q] *= (1.0 - 1e-3) / r
+
+
+def _check_options(scale, tol, max_attempts, gridpoints, check_points, bc_type) -> None:
+    """Named errors for bad options (instead of a TypeError deep in toppra or scipy)."""
+    def real(x):
+        return isinstance(x, numbers.Real) and not isinstance(x, bool) and np.isfinite(x)
+
+    def integer(x):
+        return isinstance(x, numbers.Integral) and not isinstance(x, bool)
+
+    if not (real(scale) and 0.0 < scale <= 1.0):
+        raise InvalidArgument(f"scale must be a number in (0, 1] (fraction of every limit), got {scale!r}")
+    if not (real(tol) and tol >= 0.0):
+        raise InvalidArgument(f"tol must be a finite number >= 0 (certification slack on the ratios), got {tol!r}")
+    if not (integer(max_attempts) and max_attempts >= 1):
+        raise InvalidArgument(f"max_attempts must be an integer >= 1, got {max_attempts!r}")
+    if gridpoints is not None and not (integer(gridpoints) and gridpoints >= 2):
+        raise InvalidArgument(f"gridpoints must be an integer >= 2 or None (toppra proposes them), got {gridpoints!r}")
+    if not (integer(check_points) and check_points >= 0):
+        raise InvalidArgument(f"check_points must be an integer >= 0, got {check_points!r}")
+    if isinstance(bc_type, str) and bc_type not in _BC_TYPES:
+        raise InvalidArgument(f"bc_type must be one of {_BC_TYPES} (scipy CubicSpline), got {bc_type!r}")
+
+
+#: end conditions scipy's CubicSpline accepts by name
+_BC_TYPES = ("not-a-knot", "clamped", "natural", "periodic")
 
 
 def _slow_down(traj, robot, cert, quantities, reported, tol):
@@ -360,6 +388,21 @@ def _diagnose(robot, method, spline, gp, factors) -> InfeasibleTrajectory:
                 "cannot be followed at any speed: change the path or the payload")
     return InfeasibleTrajectory(method, "no feasible path parameterization (empty controllable set); "
                                 "check the limits and the path")
+
+
+def _check_gravity_on_segments(W, robot, torque_scale: float, samples: int = 64) -> None:
+    """ruckig moves rest-to-rest along straight joint segments: if holding the arm anywhere on
+    them needs more than the effort limit, no slow-down helps, so say so before solving."""
+    u = np.linspace(0.0, 1.0, samples)[:, None]
+    Q = np.concatenate([W[k] + u * (W[k + 1] - W[k]) for k in range(len(W) - 1)])
+    g = batch_dynamics(robot).inverse_dynamics(Q, np.zeros_like(Q), np.zeros_like(Q))
+    ratio = np.abs(g) / (robot.effort_limits * torque_scale)
+    if np.max(ratio) > 1.0:
+        i, j = np.unravel_index(np.argmax(ratio), ratio.shape)
+        raise InfeasibleTrajectory(
+            "ruckig", f"holding the arm against gravity on segment {i // samples} needs {g[i, j]:.4g} N·m "
+            f"on joint {robot.joint_names[j]!r}, above its effort limit {robot.effort_limits[j] * torque_scale:.4g} "
+            "N·m (after scaling); the path cannot be followed at any speed: change the path or the payload")
 
 
 def _toppra_like(W, robot, method, factors, gridpoints, bc_type, check_points) -> Trajectory:

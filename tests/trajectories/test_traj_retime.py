@@ -70,6 +70,16 @@ def test_infeasible_gravity_raises_with_reason(panda):
     assert info.value.method == "toppra"
     with pytest.raises(InfeasibleTrajectory, match="gravity"):
         retime(W, panda, "drake-toppra", scale=1e-3, gridpoints=50)
+    with pytest.raises(InfeasibleTrajectory, match="gravity") as info:   # not a LimitViolation at t = 904 s
+        retime(W, panda, "ruckig", scale=1e-3, limits=("velocity", "acceleration", "jerk", "torque"))
+    assert info.value.method == "ruckig"
+
+
+@pytest.mark.parametrize("options", [dict(scale="0.5"), dict(gridpoints="abc"), dict(check_points=-3),
+                                     dict(bc_type="bogus"), dict(tol=np.nan), dict(max_attempts=0)])
+def test_bad_options_are_named(panda, options):
+    with pytest.raises(InvalidArgument, match=next(iter(options))):
+        retime(np.array([panda.home, panda.home + 0.3]), panda, **options)
 
 
 def test_bad_requests(panda):
