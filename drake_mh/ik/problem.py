@@ -196,6 +196,13 @@ class IKProblem:
 
     def __post_init__(self):
         set_ = functools.partial(object.__setattr__, self)
+        from drake_mh.robot import Robot
+
+        if not isinstance(self.robot, Robot):
+            raise InvalidIKProblem(f"robot must be a drake_mh Robot (drake_mh.load_robot(...)), got "
+                                   f"{type(self.robot).__name__}")
+        if self.target is None or np.iscomplexobj(self.target):
+            raise InvalidIKProblem(f"target must be a real position (3,) [m] or a pose (4, 4), got {self.target!r}")
         try:
             target = np.asarray(self.target, dtype=float)
         except (TypeError, ValueError):
@@ -209,6 +216,9 @@ class IKProblem:
             if np.abs(R_WT @ R_WT.T - np.eye(3)).max() > 1e-6 or np.linalg.det(R_WT) < 0:
                 raise InvalidIKProblem("the rotation block of the target pose is not a rotation matrix "
                                        "(orthonormal with determinant +1, to 1e-6)")
+            if np.abs(target[3] - [0.0, 0.0, 0.0, 1.0]).max() > 1e-12:
+                raise InvalidIKProblem(f"the last row of a (4, 4) target pose must be [0, 0, 0, 1], got "
+                                       f"{target[3].tolist()}")
         elif target.reshape(-1).shape == (3,):
             p_WT = target.reshape(-1).copy()
             R_WT = None
@@ -225,7 +235,12 @@ class IKProblem:
             set_(name, _positive(name, getattr(self, name)))
         for name in ("orientation_weight", "clearance", "collision_weight", "ref_weight", "manipulability_weight"):
             set_(name, _positive(name, getattr(self, name), allow_zero=True))
-        if self.scene is not None and getattr(self.scene, "robot", None) is not self.robot:
+        from drake_mh.scene import Scene
+
+        if self.scene is not None and not isinstance(self.scene, Scene):
+            raise InvalidIKProblem(f"scene must be a drake_mh.scene.Scene (Scene(robot)) or None, got "
+                                   f"{type(self.scene).__name__}")
+        if self.scene is not None and self.scene.robot is not self.robot:
             raise InvalidIKProblem("the scene belongs to another Robot object; build it with Scene(robot) "
                                    "for the robot of this problem")
         if self.q_ref is not None:

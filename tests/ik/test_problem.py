@@ -103,3 +103,23 @@ def test_rotation_angle_accurate_from_tiny_to_large(theta, seed):
     R_WT = RotationMatrix(AngleAxis(rng.uniform(0, 3), axis[::-1] / 1.0)).matrix()
     R_WE = RotationMatrix(AngleAxis(theta, axis)).matrix() @ R_WT
     assert rotation_angle(R_WE, R_WT) == pytest.approx(theta, rel=1e-6, abs=1e-15)
+
+
+@pytest.mark.parametrize("robot, target, match", [
+    (None, [0.5, 0, 0.5], "robot must be"),
+    ("panda", None, "real position"),
+    ("panda", [0.5 + 1j, 0, 0.5], "real position"),
+    ("panda", np.diag([1.0, 1.0, 1.0, 2.0]), "last row"),
+])
+def test_bad_problem_inputs_are_named(panda, robot, target, match):
+    from drake_mh.errors import InvalidIKProblem
+
+    with pytest.raises(InvalidIKProblem, match=match):
+        IKProblem(panda if robot == "panda" else robot, target)
+
+
+def test_scene_of_the_wrong_type_is_named(panda):
+    from drake_mh.errors import InvalidIKProblem
+
+    with pytest.raises(InvalidIKProblem, match="must be a drake_mh.scene.Scene"):
+        IKProblem(panda, [0.5, 0, 0.5], scene="abc")
