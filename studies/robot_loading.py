@@ -1,0 +1,150 @@
+"""Robot loading: robot descriptions with meshes, first load (mesh conversion) and cached load.
+
+For each arm of ``example-robot-data`` (a test extra; URDFs with ``package://`` STL/DAE
+meshes), a case loads the model as shipped with :func:`drake_mh.load_robot` into a fresh,
+empty mesh cache (``DRAKE_MH_CACHE`` pointed at a new temporary folder): the *first* load
+converts every collision mesh to its convex hull ``.obj`` (and ``.stl`` visuals to ``.obj``);
+then the same model is loaded ``CACHED_LOADS`` times more and the median is the *cached*
+load. Drake, trimesh and xacro are imported before the clock starts (a warm-up load of
+another model), so the times are those of a user's second robot in a session.
+
+Recorded: both times [s], nq, locked joints, collision hulls converted, the CPU model and
+the 1-minute load average (the machines are shared: absolute times drift; the ratio holds
+better). ``error`` is the cached / first ratio.
+
+Run: ``drake-mh study robot_loading [--quick]`` or ``python studies/robot_loading.py [--quick]``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import platform
+import site
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from drake_mh.study import Case, Fields, Study
+
+ROBOTS = {
+    # name: (path inside example-robot-data, end-effector frame)
+    "panda_hand": ("robots/panda_description/urdf/panda.urdf", "panda_hand_tcp"),
+    "ur5": ("robots/ur_description/urdf/ur5_robot.urdf", "tool0"),
+    "xarm7": ("robots/xarm_description/urdf/xarm7.urdf", "link_eef"),
+    "kinova": ("robots/kinova_description/robots/kinova.urdf", "j2s6s200_end_effector"),
+    "z1": ("robots/z1_description/urdf/z1.urdf", "gripperMover"),
+    "so100": ("robots/so_arm_description/urdf/so100.urdf", "jaw"),
+}
+CACHED_LOADS, QUICK_CACHED_LOADS = 5, 2
+
+
+def erd_root() -> Path:
+    """The installed ``example-robot-data`` package folder."""
+    from drake_mh.errors import MeshNotFound
+
+    for base in [*site.getsitepackages(), *sys.path]:
+        folder = Path(base) / "cmeel.prefix" / "share" / "example-robot-data"
+        if (folder / "robots").is_dir():
+            return folder
+    raise MeshNotFound("example-robot-data", ["site-packages/cmeel.prefix/share"],
+                       hint="pip install example-robot-data (in the test extra)")
+
+
+def cpu_model() -> str:
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    return platform.processor() or platform.machine()
+
+
+@contextlib.contextmanager
+def _fresh_cache():
+    old = os.environ.get("DRAKE_MH_CACHE")
+    with tempfile.TemporaryDirectory(prefix="drake_mh_cache_") as folder:
+        os.environ["DRAKE_MH_CACHE"] = folder
+        try:
+            yield Path(folder)
+        finally:
+            if old is None:
+                os.environ.pop("DRAKE_MH_CACHE", None)
+            else:
+                os.environ["DRAKE_MH_CACHE"] = old
+
+
+def run(case: Case) -> dict:
+    """First and cached load of one robot, in a fresh mesh cache."""
+    import drake_mh
+
+    root = erd_root()
+    rel, ee = ROBOTS[case["robot"]]
+    path = root / rel
+    with _fresh_cache():  # warm-up: imports (Drake parser, trimesh, pycollada) off the clock
+        drake_mh.load_robot(root / ROBOTS["ur5"][0], ee_frame=ROBOTS["ur5"][1])
+    with _fresh_cache() as cache:
+        start = time.perf_counter()
+        robot = drake_mh.load_robot(path, ee_frame=ee)
+        first = time.perf_counter() - start
+        hulls = len(list((cache / "meshes").glob("*_hull.obj")))
+        visuals = len(list((cache / "meshes").glob("*_visual.obj")))
+        cached = []
+        for _ in range(QUICK_CACHED_LOADS if case.quick else CACHED_LOADS):
+            start = time.perf_counter()
+            drake_mh.load_robot(path, ee_frame=ee)
+            cached.append(time.perf_counter() - start)
+    cached_median = float(np.median(cached))
+    return {
+        "success": True,
+        "nq": robot.nq,
+        "locked": len(robot.locked_joints),
+        "hulls": hulls,
+        "visual_conversions": visuals,
+        "time_first": first,
+        "time": cached_median,
+        "error": cached_median / first,
+        "cpu": cpu_model(),
+        "load_average": os.getloadavg()[0],
+    }
+
+
+def summarize(records: list[dict]) -> str:
+    """One row per robot: medians over replicates."""
+    ok = [r for r in records if r.get("status") == "ok"]
+    lines = [f"CPU: {ok[0]['cpu'] if ok else '?'}; 1-min load average during the cases: "
+             + (f"{min(r['load_average'] for r in ok):.1f}-{max(r['load_average'] for r in ok):.1f}" if ok else "?"),
+             "",
+             "| robot | nq | locked | hulls | visual .obj | first load [s] | cached load [s] | cached / first |",
+             "|---|---|---|---|---|---|---|---|"]
+    for name in ROBOTS:
+        group = [r for r in ok if r["robot"] == name]
+        if not group:
+            continue
+        first = float(np.median([r["time_first"] for r in group]))
+        cached = float(np.median([r["time"] for r in group]))
+        g = group[0]
+        lines.append(f"| {name} | {g['nq']} | {g['locked']} | {g['hulls']} | {g['visual_conversions']} | "
+                     f"{first:.3f} | {cached:.3f} | {cached / first:.2f} |")
+    return "\n".join(lines)
+
+
+study = Study(
+    name="robot_loading",
+    run=run,
+    grid={"robot": list(ROBOTS), "rep": range(3)},
+    quick_grid={"robot": ["panda_hand", "ur5"], "rep": range(1)},
+    fields=Fields(method="robot", success="success", time="time", error="error", nfe="hulls", rank=False,
+                  error_unit=""),
+    description=(
+        "Loading robot descriptions with meshes as shipped (example-robot-data): first load into an "
+        "empty mesh cache (collision meshes converted to convex hulls) and the median cached load. "
+        "'time' is the cached load [s], 'error' the cached / first ratio."
+    ),
+    summarize=summarize,
+)
+
+if __name__ == "__main__":
+    study.main()
