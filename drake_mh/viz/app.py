@@ -176,7 +176,7 @@ class PlannerApp:
                              primary=("Generate / Regenerate solutions", "Run"),
                              wide=("Generate / Regenerate solutions",))
             self.page = AppPage(html, port=0 if config.port == 0 else None, first=self.meshcat.port() + 1)
-        self.meshcat.SetCameraPose([1.55, -1.05, 1.05], [0.45, 0.35, 0.3])  # the Table 3 workspace
+        self.meshcat.SetCameraPose([1.25, -0.65, 0.85], [0.45, 0.35, 0.3])  # the Table 3 workspace, close up
         self.show_environment()
 
     @property

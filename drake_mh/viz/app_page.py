@@ -46,7 +46,7 @@ _PAGE = r"""<!DOCTYPE html>
            padding: 10px 12px; background: #1e1f24; border-right: 1px solid #444; }
   #view { flex: 1; border: 0; height: 100vh; }
   h1 { font-size: 16px; margin: 0 0 8px; font-weight: 600; }
-  h1 small { font-weight: 400; color: #aaa; }
+  h1 small { display: block; font-size: 12px; font-weight: 400; color: #aaa; }
   #status { background: #fff8d6; color: #222; border-left: 5px solid #e0a000; padding: 6px 8px;
             margin-bottom: 8px; min-height: 58px; }
   #status .setup { font-size: 12px; color: #444; }
@@ -74,7 +74,7 @@ _PAGE = r"""<!DOCTYPE html>
 <body>
 <div id="wrap">
   <div id="panel">
-    <h1>drake-mh app <small>· planner with a moving obstacle</small></h1>
+    <h1>drake-mh app <small>path planner, obstacle moves live</small></h1>
     <div id="status"><div class="setup">connecting to the app...</div><div class="message"></div></div>
     <div id="sections"></div>
     <div class="hint">3-D view: drag to orbit, scroll to zoom; its "Open Controls" is Meshcat's own panel

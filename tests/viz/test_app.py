@@ -1,23 +1,28 @@
 """The planner app without a browser: buttons and sliders driven through Meshcat's own API."""
 
 import json
+import os
 import re
+import signal
 import subprocess
 import sys
 
 import numpy as np
 import pytest
+import viz_html
 
 from drake_mh.errors import InvalidArgument, UnknownMethod
-from drake_mh.viz.app import AppConfig, PlannerApp
-from drake_mh.viz.app_controls import BUTTONS
+from drake_mh.viz.app import OBSTACLE_COLOUR, AppConfig, PlannerApp
+from drake_mh.viz.app_controls import BUTTONS, SECTIONS
 
 FAST = dict(method="pso", budget=4000, n_points=14)
 
 
 @pytest.fixture
 def app(meshcat, tmp_path):
-    return PlannerApp(AppConfig(status_file=str(tmp_path / "status.json"), **FAST), meshcat=meshcat)
+    app = PlannerApp(AppConfig(status_file=str(tmp_path / "status.json"), **FAST), meshcat=meshcat, page=False)
+    yield app
+    app.close()
 
 
 def test_controls_exist(app, meshcat):
@@ -72,6 +77,28 @@ def test_path_sliders_and_cycling_buttons(app, meshcat):
     app.handle("Show environment")
 
 
+def _rgb(material) -> np.ndarray:
+    return np.array([(material["color"] >> s) & 0xFF for s in (16, 8, 0)]) / 255.0
+
+
+def test_obstacle_is_translucent_red_unlike_the_robot(app, meshcat):
+    app.move_obstacle(radius=0.15)                                   # redrawn: keeps its colour
+    objects = {c["path"]: c["object"]["materials"][0] for c in viz_html.commands(meshcat.StaticHtml())
+               if c["type"] == "set_object" and c["object"].get("materials")}
+    obstacle = objects[app.view.obstacle_path("obstacle")]
+    assert np.allclose(_rgb(obstacle), OBSTACLE_COLOUR[:3], atol=1 / 255)
+    assert obstacle["transparent"] and obstacle["opacity"] == pytest.approx(OBSTACLE_COLOUR[3])
+    red, green, blue = _rgb(obstacle)
+    assert red > 0.8 and green < 0.2 and blue < 0.2
+    robot = [_rgb(m) for path, m in objects.items() if "/robot/" in path]
+    assert robot and min(np.linalg.norm(c - _rgb(obstacle)) for c in robot) > 0.3
+
+
+def test_every_control_has_a_section_of_the_page(app):
+    placed = [name for _, names in SECTIONS for name in names]
+    assert sorted(placed) == sorted(set(BUTTONS) | set(app.controls.slider_names))
+
+
 def test_bad_configuration_says_how_to_fix():
     with pytest.raises(UnknownMethod, match="available"):
         AppConfig(method="simplex")
@@ -87,9 +114,34 @@ def test_cli_runs_headless_and_exits(tmp_path):
                           "--method", "pso", "--budget", "3000", "--n-points", "12", "--status-file", str(status)],
                          capture_output=True, text=True, timeout=240)
     assert out.returncode == 0, out.stderr
-    assert re.search(r"open http://localhost:\d+ in a browser", out.stdout)
+    page = re.search(r"open (http://localhost:\d+) in a browser", out.stdout).group(1)
+    assert "app stopped after --max-seconds 3" in out.stdout
     state = json.loads(status.read_text())
     assert state["solutions"] and state["mode"] in ("run", "idle") and state["url"].startswith("http://localhost:")
+    assert state["page_url"] == page != state["url"]
+    assert state["message"].startswith("app stopped")
+
+
+def test_ctrl_c_prints_the_apps_own_stop_line():
+    app = subprocess.Popen([sys.executable, "-m", "drake_mh", "app", "--port", "0", "--method", "pso",
+                            "--budget", "3000", "--n-points", "12", "--run"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert "open http://localhost:" in app.stdout.readline()
+        app.send_signal(signal.SIGINT)
+        out, err = app.communicate(timeout=120)
+    finally:
+        app.kill()
+    assert app.returncode == 0, err
+    assert "drake-mh app: app stopped by Ctrl-C" in out
+    assert "run the same command again" not in out + err and "Traceback" not in err
+
+
+def test_help_says_what_max_seconds_bounds():
+    out = subprocess.run([sys.executable, "-m", "drake_mh", "app", "--help"], capture_output=True, text=True,
+                         timeout=120, env={**os.environ, "COLUMNS": "200"})
+    text = " ".join(out.stdout.split())
+    assert re.search(r"--max-seconds S .*S seconds \(wall clock\) after it prints its URL.*until Ctrl-C", text)
 
 
 def test_cli_bad_method_exits_2():
