@@ -27,6 +27,8 @@ ERD_ROBOTS = {
     "panda": ("robots/panda_description/urdf/panda.urdf", "panda_hand_tcp", 7),
     "ur5": ("robots/ur_description/urdf/ur5_robot.urdf", "tool0", 6),
     "xarm7": ("robots/xarm_description/urdf/xarm7.urdf", "link_eef", 7),
+    # continuous joints, and material names defined twice with different colours
+    "kinova": ("robots/kinova_description/robots/kinova.urdf", "j2s6s200_end_effector", 6),
 }
 
 

@@ -422,3 +422,15 @@ def test_visual_stl_meshes_are_converted_for_meshcat():
     robot = _erd("xarm7")
     assert robot.mesh_files["visual"] and all(f.endswith("_visual.obj") for _, f in robot.mesh_files["visual"])
     assert all(f.endswith("_hull.obj") for _, f in robot.mesh_files["collision"])
+
+
+def test_locking_a_revolute_joint_at_a_value_keeps_the_kinematics(panda):
+    """A URDF joint locked at v: the fixed joint's origin is the joint origin composed with the
+    motion at v (bundled Panda, joints 4 and 7 locked, with their transmissions)."""
+    locked = drake_mh.load_robot("panda", locked={"panda_joint4": -1.2, "panda_joint7": 0.5})
+    assert locked.nq == 5 and "panda_joint4" not in locked.joint_names
+    assert np.isfinite(locked.effort_limits).all()  # the remaining actuators are kept
+    for q in locked.random_configurations(10, 1):
+        full = np.insert(q, 3, -1.2)
+        full = np.append(full, 0.5)
+        np.testing.assert_allclose(locked.fk(q), panda.fk(full), atol=1e-14)
