@@ -75,15 +75,19 @@ def solve_jacobian(problem: IKProblem, method: str, seed=0, budget: int | None =
     lm.start([0], q0[None])
     nfe, attempts = 0, 1
     best_q, best_f = np.array(q0, dtype=float), np.inf
+    sphere_check = problem.scene is not None and bool(problem.scene.obstacles)
     while nfe < budget and time.perf_counter() <= deadline:
         lm.iterate()
         nfe += 1
         status = lm.status[0]
         if status == CONVERGED:
-            result = verify(problem, lm.Qa[0].copy(), method=method, start=start, nfe=nfe, attempts=attempts,
-                            message=f"converged after {attempts} starts")
-            if result.success:
-                return result
+            q = lm.Qa[0].copy()
+            # the sphere model first (microseconds, never more clearance than Drake), as hybrid does
+            if not sphere_check or problem.scene.batch_min_distance(q[None])[0] >= problem.clearance:
+                result = verify(problem, q, method=method, start=start, nfe=nfe, attempts=attempts,
+                                message=f"converged after {attempts} starts")
+                if result.success:
+                    return result
             status = STALLED  # e.g. in collision: try another start
         if status == STALLED:
             if lm.fa[0] < best_f:

@@ -174,7 +174,7 @@ def prepare(problem: IKProblem, method: str = "hybrid", config=None, **params) -
 def _solve(problem: IKProblem, name: str, seed, budget, timeout, config, start: float, params: dict,
            check_reach: bool = True) -> IKResult:
     """Runs method ``name`` (already validated) with its clock started at ``start``."""
-    reason = problem.unreachable_reason() if check_reach else None
+    reason = (problem.unreachable_reason() or problem.obstructed_reason()) if check_reach else None
     if reason is not None:
         q = problem.q_ref if problem.q_ref is not None else 0.5 * (problem.lower + problem.upper)
         return verify(problem, q, method=name, start=start, nfe=0, message=reason)

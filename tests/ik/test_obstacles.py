@@ -90,3 +90,14 @@ def test_cached_ik_context_follows_the_scene(panda):
     panda.plant.SetPositions(moved[1], q)
     pairs = panda.scene_graph.get_query_output_port().Eval(sg_context).ComputeSignedDistancePairwiseClosestPoints()
     assert min(p.distance for p in pairs) == pytest.approx(scene.min_distance(q), abs=1e-9)
+
+
+@pytest.mark.parametrize("method", ["pinv", "dls", "hybrid", "pso", "drake_snopt"])
+def test_obstacle_over_the_fixed_base_fails_at_once(panda, method):
+    """Every configuration collides when an obstacle engulfs the base: say so, run nothing."""
+    scene = Scene(panda)
+    scene.add("blob", Sphere(0.3), [0, 0, 0.1])
+    problem = IKProblem(panda, [0.5, 0.1, 0.4], scene=scene, clearance=0.01)
+    result = solve_ik(problem, method, seed=0)
+    assert not result.success and result.nfe == 0
+    assert "panda_link0" in result.message and "no joint moves" in result.message   # nfe 0: no budget spent
