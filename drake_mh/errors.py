@@ -46,7 +46,7 @@ class UnknownRobot(DrakeMhError, LookupError):
 
 
 class InvalidURDF(DrakeMhError, ValueError):
-    """A URDF file could not be read or Drake rejected it.
+    """A robot model file (URDF, xacro, SDFormat, MJCF) could not be read or Drake rejected it.
 
     Attributes:
         source: path (or ``"<string>"``) of the model.
@@ -56,7 +56,8 @@ class InvalidURDF(DrakeMhError, ValueError):
     def __init__(self, source: str, reason: str):
         self.source = source
         self.reason = reason
-        super().__init__(f"cannot load URDF {source}: {reason}")
+        kind = "URDF" if str(source).lower().endswith((".urdf", "<string>")) else "robot model"
+        super().__init__(f"cannot load {kind} {source}: {reason}")
 
 
 class UnsupportedModel(DrakeMhError, ValueError):
