@@ -254,7 +254,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"{PROG}: interrupted; run the same command again to continue where it stopped", file=sys.stderr)
+        resumable = args.command in ("study", "demo")  # studies keep every finished case
+        tail = "; run the same command again to continue where it stopped" if resumable else ""
+        print(f"{PROG} {args.command}: interrupted{tail}", file=sys.stderr)
         return 130
     except BrokenPipeError:  # e.g. `drake-mh robots | head -1`
         return 0

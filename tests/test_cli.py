@@ -169,3 +169,18 @@ def test_progress_only_on_an_interactive_terminal(monkeypatch):
     monkeypatch.delenv("CI")
     monkeypatch.setattr(sys, "stderr", open(os.devnull, "w"))
     assert not wants_progress(argparse.Namespace(quiet=False))
+
+
+@pytest.mark.parametrize("command, resumable", [("ik", False), ("study", True)])
+def test_ctrl_c_says_resume_only_where_results_are_kept(monkeypatch, capsys, command, resumable):
+    import argparse
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(argparse.ArgumentParser, "parse_args",
+                        lambda self, argv=None: argparse.Namespace(command=command, func=interrupted))
+    assert main([command]) == 130
+    err = capsys.readouterr().err
+    assert f"drake-mh {command}: interrupted" in err
+    assert ("run the same command again" in err) == resumable
