@@ -15,6 +15,7 @@ server here listens on ``localhost`` only; to view it from another machine, forw
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import sys
 import threading
@@ -24,7 +25,7 @@ from drake_mh.errors import InvalidArgument, VisualizationError
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["get_meshcat", "close_meshcat", "meshcat_url", "check_thread"]
+__all__ = ["get_meshcat", "close_meshcat", "meshcat_url", "check_thread", "private_meshcat"]
 
 DEFAULT_HOST = "localhost"
 """Interface the server listens on; never ``*`` (all interfaces)."""
@@ -79,6 +80,46 @@ def get_meshcat(port: int | None = None, *, announce: bool = True):
     if announce:
         print(f"drake_mh.viz: Meshcat at {meshcat.web_url()} (open it in a browser)", file=sys.stdout)
     return meshcat
+
+
+@contextlib.contextmanager
+def private_meshcat():
+    """A Meshcat of its own for recording a page (``StaticHtml``), closed on exit.
+
+    Drake's ``Meshcat`` always runs a server (there is no offline scene builder), so recording
+    an animation for a report needs one; this one is made silent and short-lived: it listens
+    on ``localhost`` only, on an arbitrary free port (never 7000-7999, which a user's viewer
+    takes), is not announced (Drake's "Meshcat listening" log line is held back and nothing
+    is printed), is not this thread's shared server, and is closed when the block ends
+    (once the caller has dropped every view drawn on it).
+
+    Yields:
+        A ``pydrake.geometry.Meshcat``.
+
+    Raises:
+        VisualizationError: no port can be bound.
+    """
+    from pydrake.geometry import Meshcat, MeshcatParams
+
+    params = MeshcatParams()
+    params.host = DEFAULT_HOST
+    params.port = 0
+    drake_logger = logging.getLogger("drake")
+    level = drake_logger.level
+    drake_logger.setLevel(max(logging.WARNING, level))
+    try:
+        meshcat = Meshcat(params)
+    except (RuntimeError, SystemExit) as exc:
+        raise VisualizationError(f"cannot start a private Meshcat on localhost: {exc}") from exc
+    finally:
+        drake_logger.setLevel(level)
+    _owner[meshcat] = threading.get_ident()
+    logger.debug("private Meshcat for recording on port %d", meshcat.port())
+    try:
+        yield meshcat
+    finally:
+        _owner.pop(meshcat, None)
+        del meshcat  # last reference: Drake stops the server and frees the port here
 
 
 def meshcat_url(meshcat=None) -> str:

@@ -8,6 +8,7 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument
 from drake_mh.viz.inputs import as_motion
+from drake_mh.viz.server import private_meshcat
 from drake_mh.viz.view import View
 
 __all__ = ["show", "animation_html", "save_animation"]
@@ -15,7 +16,8 @@ __all__ = ["show", "animation_html", "save_animation"]
 
 def show(robot, q_or_traj=None, scene=None, *, target=None, ghosts=(), distances: bool | None = None,
          ee_path: bool = True, fps: float = 30.0, move_obstacles: bool = True, obstacle_positions=None,
-         loop: bool = True, meshcat=None, prefix: str = "/drake_mh", role: str = "illustration") -> View:
+         loop: bool = True, meshcat=None, prefix: str = "/drake_mh", role: str = "illustration",
+         frame: bool = True) -> View:
     """Show a robot at a configuration, or play a trajectory, in Meshcat.
 
     ::
@@ -42,6 +44,9 @@ def show(robot, q_or_traj=None, scene=None, *, target=None, ghosts=(), distances
         meshcat: a Meshcat instance; default the shared localhost server.
         prefix: Meshcat path the view draws under (cleared first).
         role: robot geometry drawn: ``"illustration"`` or ``"proximity"``.
+        frame: point the camera at the robot, its motion, obstacles and targets
+            (:meth:`View.frame`: planar arms from above, others obliquely); ``False`` keeps
+            the camera where it is.
 
     Returns:
         The :class:`View` (``view.url``, ``view.html()``, ``view.add_ghost(q)`` ...).
@@ -67,7 +72,28 @@ def show(robot, q_or_traj=None, scene=None, *, target=None, ghosts=(), distances
                      move_obstacles=move_obstacles, loop=loop, ee_path=ee_path)
     if scene is not None and (distances if distances is not None else not motion.is_trajectory):
         view.add_distances(scene, motion.q)
+    if frame:
+        Q = motion.Q if motion.is_trajectory else motion.q[None, :]
+        if ghosts_Q is not None:
+            Q = np.vstack([Q, ghosts_Q])
+        view.frame(Q, _points_shown(robot, Q, scene, target, obstacle_positions, motion))
     return view
+
+
+def _points_shown(robot, Q, scene, target, obstacle_positions, motion) -> np.ndarray:
+    """Points ``(K, 3)`` [m] besides the robot that the camera keeps in view."""
+    points = [robot.batch.positions(Q)]
+    if target is not None:
+        arr = np.asarray(target, dtype=float)
+        points.append(arr[:3, 3][None, :] if arr.shape == (4, 4) else arr.reshape(-1, 3))
+    if scene is not None:
+        span = (motion.t[-1] - motion.t[0]) if motion.is_trajectory else 0.0
+        for obstacle in scene.obstacles.values():
+            p = np.asarray(obstacle.position, dtype=float)
+            points.append(np.vstack([p, p + span * np.asarray(obstacle.velocity_W, dtype=float)]))
+    for P in dict(obstacle_positions or {}).values():
+        points.append(np.asarray(P, dtype=float).reshape(-1, 3))
+    return np.vstack(points)
 
 
 def _add_targets(view: View, target) -> None:
@@ -83,8 +109,11 @@ def animation_html(robot, q_or_traj, scene=None, **show_kwargs) -> str:
     """Self-contained HTML page (Meshcat ``StaticHtml``) of :func:`show`'s drawing.
 
     For reports: ``case.attach("motion.html", drake_mh.viz.animation_html(robot, (t, Q)))``.
-    Draws on the shared Meshcat server (replacing what is under ``prefix``), so a browser
-    watching it sees the same scene.
+    Unless ``meshcat=`` is given, the page is recorded on a private Meshcat of its own
+    (:func:`drake_mh.viz.server.private_meshcat`: localhost, any free port, never announced,
+    closed before this returns), so a batch study neither prints server URLs nor leaves
+    servers running, and the shared server a user watches is left alone. The camera is framed
+    on the robot and its motion (``frame=True``).
 
     Args:
         robot, q_or_traj, scene, **show_kwargs: as for :func:`show`.
@@ -93,9 +122,19 @@ def animation_html(robot, q_or_traj, scene=None, **show_kwargs) -> str:
         The page: about 2.2 MB, plus about 3.7 kB per link and animation second at 30 fps
         (the Panda: about 30 kB per second).
     """
-    return show(robot, q_or_traj, scene, **show_kwargs).html()
+    if show_kwargs.get("meshcat") is not None:
+        return show(robot, q_or_traj, scene, **show_kwargs).html()
+    with private_meshcat() as meshcat:
+        view = show(robot, q_or_traj, scene, **{**show_kwargs, "meshcat": meshcat})
+        try:
+            return view.html()
+        finally:
+            del view  # the view holds the server: drop it inside the block so the server closes
 
 
 def save_animation(path, robot, q_or_traj, scene=None, **show_kwargs) -> Path:
     """Write :func:`animation_html` to ``path`` (folders created) and return the path."""
-    return show(robot, q_or_traj, scene, **show_kwargs).save_html(path)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(animation_html(robot, q_or_traj, scene, **show_kwargs), encoding="utf-8")
+    return path

@@ -374,6 +374,30 @@ class View:
                     tracks[name] = (obstacle.X_WO, P)
         return tracks
 
+    # --- camera -----------------------------------------------------------------------------
+
+    def frame(self, Q=None, extra_points=None, aspect: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+        """Point the camera at the robot over ``Q`` and at ``extra_points`` (see
+        :mod:`drake_mh.viz.camera`): planar arms from above along their joint axis, other
+        robots obliquely; everything fits the view. Saved pages (:meth:`html`) keep it.
+
+        Args:
+            Q: configurations ``(N, nq)`` the robot takes (default the current one).
+            extra_points: further points ``(M, 3)`` [m] to keep in view (paths, obstacles, targets).
+            aspect: width / height of the viewer the page is shown in (reports: about 2).
+
+        Returns:
+            ``(p_WCamera (3,), p_WTarget (3,))`` [m].
+        """
+        from drake_mh.viz.camera import camera_pose, frame_points, joint_axis_normal, set_camera
+
+        Q = self.q[None, :] if Q is None else self.robot.check_Q(Q, "Q")
+        points = frame_points(self.geometry, Q, extra_points)
+        p_WC, p_WT = camera_pose(points, joint_axis_normal(self.robot, Q[0]), aspect=aspect)
+        check_thread(self.meshcat)
+        set_camera(self.meshcat, p_WC, p_WT)
+        return p_WC, p_WT
+
     # --- export -----------------------------------------------------------------------------
 
     def html(self) -> str:

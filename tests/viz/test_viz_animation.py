@@ -138,3 +138,105 @@ def test_trajectory_errors(meshcat, panda):
         show(panda, "home", meshcat=meshcat)
     with pytest.raises(InvalidArgument, match="keys"):
         show(panda, {"times": t}, meshcat=meshcat)
+
+
+# --- report pages: framed camera, no announced server -----------------------------------------
+
+
+def _camera(html: str) -> tuple[np.ndarray, np.ndarray]:
+    """World position of the page's camera and of its target (the last ones the page sets).
+
+    Meshcat works in three.js coordinates (y up): a world point (x, y, z) is (x, z, -y).
+    """
+    position = target = None
+    for c in viz_html.commands(html):
+        if c["type"] == "set_property" and c["path"] == "/Cameras/default/rotated/<object>" \
+                and c["property"] == "position":
+            position = c["value"]
+        elif c["type"] == "set_target":
+            target = c["value"]
+    assert position is not None and target is not None, "the page does not set the camera"
+    world = [np.array([v[0], -v[2], v[1]], dtype=float) for v in (position, target)]
+    return world[0], world[1]
+
+
+def _angles_from_axis(camera, target, points) -> np.ndarray:
+    axis = (target - camera) / np.linalg.norm(target - camera)
+    rays = points - camera
+    return np.degrees(np.arccos(np.clip(rays @ axis / np.linalg.norm(rays, axis=1), -1, 1)))
+
+
+def _link_points(robot, Q) -> np.ndarray:
+    return np.array([X[:3, 3] for q in Q for X in robot.link_poses(q).values()])
+
+
+def test_planar_arm_pages_look_down_the_joint_axis_and_fill_the_view(planar5):
+    t, Q = _motion(planar5)
+    camera, target = _camera(animation_html(planar5, (t, Q)))
+    view_dir = (camera - target) / np.linalg.norm(camera - target)
+    assert view_dir[2] > 0.97  # from above, along the joints' common z axis (about 10 degrees off)
+    angles = _angles_from_axis(camera, target, _link_points(planar5, Q))
+    assert angles.max() < 37.5  # every link inside the 75-degree field of view
+    assert angles.max() > 15.0  # and the arm fills a good part of it (not a speck 3 m away)
+
+
+def test_spatial_robot_pages_are_framed_obliquely(panda):
+    t, Q = _motion(panda)
+    camera, target = _camera(animation_html(panda, (t, Q)))
+    view_dir = (camera - target) / np.linalg.norm(camera - target)
+    assert 0.2 < view_dir[2] < 0.8  # from above at an angle, not edge-on and not top-down
+    angles = _angles_from_axis(camera, target, _link_points(panda, Q))
+    assert 12.0 < angles.max() < 37.5
+
+
+def test_joint_axis_normal(planar5, planar2r, panda):
+    from drake_mh.viz.camera import joint_axis_normal
+
+    np.testing.assert_allclose(joint_axis_normal(planar5), [0, 0, 1], atol=1e-12)
+    n = joint_axis_normal(planar2r)
+    assert n is not None and abs(abs(n[1]) - 1) < 1e-12
+    assert joint_axis_normal(panda) is None
+
+
+def test_recording_a_page_announces_no_server_and_closes_it(planar5, capsys, caplog, monkeypatch):
+    import importlib
+    import logging
+    import socket
+
+    show_module = importlib.import_module("drake_mh.viz.show")  # the attribute drake_mh.viz.show is the function
+    view_module = importlib.import_module("drake_mh.viz.view")
+
+    def no_shared_server(*args, **kwargs):
+        raise AssertionError("a report page must not start or use the shared Meshcat server")
+
+    monkeypatch.setattr(view_module, "get_meshcat", no_shared_server)
+    ports = []
+    original = show_module.private_meshcat
+
+    def spy():
+        manager = original()
+        meshcat = manager.__enter__()
+        ports.append(meshcat.port())
+        return _Wrap(manager, meshcat)
+
+    class _Wrap:
+        def __init__(self, manager, meshcat):
+            self.manager, self.meshcat = manager, meshcat
+
+        def __enter__(self):
+            meshcat, self.meshcat = self.meshcat, None
+            return meshcat
+
+        def __exit__(self, *exc):
+            return self.manager.__exit__(*exc)
+
+    monkeypatch.setattr(show_module, "private_meshcat", spy)
+    caplog.set_level(logging.DEBUG)
+    page = animation_html(planar5, _motion(planar5))
+    assert viz_html.animation(page) is not None
+    out = capsys.readouterr()
+    assert "Meshcat" not in out.out and "Meshcat" not in out.err
+    assert not [r for r in caplog.records if "listening" in r.getMessage()]
+    assert len(ports) == 1 and not 7000 <= ports[0] <= 7999
+    with socket.socket() as sock:  # closed at once: nothing listens on its port any more
+        assert sock.connect_ex(("127.0.0.1", ports[0])) != 0
