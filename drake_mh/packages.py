@@ -6,8 +6,10 @@ trying, for ``package://NAME/rest`` (and Gazebo's ``model://NAME/rest``), in thi
 1. ``packages={"NAME": "/dir"}`` given by the caller (shell: ``--package NAME=DIR``);
 2. ``package.xml`` files found up the tree from the model (each ancestor folder of the model
    and the folders directly inside the nearest ancestors), whose ``<name>`` is ``NAME``;
-3. ``ROS_PACKAGE_PATH`` (entries that are, or directly contain, a package ``NAME``) and
-   ``AMENT_PREFIX_PATH`` (``PREFIX/share/NAME``);
+3. ``ROS_PACKAGE_PATH`` (entries that are, or directly contain, a package ``NAME``),
+   ``AMENT_PREFIX_PATH`` (``PREFIX/share/NAME``) and the Python environment's prefixes
+   (``sys.prefix/share/NAME``, ``site-packages/cmeel.prefix/share/NAME``: pip wheels that ship
+   ROS packages, such as ``example-robot-data``);
 4. failing those, the model's own folder and its parents: an ancestor called ``NAME``, or an
    ancestor ``A`` with ``A/NAME/rest`` or ``A/rest`` (models exported from CAD tools and
    simulators often assume that layout).
@@ -31,6 +33,30 @@ logger = logging.getLogger(__name__)
 
 _NEAR_ANCESTORS = 4
 """How many ancestors of the model also have their sub-folders scanned for ``package.xml``."""
+
+
+def installed_package_dir(name: str) -> Path | None:
+    """Folder of a ROS-style package installed in this Python environment, or ``None``.
+
+    Looks at ``sys.prefix/share/NAME`` and ``<site-packages>/cmeel.prefix/share/NAME`` (the
+    layout of cmeel wheels, e.g. ``pip install example-robot-data``).
+    """
+    import site
+    import sys
+
+    bases = [Path(sys.prefix) / "share"]
+    try:
+        sites = [*site.getsitepackages(), site.getusersitepackages()]
+    except AttributeError:  # some virtualenv builds lack getsitepackages
+        sites = []
+    for entry in [*sites, *sys.path]:
+        if entry and "site-packages" in str(entry):
+            bases.append(Path(entry) / "cmeel.prefix" / "share")
+    for base in bases:
+        folder = base / name
+        if folder.is_dir():
+            return folder
+    return None
 
 
 def parse_package_option(items) -> dict[str, str]:
@@ -149,6 +175,10 @@ class UriResolver:
                 return d
         searched.append(f"AMENT_PREFIX_PATH/share/{name} "
                         f"({os.environ.get('AMENT_PREFIX_PATH') or 'not set'})")
+        folder = installed_package_dir(name)
+        if folder is not None:
+            return folder
+        searched.append(f"this Python's prefixes (share/{name}, site-packages/cmeel.prefix/share/{name})")
         for folder in self._ancestors():
             if folder.name == name:
                 return folder

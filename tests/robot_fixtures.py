@@ -6,8 +6,6 @@
 
 from __future__ import annotations
 
-import site
-import sys
 from pathlib import Path
 
 import pytest
@@ -15,11 +13,12 @@ import pytest
 
 def erd_root() -> Path:
     """The ``example-robot-data`` package folder, or skip the test when it is not installed."""
-    for base in [*site.getsitepackages(), *sys.path]:
-        folder = Path(base) / "cmeel.prefix" / "share" / "example-robot-data"
-        if (folder / "robots").is_dir():
-            return folder
-    pytest.skip("example-robot-data is not installed (pip install -e '.[test]')")
+    from drake_mh.packages import installed_package_dir
+
+    folder = installed_package_dir("example-robot-data")
+    if folder is None or not (folder / "robots").is_dir():
+        pytest.skip("example-robot-data is not installed (pip install -e '.[test]')")
+    return folder
 
 
 ERD_ROBOTS = {

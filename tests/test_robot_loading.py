@@ -434,3 +434,10 @@ def test_locking_a_revolute_joint_at_a_value_keeps_the_kinematics(panda):
         full = np.insert(q, 3, -1.2)
         full = np.append(full, 0.5)
         np.testing.assert_allclose(locked.fk(q), panda.fk(full), atol=1e-14)
+
+
+def test_installed_packages_resolve_from_text():
+    """package://example-robot-data/... resolves from this Python's prefixes, even from text."""
+    path = erd_root() / ERD_ROBOTS["ur5"][0]
+    robot = drake_mh.Robot(path.read_text(), ee_frame="tool0")  # no model folder to search
+    assert robot.nq == 6 and robot.collision_summary()["shoulder_link"] == {"Convex": 1}
