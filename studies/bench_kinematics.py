@@ -165,7 +165,7 @@ study = Study(
     run=run_case,
     grid={"robot": ["panda"], "N": list(SIZES)},
     quick_grid={"robot": ["panda"], "N": [1, 128, 1024]},
-    fields=Fields(method="robot", time="time", rank=False),
+    fields=Fields(method="robot", time="time", rank=False, group_by=("N",)),
     description=(
         "Batched FK + Jacobian (drake_mh.kinematics.BatchKinematics, numba) against Drake's "
         "per-configuration Python loop, a vectorized-numpy version of the same recurrence, and "

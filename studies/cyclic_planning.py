@@ -313,7 +313,9 @@ study = Study(
     quick_grid=_QUICK_CASES,
     seed=0,
     fields=Fields(method="method", success="success", time="time", error="fitness", nfe="nfe",
-                  instance=("instance", "rep")),
+                  instance=("instance", "rep"), group_by=("instance",), error_unit="rad",
+                  conditions="2000 evaluations (20 individuals x 100 iterations); success = a feasible k "
+                             "(finite fitness)"),
     description=__doc__.split("\n\n")[1] + " " + __doc__.split("\n\n")[2],
     summarize=summarize,
 )

@@ -269,7 +269,7 @@ study = Study(
     quick_grid=_cases(True),
     seed=0,
     fields=Fields(method="method", success="success", time="time", error="error", nfe="nfe",
-                  instance=("part", "scenario", "h1", "rep")),
+                  instance=("part", "scenario", "h1", "rep"), group_by=("part", "scenario", "h1")),
     description=(
         "Reactive control among moving obstacles on the Panda. Part esm: the ESM paper's scheme "
         "(joint-angle-level step with manipulability, tracking and the velocity-aware obstacle "

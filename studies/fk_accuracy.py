@@ -85,7 +85,8 @@ study = Study(
     run=run,
     grid={"robot": drake_mh.available_robots(), "rep": range(5)},
     quick_grid={"robot": drake_mh.available_robots(), "rep": range(1)},
-    fields=Fields(method="robot", success="success", time="time", error="error", nfe="configurations", rank=False),
+    fields=Fields(method="robot", success="success", time="time", error="error", nfe="configurations", rank=False,
+                  error_unit="m, -"),
     description=(
         "Batched forward kinematics and Jacobians (drake_mh.kinematics.BatchKinematics) against "
         "Drake's MultibodyPlant, one row per bundled robot, on random configurations within the "

@@ -82,7 +82,9 @@ study = Study(
     grid={"target": range(50), "method": list(METHODS)},
     quick_grid={"target": range(12), "method": list(METHODS)},
     seed=0,
-    fields=Fields(method="method", success="success", time="time", error="error", nfe="nfe"),
+    fields=Fields(method="method", success="success", time="time", error="error", nfe="nfe", error_unit="m + rad",
+                  conditions=f"{TIMEOUT} s per solve, DE and PSO also at most {BUDGET:,} evaluations; success = "
+                             "pose verified with Drake within 1 mm and 0.01 rad"),
     description=(
         "Inverse kinematics on the Panda (full pose, 1 mm / 0.01 rad): Drake InverseKinematics with SNOPT, "
         "the hybrid (population search + batched Levenberg-Marquardt), and the metaheuristics DE and PSO "

@@ -262,7 +262,8 @@ study = Study(
                 "budget_per_dim": [1_000], "method": available_methods(), "rep": list(range(3))},
     seed=0,
     fields=Fields(method="method", success="success", time="time", error="error", nfe="nfe",
-                  instance=("function", "dim", "shift", "rep"), panels=("function", "dim", "shift")),
+                  instance=("function", "dim", "shift", "rep"), panels=("function", "dim", "shift"),
+                  group_by=("function", "dim", "shift"), error_unit=""),
     description=(
         "All drake_mh optimizers (metaheuristics PSO, BAT, GSA, e3GSA, WOA, AO, GA, ABC, ARO and "
         "the baselines CMA-ES, DE, random search) on a CEC 2017 subset (F1, F3, F4, F5, F9, F10) "

@@ -142,7 +142,7 @@ study = Study(
     quick_grid={"method": METHODS, "rep": [0]},
     seed=0,
     fields=Fields(method="method", success="success", time="time", error="error", nfe="attempts",
-                  instance=("rep",), lower_is_better=True, rank=False),
+                  instance=("rep",), lower_is_better=True, rank=False, error_unit=""),
     description=(
         "Time-optimal parameterization of random 7-waypoint Panda paths under velocity, "
         "acceleration and torque limits (gravity included): drake_mh's toppra set-up against "

@@ -65,8 +65,19 @@ def _progress_logging(enabled: bool):
         yield
 
 
-def run_and_print(name: str, args: argparse.Namespace, out=None, quick=None) -> object:
-    """Runs one study with the CLI options and prints its outcome; returns the StudyResult."""
+REUSE_HINT = "to recompute them, move that folder aside or give another --out"
+
+
+def run_and_print(name: str, args: argparse.Namespace, out=None, quick=None, reuse_hint: str | None = REUSE_HINT) -> object:
+    """Runs one study with the CLI options and prints its outcome; returns the StudyResult.
+
+    Args:
+        name: study name or path (``"list"`` prints the available studies).
+        args: the parsed CLI options.
+        out, quick: override ``args.out`` / ``args.quick``.
+        reuse_hint: printed after the count of finished cases that were reused (not run
+            again); ``None`` prints no such line (the demo says it once for all studies).
+    """
     from drake_mh.cli import wants_progress
     from drake_mh.study import available_studies, run_study
 
@@ -99,6 +110,8 @@ def run_and_print(name: str, args: argparse.Namespace, out=None, quick=None) -> 
     line += f") in {elapsed:.1f} s -> {result.folder}"
     if not quiet:
         print(line)
+        if already and reuse_hint:
+            print(f"({already} finished cases were reused from {result.folder}, not run again; {reuse_hint})")
         if result.summary.strip():
             print(result.summary.rstrip())
         if result.n_errors:

@@ -1,16 +1,23 @@
 """``drake-mh demo``: a short end-to-end comparison on built-in defaults, with a report.
 
-Runs the quick form of the demo studies one after the other (each resumes if already run
-into the same folder), then writes ``<out>/index.html`` linking every study report. The
-studies are found like ``drake-mh study`` finds them (``studies/`` of the repository).
+Runs the quick form of the demo studies one after the other, then writes ``<out>/index.html``:
+one 3-D animation (a time-optimal Panda motion from ``retime_benchmark``), each study's summary
+and key figures, and links to every study report. The studies are found like ``drake-mh study``
+finds them (``studies/`` of the repository).
+
+A second run into the same folder reuses the finished cases (the runner resumes) and says so,
+on the terminal and on the page; ``--fresh`` first moves the earlier results aside (to
+``<out>-<date>-<time>``, never deleted) and runs everything again.
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime
+import json
 import logging
-import shutil
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from drake_mh.errors import InvalidArgument
@@ -21,6 +28,16 @@ logger = logging.getLogger(__name__)
 DEMO_STUDIES: tuple[str, ...] = ("bench_kinematics", "fk_accuracy", "retime_benchmark")
 #: optional studies added to the demo when their script exists
 OPTIONAL_DEMO_STUDIES: tuple[str, ...] = ("ik_comparison",)
+#: figures of a study report shown on the demo page, in order of preference (at most two)
+KEY_FIGURES: tuple[str, ...] = ("boxplots", "convergence")
+#: the demo page's 3-D animation: (study, robot, first method name prefix, title)
+DEMO_ANIMATION = (
+    "retime_benchmark", "panda", "toppra@",
+    "Time-optimal Panda motion (toppra, from retime_benchmark) under velocity, acceleration and "
+    "torque limits; drag to rotate, scroll to zoom",
+)
+#: marker file written into the demo folder (tells --fresh the folder is the demo's)
+MARKER = "demo.json"
 
 
 def register(subparsers, common: argparse.ArgumentParser) -> None:
@@ -30,13 +47,16 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
         parents=[common],
         help="short end-to-end comparison with a report (a few minutes at most)",
         description="Run the quick form of the demo studies ("
-        + ", ".join(DEMO_STUDIES)
-        + ") and write a report linking them. Re-running continues (and reuses finished cases) "
-        "unless --fresh is given.",
+        + ", ".join(DEMO_STUDIES + OPTIONAL_DEMO_STUDIES)
+        + ") and write a report with their figures, a 3-D animation and links to each study "
+        "report. Re-running reuses the finished cases (and says how many); --fresh runs "
+        "everything again after moving the earlier results aside.",
     )
     p.add_argument("--out", default="results/demo", metavar="DIR", help="results folder (default results/demo)")
     p.add_argument("--workers", type=int, default=None, help="local worker processes (default: CPU count)")
-    p.add_argument("--fresh", action="store_true", help="delete the demo's previous results first")
+    p.add_argument("--fresh", action="store_true",
+                   help="run every case again: the earlier results in DIR are first moved to "
+                        "DIR-<date>-<time> (kept, not deleted)")
     p.set_defaults(func=cmd_demo, executor=None, seed=None, quick=True, no_report=False)
 
 
@@ -48,12 +68,122 @@ def demo_studies() -> list[str]:
     return list(DEMO_STUDIES) + [s for s in OPTIONAL_DEMO_STUDIES if s in found]
 
 
-def _clear(folder: Path) -> None:
-    """Deletes a previous study results folder (only if it is one)."""
-    if folder.is_dir():
+@dataclass(frozen=True)
+class Earlier:
+    """Finished cases found in a demo folder before running.
+
+    Attributes:
+        cases: finished cases per study folder.
+        created: when the earliest of those studies started ('' if unknown).
+    """
+
+    cases: dict[str, int]
+    created: str
+
+    @property
+    def total(self) -> int:
+        """All finished cases found."""
+        return sum(self.cases.values())
+
+
+def earlier_results(out: Path, studies: list[str]) -> Earlier:
+    """Counts the finished cases of the demo's studies already in ``out``."""
+    from drake_mh.study.store import RecordStore
+
+    cases, created = {}, []
+    for name in studies:
+        folder = out / name
         if not (folder / "study.json").is_file():
-            raise InvalidArgument(f"{folder} exists but is not a study results folder; choose another --out")
-        shutil.rmtree(folder)
+            continue
+        store = RecordStore(folder)
+        cases[name] = len(store.records())
+        created.append(str((store.read_meta() or {}).get("created", "")))
+    return Earlier(cases, min((c for c in created if c), default=""))
+
+
+def _is_demo_folder(folder: Path, studies: list[str]) -> bool:
+    return (folder / MARKER).is_file() or any((folder / s / "study.json").is_file() for s in studies)
+
+
+def move_aside(out: Path, studies: list[str], now: datetime.datetime | None = None) -> Path | None:
+    """Moves an earlier demo folder to ``<out>-<YYYYmmdd-HHMMSS>`` (nothing is deleted).
+
+    Returns:
+        The new location, or ``None`` when ``out`` does not exist.
+
+    Raises:
+        InvalidArgument: ``out`` exists but is not a demo results folder.
+    """
+    if not out.exists():
+        return None
+    if not out.is_dir() or not _is_demo_folder(out, studies):
+        raise InvalidArgument(f"{out} exists but is not a demo results folder; choose another --out")
+    stamp = (now or datetime.datetime.now()).strftime("%Y%m%d-%H%M%S")
+    target = out.with_name(f"{out.name}-{stamp}")
+    suffix = 1
+    while target.exists():
+        target = out.with_name(f"{out.name}-{stamp}-{suffix}")
+        suffix += 1
+    out.rename(target)
+    return target
+
+
+def reuse_message(out: Path, earlier: Earlier) -> str:
+    """One sentence telling that earlier results are reused and how to start afresh."""
+    per_study = ", ".join(f"{name} {n}" for name, n in earlier.cases.items())
+    since = f" (first started {earlier.created})" if earlier.created else ""
+    return (f"Reusing {earlier.total} finished cases from an earlier run in {out}{since}: {per_study}. "
+            f"They are not run again; `drake-mh demo --fresh` runs everything anew (the earlier results "
+            f"are moved to {out.name}-<date>-<time>, not deleted).")
+
+
+def key_figures(folder: Path, study: str) -> list:
+    """The study report's key figures (:data:`KEY_FIGURES`, at most two) as report blocks."""
+    from drake_mh.study.report import ReportData, build_document
+    from drake_mh.study.report.plots import FigureFile
+
+    try:
+        doc = build_document(ReportData.load(folder))
+    except Exception as exc:  # a figure must not sink the demo page
+        logger.warning("no figures from %s: %s", folder, exc)
+        return []
+    figures = {b.name: b for b in doc.blocks if isinstance(b, FigureFile)}
+    chosen = [figures[n] for n in KEY_FIGURES if n in figures][:2]
+    return [FigureFile(f"{study}-{f.name}", f.png, f.caption) for f in chosen]
+
+
+def demo_animation(out: Path) -> object | None:
+    """Records :data:`DEMO_ANIMATION` into ``<out>/animation.html``; returns its report block.
+
+    ``None`` when the trajectory or ``drake_mh.viz`` is missing (the page says so instead).
+    """
+    import numpy as np
+
+    from drake_mh.study.report.document import Animation
+    from drake_mh.study.store import RecordStore
+
+    study, robot_name, prefix, title = DEMO_ANIMATION
+    folder = out / study
+    if not (folder / "records.jsonl").is_file():
+        return None
+    store = RecordStore(folder)
+    for record in store.records():
+        if record.get("status") != "ok" or not str(record.get("method", "")).startswith(prefix):
+            continue
+        arrays = store.load_arrays(record) if record.get("arrays") else {}
+        if "traj_t" not in arrays or "traj_q" not in arrays:
+            continue
+        try:
+            import drake_mh
+            from drake_mh.viz import animation_html
+        except ImportError as exc:
+            logger.info("no demo animation: %s", exc)
+            return None
+        robot = drake_mh.load_robot(robot_name)
+        page = animation_html(robot, (np.asarray(arrays["traj_t"]), np.asarray(arrays["traj_q"])))
+        (out / "animation.html").write_text(page, encoding="utf-8")
+        return Animation("animation.html", f"{title} ({record.get('key')})", page)
+    return None
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -68,41 +198,64 @@ def cmd_demo(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     out = Path(args.out)
     quiet = getattr(args, "quiet", False)
+    studies = demo_studies()
+    if args.fresh:
+        moved = move_aside(out, studies)
+        if moved is not None:
+            print(f"--fresh: earlier results moved to {moved} (kept); running every case again")
+    earlier = earlier_results(out, studies)
+    if earlier.total:
+        print(reuse_message(out, earlier))
     smoke = _smoke()
     if smoke is not None and not quiet:
         smoke(out=print)
         print()
-    doc = Document(title="drake_mh demo")
-    doc.add(
-        Paragraph(
-            "Quick forms of the demo studies, run end to end on the bundled robots. Each study has "
-            "its own report (tables, statistics, figures) linked below."
-        )
-    )
-    results = []
-    for name in demo_studies():
-        folder = out / name
-        if args.fresh:
-            _clear(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    write_atomic(out / MARKER, json.dumps({"studies": studies}).encode("utf-8"))
+    sections, results = [], []
+    for name in studies:
         if not quiet:
             print(f"== {name} (quick) ==")
-        result = run_and_print(name, args, out=folder, quick=True)
+        result = run_and_print(name, args, out=out / name, quick=True, reuse_hint=None)
         results.append(result)
-        doc.add(Heading(name))
+        section = [Heading(name)]
         if result.summary.strip():
-            doc.add(Markdown(result.summary))
+            section.append(Markdown(result.summary))
+        section += key_figures(out / name, name)
         line = f"{len(result.records)}/{result.n_cases} cases"
+        line += f" ({result.n_new} run now, {len(result.records) - result.n_new} reused from the earlier run)" \
+            if len(result.records) > result.n_new else ""
         line += f", {result.n_errors} raised" if result.n_errors else ""
-        doc.add(Paragraph(line + "."))
-        doc.add(Link(f"{name}/index.html", f"{name} report"))
+        section += [Paragraph(line + "."), Link(f"{name}/index.html", f"{name}: full report (tables, statistics, figures)")]
+        sections.append(section)
         if not quiet:
             print()
+    doc = Document(title="drake_mh demo")
+    doc.add(Paragraph(
+        "Quick forms of the demo studies, run end to end on the bundled robots: batched kinematics "
+        "against Drake, its accuracy, time-optimal retiming and inverse kinematics. Each section shows "
+        "the study's summary and key figures; its full report is linked below it."))
+    reused = sum(len(r.records) - r.n_new for r in results)
+    if reused:
+        doc.add(Paragraph(f"**Reused results:** {reused} of {sum(len(r.records) for r in results)} cases come "
+                          f"from an earlier run in this folder and were not run again; run `drake-mh demo --fresh` "
+                          "to recompute everything (the earlier results are moved aside, not deleted)."))
+    animation = demo_animation(out)
+    if animation is not None:
+        doc.add(Heading("A motion in 3-D"))
+        doc.add(animation)
+    for section in sections:
+        for block in section:
+            doc.add(block)
     elapsed = time.perf_counter() - start
     doc.add(Paragraph(f"Demo wall time {elapsed:.1f} s."))
-    out.mkdir(parents=True, exist_ok=True)
+    for block in doc.blocks:
+        if hasattr(block, "png"):
+            write_atomic(out / "figures" / f"{block.name}.png", block.png)
     write_atomic(out / "report.md", to_markdown(doc).encode("utf-8"))
     write_atomic(out / "index.html", to_html(doc).encode("utf-8"))
     errors = sum(r.n_errors for r in results)
-    print(f"demo finished in {elapsed:.1f} s" + (f" ({errors} case(s) raised)" if errors else ""))
+    print(f"demo finished in {elapsed:.1f} s" + (f" ({errors} case(s) raised)" if errors else "")
+          + (f"; {reused} cases reused from the earlier run (--fresh recomputes them)" if reused else ""))
     print(f"demo report: {(out / 'index.html').resolve()}")
     return 0

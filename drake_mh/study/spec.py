@@ -37,7 +37,19 @@ class Fields:
             ``False`` e.g. when the "method" field is a robot in a verification study.
         panels: fields whose value combinations each get their own convergence panel (e.g.
             ``("function", "dim", "shift")``: problems of different scale are not pooled);
-            ``None``: the first instance field when it has 2-6 values, else one panel.
+            ``None``: :attr:`group_by` if given, else the first instance field when it has 2-6
+            values, else one panel.
+        group_by: fields whose values are instances of a different kind (another component,
+            another N, another test function): the report's per-method table gets one row per
+            (group, method) and the box plots one panel per group, so that numbers of
+            different scale are never pooled into one median; ``None``: one row per method.
+        error_unit: unit of ``error`` shown in column headers and axis labels (e.g. ``"m"``,
+            ``"rad"``); ``""`` when it has none (a fitness), ``None`` when unknown.
+        message: field holding a case's own message (e.g. ``IKResult.message``); the report
+            shows the commonest one of the failed cases next to a success rate below 100 %.
+        conditions: one sentence stating the budget and tolerance a case succeeds within
+            (e.g. ``"20,000 evaluations or 0.5 s per solve; success = 1 mm and 0.01 rad"``),
+            shown with the success rates so that a low rate comes with its reason.
     """
 
     method: str = "method"
@@ -49,6 +61,10 @@ class Fields:
     lower_is_better: bool = True
     rank: bool = True
     panels: tuple[str, ...] | None = None
+    group_by: tuple[str, ...] | None = None
+    error_unit: str | None = None
+    message: str = "message"
+    conditions: str = ""
 
     def to_dict(self) -> dict:
         """Returns the fields as a JSON-friendly dict."""
@@ -62,13 +78,19 @@ class Fields:
             "lower_is_better": self.lower_is_better,
             "rank": self.rank,
             "panels": None if self.panels is None else list(self.panels),
+            "group_by": None if self.group_by is None else list(self.group_by),
+            "error_unit": self.error_unit,
+            "message": self.message,
+            "conditions": self.conditions,
         }
 
     @classmethod
     def from_dict(cls, data: Mapping) -> Fields:
         """Inverse of :meth:`to_dict` (unknown keys ignored)."""
-        kwargs = {k: data[k] for k in ("method", "success", "time", "error", "nfe", "lower_is_better", "rank") if k in data}
-        for key in ("instance", "panels"):
+        names = ("method", "success", "time", "error", "nfe", "lower_is_better", "rank", "error_unit", "message",
+                 "conditions")
+        kwargs = {k: data[k] for k in names if k in data}
+        for key in ("instance", "panels", "group_by"):
             if data.get(key) is not None:
                 kwargs[key] = tuple(data[key])
         return cls(**kwargs)

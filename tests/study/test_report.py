@@ -145,7 +145,7 @@ def test_study_markdown_summary_renders_as_html_tables():
     doc = Document("t")
     doc.add(Markdown(text))
     page = to_html(doc)
-    assert "<table>" in page and "<td>x | y</td>" in page and "<h3>Ranks</h3>" in page
+    assert "<table>" in page and ">x | y</td>" in page and "<h3>Ranks</h3>" in page
 
 
 def test_convergence_panels_per_field_combination(toy_results, monkeypatch):

@@ -93,12 +93,42 @@ class ReportData:
         """Study name (folder name if unknown)."""
         return self.meta.get("name") or self.folder.name
 
-    def by_method(self) -> dict[str, list[dict[str, Any]]]:
-        """Groups records by method (order of :attr:`methods`)."""
+    def by_method(self, records: list[dict[str, Any]] | None = None) -> dict[str, list[dict[str, Any]]]:
+        """Groups records (default all) by method, in the order of :attr:`methods`; methods
+        without a record in ``records`` are left out unless ``records`` is ``None``."""
         groups: dict[str, list[dict[str, Any]]] = {m: [] for m in self.methods}
-        for record in self.records:
+        for record in self.records if records is None else records:
             groups[method_of(record, self.fields)].append(record)
+        if records is not None:
+            groups = {m: g for m, g in groups.items() if g}
         return groups
+
+    @property
+    def group_keys(self) -> tuple[str, ...]:
+        """The fields that split the records into groups of a different kind (``fields.group_by``)."""
+        return tuple(self.fields.group_by or ())
+
+    def by_group(self) -> dict[tuple, list[dict[str, Any]]]:
+        """Groups records by the values of :attr:`group_keys` (one group ``()`` when none).
+
+        Groups are ordered by value: numbers numerically, other values in order of first
+        appearance.
+        """
+        keys = self.group_keys
+        groups: dict[tuple, list[dict[str, Any]]] = {}
+        for record in self.records:
+            groups.setdefault(tuple(record.get(k) for k in keys), []).append(record)
+        first = {g: i for i, g in enumerate(groups)}
+
+        def order(group: tuple) -> list:
+            return [(0, float(v), 0) if isinstance(v, (int, float)) and not isinstance(v, bool)
+                    else (1, 0.0, first[group]) for v in group]
+
+        return {g: groups[g] for g in sorted(groups, key=order)}
+
+    def group_label(self, group: tuple) -> str:
+        """``"N = 128"``, ``"function = F5, dim = 10"``; ``""`` for the single group ``()``."""
+        return ", ".join(f"{k} = {v}" for k, v in zip(self.group_keys, group))
 
     def values(self, records: list[dict[str, Any]], name: str, ok_only: bool = True) -> np.ndarray:
         """Returns the finite values of field ``name`` as a ``(n,)`` float array."""

@@ -23,7 +23,7 @@ class Heading:
 
 @dataclass(frozen=True)
 class Paragraph:
-    """Plain text paragraph (``**bold**`` not interpreted)."""
+    """Text paragraph; in HTML, inline markdown ```code``` and ``**bold**`` are rendered."""
 
     text: str
 
@@ -53,7 +53,7 @@ class Animation:
 @dataclass(frozen=True)
 class Markdown:
     """Markdown text from a study (its summary): verbatim in ``report.md``; in HTML, headings,
-    pipe tables, fenced code and paragraphs are rendered (inline markup shown as is)."""
+    pipe tables, fenced code and paragraphs are rendered, with inline ```code``` and ``**bold**``."""
 
     text: str
 
@@ -115,10 +115,50 @@ h1{font-size:1.6em}h2{font-size:1.25em;margin-top:1.6em;border-bottom:1px solid 
 table{border-collapse:collapse;margin:.5em 0;font-size:.9em}
 th,td{border:1px solid #ccc;padding:.25em .6em;text-align:right}th{background:#f3f3f3}
 td:first-child,th:first-child{text-align:left}
+td{white-space:nowrap}td.name{text-align:left}td.text{white-space:normal;text-align:left;min-width:14em}
 .caption{color:#555;font-size:.85em;font-style:italic;margin:.2em 0 1em}
+code{background:#f3f3f3;padding:0 .25em;border-radius:3px;font-size:.92em}
 img{max-width:100%;height:auto}pre{background:#f7f7f7;padding:.8em;overflow-x:auto;font-size:.85em}
-iframe{width:100%;height:520px;border:1px solid #ccc}
+iframe{width:100%;height:600px;border:1px solid #ccc}
+.scroll{overflow-x:auto}
 """
+
+#: table cells longer than this may wrap (text); shorter ones (numbers, names) never do
+WRAP_ABOVE = 40
+
+
+def inline_html(text: str) -> str:
+    """Escapes ``text`` for HTML and renders inline markdown: ```code``` and ``**bold**``."""
+    out = []
+    for i, part in enumerate(re.split(r"(`[^`]+`)", str(text))):
+        if i % 2:
+            out.append(f"<code>{html.escape(part[1:-1])}</code>")
+        else:
+            out.append(re.sub(r"\*\*(\S(?:.*?\S)?)\*\*", r"<strong>\1</strong>", html.escape(part)))
+    return "".join(out)
+
+
+def _header(text) -> str:
+    """A header cell: a unit in brackets stays on one line (``[m + rad]``)."""
+    body = re.sub(r"\[[^\]]*\]", lambda m: m.group(0).replace(" ", "\u00a0"), str(text))
+    return f"<th>{inline_html(body)}</th>"
+
+
+_NUMBER = re.compile(r"[-+]?(\d[\d,]*\.?\d*|\.\d+)(e[-+]?\d+)?\s*(%|x|[a-zµ]{1,3})?(\s*\(.*\))?|-|inf|-inf|nan",
+                     re.IGNORECASE)
+
+
+def _cell(text) -> str:
+    """A body cell: long text may wrap (left-aligned), numbers never wrap (right-aligned),
+    short words (names) are left-aligned."""
+    text = str(text)
+    if len(text) > WRAP_ABOVE:
+        css = ' class="text"'
+    elif _NUMBER.fullmatch(text.strip()) or not text.strip():
+        css = ""
+    else:
+        css = ' class="name"'
+    return f"<td{css}>{inline_html(text)}</td>"
 
 
 def _split_row(line: str) -> list[str]:
@@ -191,15 +231,15 @@ def to_html(doc: Document) -> str:
             level = min(6, max(2, block.level))
             parts.append(f"<h{level}>{esc(block.text)}</h{level}>")
         elif isinstance(block, Paragraph):
-            parts.append(f"<p>{esc(block.text)}</p>")
+            parts.append(f"<p>{inline_html(block.text)}</p>")
         elif isinstance(block, Preformatted):
             parts.append(f"<pre>{esc(block.text)}</pre>")
         elif isinstance(block, Table):
-            head = "".join(f"<th>{esc(str(h))}</th>" for h in block.headers)
-            body = "".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in row) + "</tr>" for row in block.rows)
-            parts.append(f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
+            head = "".join(_header(h) for h in block.headers)
+            body = "".join("<tr>" + "".join(_cell(c) for c in row) + "</tr>" for row in block.rows)
+            parts.append(f'<div class="scroll"><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>')
             if block.caption:
-                parts.append(f'<p class="caption">{esc(block.caption)}</p>')
+                parts.append(f'<p class="caption">{inline_html(block.caption)}</p>')
         elif isinstance(block, FigureFile):
             data = base64.b64encode(block.png).decode("ascii")
             parts.append(f'<figure><img alt="{esc(block.caption)}" src="data:image/png;base64,{data}">')

@@ -94,8 +94,8 @@ def convergence_figure(data: ReportData) -> FigureFile | None:
             histories.append((record, arrays["history_nfe"], arrays["history_best"]))
     if not histories:
         return None
-    if data.fields.panels:
-        panel_keys = tuple(data.fields.panels)
+    if data.fields.panels or data.fields.group_by:
+        panel_keys = tuple(data.fields.panels or data.fields.group_by)
     else:
         panel_keys = (data.instance_keys[0],) if data.instance_keys else ()
         if not 2 <= len({str(r.get(panel_keys[0])) for r, _, _ in histories} if panel_keys else ()) <= MAX_PANELS:
@@ -117,7 +117,7 @@ def convergence_figure(data: ReportData) -> FigureFile | None:
         top = max(float(np.max(h[1])) for h in chosen)
         low = max(1.0, min(float(np.min(h[1])) for h in chosen))
         grid = np.unique(np.geomspace(low, top, 200)) if top > low else np.array([low])
-        positive = True
+        shown = []
         for method in data.methods:
             curves = [
                 best_so_far_on_grid(n, b, grid, data.fields.lower_is_better)
@@ -130,12 +130,11 @@ def convergence_figure(data: ReportData) -> FigureFile | None:
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns before first eval
                 q25, median, q75 = np.nanpercentile(stack, [25, 50, 75], axis=0)
-            positive &= bool(np.all(stack[np.isfinite(stack)] > 0))
+            shown.append(stack[np.isfinite(stack)])
             ax.plot(grid, median, color=colors[method], label=f"{method} (n={len(curves)})")
             ax.fill_between(grid, q25, q75, color=colors[method], alpha=0.2, linewidth=0)
-        ax.set_xscale("log" if top / low > 50 else "linear")
-        if positive:
-            ax.set_yscale("log")
+        readable_axis(ax, np.array([low, top]) if top / low > 50 else np.array([1.0]), axis="x")
+        readable_axis(ax, np.concatenate(shown) if shown else np.array([]))
         ax.set_xlabel("function evaluations")
         ax.set_ylabel("best so far")
         ax.set_title(", ".join(f"{k} = {v}" for k, v in zip(panel_keys, panel)) if panel_keys else data.name,
@@ -146,30 +145,164 @@ def convergence_figure(data: ReportData) -> FigureFile | None:
     return FigureFile("convergence", _render(fig), caption)
 
 
+#: fewer cases than this per method and panel are drawn as points (a box of 1-4 values says little)
+STRIP_BELOW = 5
+#: box-plot panels at most (groups x metrics); the others are left out (the table has them all)
+MAX_BOX_PANELS = 24
+
+
+def _plain_tick(value: float, _pos=None) -> str:
+    """A log-axis tick as a plain number: ``0.001``, ``20``, ``1e+05``."""
+    if value == 0 or not np.isfinite(value):
+        return "0"
+    magnitude = abs(value)
+    return f"{value:.0e}" if magnitude >= 1e5 or magnitude < 1e-3 else f"{value:g}"
+
+
+def linear_tick_labels(locs) -> list[str]:
+    """Labels of linear-axis ticks ``locs``, with just the digits that tell them apart:
+    ``21.10128, 21.1013, 21.10132``; ``0.3`` (float noise rounded away); ``2e-16``."""
+    locs = np.asarray(locs, dtype=float)
+    finite = locs[np.isfinite(locs)]
+    if finite.size == 0:
+        return ["" for _ in locs]
+    steps = np.diff(np.unique(finite))
+    step = float(steps.min()) if steps.size else max(abs(float(finite[0])), 1.0)
+    top = float(np.max(np.abs(finite)))
+    if top >= 1e6 or (0 < top < 1e-3):
+        digits = max(0, int(np.floor(np.log10(top))) - int(np.floor(np.log10(step))))
+        return [("0" if v == 0 else f"{v:.{digits}e}") for v in locs]
+    decimals = max(0, -int(np.floor(np.log10(step) + 1e-9)))
+    return [f"{v:.{decimals}f}" for v in locs]
+
+
+class _LinearFormatter:
+    """matplotlib formatter around :func:`linear_tick_labels` (built lazily: no import at load)."""
+
+    @staticmethod
+    def make():
+        from matplotlib.ticker import Formatter
+
+        class LinearFormatter(Formatter):
+            def set_locs(self, locs):
+                locs = list(locs)
+                self._labels = dict(zip(locs, linear_tick_labels(locs)))
+
+            def __call__(self, x, pos=None):
+                labels = getattr(self, "_labels", {})
+                return labels.get(x, linear_tick_labels([x])[0])
+
+        return LinearFormatter()
+
+
+def readable_axis(ax, values: np.ndarray, axis: str = "y") -> None:
+    """Log scale when positive values span more than a decade, else linear; plain tick labels.
+
+    Log ticks read ``0.01, 0.1, 1`` (no ``2.1×10¹`` minor labels); linear ticks are full
+    numbers (``21.1004``, ``2e-16``), never an offset or a common factor at the axis' end.
+    """
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values)]
+    target = ax.yaxis if axis == "y" else ax.xaxis
+    if values.size and np.all(values > 0) and values.max() / values.min() > 10:
+        (ax.set_yscale if axis == "y" else ax.set_xscale)("log")
+        target.set_major_locator(LogLocator(base=10, numticks=8))
+        target.set_major_formatter(FuncFormatter(_plain_tick))
+        target.set_minor_formatter(NullFormatter())
+    else:
+        target.set_major_formatter(_LinearFormatter.make())
+
+
+def _draw_categories(ax, categories: list, rng: np.random.Generator) -> int:
+    """Box plots, or points where a category has fewer than :data:`STRIP_BELOW` values.
+
+    Args:
+        ax: the axes.
+        categories: ``[(label, values (n,), colour), ...]`` in x order.
+        rng: jitter of the points.
+
+    Returns:
+        How many categories were drawn as points.
+    """
+    boxes = [(i + 1, v) for i, (_, v, _) in enumerate(categories) if v.size >= STRIP_BELOW]
+    if boxes:
+        ax.boxplot([v for _, v in boxes], positions=[p for p, _ in boxes], widths=0.6, showfliers=True)
+    strips = 0
+    for i, (_, v, colour) in enumerate(categories):
+        if v.size < STRIP_BELOW:
+            strips += 1
+            x = i + 1 + (rng.uniform(-0.12, 0.12, v.size) if v.size > 1 else np.zeros(1))
+            ax.scatter(x, v, s=30, color=colour, edgecolor="black", linewidth=0.5, zorder=3)
+    ax.set_xticks(range(1, len(categories) + 1), [c[0] for c in categories])
+    ax.set_xlim(0.4, len(categories) + 0.6)
+    readable_axis(ax, np.concatenate([c[1] for c in categories]))
+    ax.tick_params(axis="x", labelrotation=30 if len(categories) > 3 else 0, labelsize=8)
+    ax.grid(True, axis="y", alpha=0.3)
+    return strips
+
+
 def box_figure(data: ReportData) -> FigureFile | None:
-    """Box plots of time and error per method (cases that did not raise)."""
-    panels = [(f, label) for f, label in ((data.fields.time, "time"), (data.fields.error, "error")) if data.has_field(f)]
+    """Time and error per method over the cases that did not raise: box plots, or the points
+    themselves (strip plot) where a method has fewer than :data:`STRIP_BELOW` cases.
+
+    One panel per metric and group (``fields.group_by``): instances of a different kind are
+    not pooled. When every group has a single method (a benchmark over N), the groups share
+    one panel per metric, side by side. Times are shown in s, ms or µs, whichever suits.
+    """
+    from drake_mh.study.report.units import time_unit, with_unit
+
+    fields = data.fields
+    metrics = []
+    if data.has_field(fields.time):
+        unit, factor = time_unit(data.values(data.records, fields.time))
+        metrics.append((fields.time, with_unit(fields.time, unit), factor))
+    if data.has_field(fields.error):
+        metrics.append((fields.error, with_unit(fields.error, fields.error_unit), 1.0))
+    if not metrics:
+        return None
+    groups = data.by_group()
+    colors = _colors(data.methods)
+    side_by_side = len(groups) > 1 and all(len(data.by_method(r)) == 1 for r in groups.values())
+    panels = []  # (axis label, title, categories)
+    for field_name, label, factor in metrics:
+        if side_by_side:
+            categories = [(data.group_label(g), data.values(r, field_name) * factor, colors[method_of(r[0], fields)])
+                          for g, r in groups.items()]
+            methods = sorted({method_of(r[0], fields) for r in groups.values()})
+            panels.append((label, ", ".join(methods), [c for c in categories if c[1].size]))
+            continue
+        for group, records in groups.items():
+            categories = [(m, data.values(r, field_name) * factor, colors[m]) for m, r in data.by_method(records).items()]
+            panels.append((label, data.group_label(group), [c for c in categories if c[1].size]))
+    panels = [p for p in panels if p[2]]
     if not panels:
         return None
-    groups = data.by_method()
-    fig = _figure(max(4.0, 1.0 + 0.9 * len(groups)) * len(panels), 3.4)
-    axes = fig.subplots(1, len(panels), squeeze=False)[0]
-    for ax, (field_name, _label) in zip(axes, panels):
-        values = [data.values(records, field_name) for records in groups.values()]
-        labels = list(groups)
-        keep = [i for i, v in enumerate(values) if v.size]
-        if not keep:
-            continue
-        values = [values[i] for i in keep]
-        labels = [labels[i] for i in keep]
-        ax.boxplot(values, tick_labels=labels, showfliers=True)
-        everything = np.concatenate(values)
-        if np.all(everything > 0) and everything.max() / everything.min() > 100:
-            ax.set_yscale("log")
-        ax.set_ylabel(field_name)
-        ax.tick_params(axis="x", labelrotation=30, labelsize=8)
-        ax.grid(True, axis="y", alpha=0.3)
-    caption = "Distribution per method over cases that did not raise (box: quartiles, whiskers: 1.5 IQR)."
+    left_out = max(0, len(panels) - MAX_BOX_PANELS)
+    panels = panels[:MAX_BOX_PANELS]
+    columns = len(panels) if side_by_side or len(groups) == 1 else min(len(groups), 4)
+    rows = -(-len(panels) // columns)
+    most = max(len(p[2]) for p in panels)
+    width = max(3.4, 1.0 + 0.75 * most)
+    fig = _figure(width * columns, 3.3 * rows)
+    axes = fig.subplots(rows, columns, squeeze=False).ravel()
+    for ax in axes[len(panels):]:
+        ax.set_visible(False)
+    rng = np.random.default_rng(0)  # jitter only; fixed so that the figure is reproducible
+    strips = 0
+    for ax, (label, title, categories) in zip(axes, panels):
+        strips += _draw_categories(ax, categories, rng)
+        ax.set_ylabel(label)
+        if title:
+            ax.set_title(title, fontsize=10)
+    caption = "Distribution per method over cases that did not raise (box: quartiles, whiskers: 1.5 IQR"
+    caption += f"; fewer than {STRIP_BELOW} cases: every case as a point)." if strips else ")."
+    if data.group_keys:
+        caption += (f" One column per {' x '.join(data.group_keys)}." if side_by_side
+                    else f" One panel per {' x '.join(data.group_keys)}.")
+    if left_out:
+        caption += f" {left_out} more panels left out (see the table)."
     return FigureFile("boxplots", _render(fig), caption)
 
 
