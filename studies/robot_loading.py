@@ -20,8 +20,6 @@ from __future__ import annotations
 import contextlib
 import os
 import platform
-import site
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -45,13 +43,13 @@ CACHED_LOADS, QUICK_CACHED_LOADS = 5, 2
 def erd_root() -> Path:
     """The installed ``example-robot-data`` package folder."""
     from drake_mh.errors import MeshNotFound
+    from drake_mh.packages import installed_package_dir
 
-    for base in [*site.getsitepackages(), *sys.path]:
-        folder = Path(base) / "cmeel.prefix" / "share" / "example-robot-data"
-        if (folder / "robots").is_dir():
-            return folder
-    raise MeshNotFound("example-robot-data", ["site-packages/cmeel.prefix/share"],
-                       hint="pip install example-robot-data (in the test extra)")
+    folder = installed_package_dir("example-robot-data")
+    if folder is None:
+        raise MeshNotFound("example-robot-data", ["this Python's prefixes"],
+                           hint="pip install example-robot-data (in the test extra)")
+    return folder
 
 
 def cpu_model() -> str:
