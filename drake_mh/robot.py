@@ -208,8 +208,8 @@ class Robot:
         from drake_mh.packages import UriResolver
         from drake_mh.robot_chain import default_ee, plan_locks, read_tree
         from drake_mh.robot_loading import (
-            FORMATS, MeshReport, dedupe_urdf_materials, lock_joints, parse_xml, rewrite_meshes, strip_mimics, to_text,
-            urdf_mimics,
+            FORMATS, MeshReport, dedupe_urdf_materials, lock_joints, parse_model, parse_xml, rewrite_meshes,
+            read_extra_limits, strip_mimics, to_text, urdf_mimics, weld_free_bodies,
         )
 
         if model_format not in FORMATS:
@@ -228,7 +228,7 @@ class Robot:
         if model_format == "urdf":
             _check_urdf(root, source)
         self.name = name or root.get("name") or "robot"
-        extra = _read_extra_limits(root, source) if model_format == "urdf" else {"jerk": {}, "effort": {}}
+        extra = read_extra_limits(root, source) if model_format == "urdf" else {"jerk": {}, "effort": {}}
         resolver = _resolver or UriResolver(Path(model_dir) if model_dir is not None else None,
                                             packages, source)
         report = MeshReport()
@@ -242,16 +242,16 @@ class Robot:
         self.mesh_files = {"collision": report.collision, "visual": report.visual}
         text = to_text(root) if changed else urdf
 
-        builder, plant, scene_graph = _parse_model(text, model_format, resolver, source)
+        builder, plant, scene_graph = parse_model(text, model_format, resolver, source)
         tree = read_tree(plant)
         self.ee_frame_name = ee_frame if ee_frame is not None else default_ee(tree, source)
         self.locked_joints = plan_locks(tree, self.ee_frame_name, locked, mimics, source)
         if self.locked_joints:
             lock_joints(root, model_format, self.locked_joints, source)
             text = to_text(root)
-            builder, plant, scene_graph = _parse_model(text, model_format, resolver, source)
+            builder, plant, scene_graph = parse_model(text, model_format, resolver, source)
         self.model_text = text
-        _weld_free_bodies(plant)
+        weld_free_bodies(plant)
         plant.Finalize()
         # a geometry source for obstacles added at run time by drake_mh.scene.Scene
         self.obstacle_source_id = scene_graph.RegisterSource("drake_mh.obstacles")
@@ -525,67 +525,6 @@ def _check_urdf(root: ET.Element, source: str) -> None:
             if lo > hi:
                 raise InvalidLimits(
                     f"{source}: joint {jname!r} has lower limit {lo} > upper limit {hi}; swap them")
-
-
-class _DrakeLogCapture(logging.Filter):
-    """Turns Drake's parser warnings (unsupported tags ...) into drake_mh INFO messages."""
-
-    def filter(self, record: logging.LogRecord) -> bool:
-        logger.info("drake: %s", record.getMessage())
-        return False
-
-
-def _parse_model(text: str, model_format: str, resolver, source: str):
-    """Parse ``text`` into a new plant + scene graph (not finalized): ``(builder, plant, sg)``."""
-    from pydrake.multibody.parsing import Parser
-    from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
-    from pydrake.systems.framework import DiagramBuilder
-
-    builder = DiagramBuilder()
-    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
-    parser = Parser(plant)
-    resolver.populate(parser.package_map())
-    drake_logger = logging.getLogger("drake")
-    capture = _DrakeLogCapture()
-    drake_logger.addFilter(capture)
-    try:
-        parser.AddModels(file_contents=text, file_type={"mjcf": "xml"}.get(model_format, model_format))
-    except Exception as exc:  # Drake raises RuntimeError/ValueError with a parser message
-        message = " ".join(line.strip() for line in str(exc).strip().splitlines())
-        raise InvalidURDF(source, message[:800]) from exc
-    finally:
-        drake_logger.removeFilter(capture)
-    return builder, plant, scene_graph
-
-
-def _weld_free_bodies(plant) -> None:
-    """Weld every body with no inboard joint to the world at its default pose (fixed base)."""
-    from pydrake.multibody.tree import BodyIndex, JointIndex
-
-    children = {plant.get_joint(JointIndex(i)).child_body().index() for i in range(plant.num_joints())}
-    for i in range(1, plant.num_bodies()):
-        body = plant.get_body(BodyIndex(i))
-        if body.index() not in children:
-            logger.info("welding root link %r to the world (fixed base)", body.name())
-            plant.WeldFrames(plant.world_frame(), body.body_frame(), plant.GetDefaultFloatingBaseBodyPose(body))
-
-
-def _read_extra_limits(root: ET.Element, source: str) -> dict[str, dict[str, float]]:
-    """Jerk limits (``drake_mh:jerk``) and raw ``<limit effort>`` per joint from the URDF."""
-    jerk_key = f"{{{DRAKE_MH_NS}}}jerk"
-    jerk, effort = {}, {}
-    for joint in root.findall("joint"):
-        limit = joint.find("limit")
-        if limit is None:
-            continue
-        try:
-            if limit.get(jerk_key) is not None:
-                jerk[joint.get("name")] = float(limit.get(jerk_key))
-            if limit.get("effort") is not None and float(limit.get("effort")) > 0:
-                effort[joint.get("name")] = float(limit.get("effort"))
-        except ValueError as exc:
-            raise InvalidURDF(source, f"joint {joint.get('name')!r}: non-numeric limit ({exc})") from exc
-    return {"jerk": jerk, "effort": effort}
 
 
 def _ordered_joints(plant) -> list:

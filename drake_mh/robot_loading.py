@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_mh.errors import InvalidArgument, InvalidURDF, MeshNotFound, UnsupportedModel
+from drake_mh.errors import InvalidURDF, MeshNotFound, UnsupportedModel
 from drake_mh.packages import UriResolver
 
 logger = logging.getLogger(__name__)
@@ -397,3 +397,69 @@ def strip_mimics(root: ET.Element) -> None:
     for joint in root.findall("joint"):
         for mimic in joint.findall("mimic"):
             joint.remove(mimic)
+
+
+# --- Drake -------------------------------------------------------------------------------------
+
+
+class _DrakeLogCapture(logging.Filter):
+    """Turns Drake's parser warnings (unsupported tags ...) into drake_mh INFO messages."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        logger.info("drake: %s", record.getMessage())
+        return False
+
+
+def parse_model(text: str, model_format: str, resolver, source: str):
+    """Parse ``text`` into a new plant + scene graph (not finalized): ``(builder, plant, sg)``."""
+    from pydrake.multibody.parsing import Parser
+    from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+    from pydrake.systems.framework import DiagramBuilder
+
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
+    parser = Parser(plant)
+    resolver.populate(parser.package_map())
+    drake_logger = logging.getLogger("drake")
+    capture = _DrakeLogCapture()
+    drake_logger.addFilter(capture)
+    try:
+        parser.AddModels(file_contents=text, file_type={"mjcf": "xml"}.get(model_format, model_format))
+    except Exception as exc:  # Drake raises RuntimeError/ValueError with a parser message
+        message = " ".join(line.strip() for line in str(exc).strip().splitlines())
+        raise InvalidURDF(source, message[:800]) from exc
+    finally:
+        drake_logger.removeFilter(capture)
+    return builder, plant, scene_graph
+
+
+def weld_free_bodies(plant) -> None:
+    """Weld every body with no inboard joint to the world at its default pose (fixed base)."""
+    from pydrake.multibody.tree import BodyIndex, JointIndex
+
+    children = {plant.get_joint(JointIndex(i)).child_body().index() for i in range(plant.num_joints())}
+    for i in range(1, plant.num_bodies()):
+        body = plant.get_body(BodyIndex(i))
+        if body.index() not in children:
+            logger.info("welding root link %r to the world (fixed base)", body.name())
+            plant.WeldFrames(plant.world_frame(), body.body_frame(), plant.GetDefaultFloatingBaseBodyPose(body))
+
+
+def read_extra_limits(root: ET.Element, source: str) -> dict[str, dict[str, float]]:
+    """Jerk limits (``drake_mh:jerk``) and raw ``<limit effort>`` per joint from the URDF."""
+    from drake_mh.robot import DRAKE_MH_NS
+
+    jerk_key = f"{{{DRAKE_MH_NS}}}jerk"
+    jerk, effort = {}, {}
+    for joint in root.findall("joint"):
+        limit = joint.find("limit")
+        if limit is None:
+            continue
+        try:
+            if limit.get(jerk_key) is not None:
+                jerk[joint.get("name")] = float(limit.get(jerk_key))
+            if limit.get("effort") is not None and float(limit.get("effort")) > 0:
+                effort[joint.get("name")] = float(limit.get("effort"))
+        except ValueError as exc:
+            raise InvalidURDF(source, f"joint {joint.get('name')!r}: non-numeric limit ({exc})") from exc
+    return {"jerk": jerk, "effort": effort}
