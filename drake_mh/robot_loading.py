@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_mh.errors import InvalidURDF, MeshNotFound, UnsupportedModel
+from drake_mh.errors import InvalidURDF, MeshConversionError, MeshNotFound, UnsupportedModel
 from drake_mh.packages import UriResolver
 
 logger = logging.getLogger(__name__)
@@ -222,7 +222,12 @@ def rewrite_meshes(root: ET.Element, fmt: str, resolver: UriResolver,
                         _declare_convex(mesh)
                         report.collision.append((uri, str(new)))
                     else:
-                        new = visual_mesh(path)
+                        try:
+                            new = visual_mesh(path)
+                        except MeshConversionError as exc:  # only looks: keep the robot usable
+                            logger.warning("%s: visual mesh %s not shown (%s)", resolver.source, uri,
+                                           exc.reason)
+                            new = path
                         report.visual.append((uri, str(new)))
                     if fmt == "urdf":
                         mesh.set("filename", _file_uri(new))

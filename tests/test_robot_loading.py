@@ -441,3 +441,14 @@ def test_installed_packages_resolve_from_text():
     path = erd_root() / ERD_ROBOTS["ur5"][0]
     robot = drake_mh.Robot(path.read_text(), ee_frame="tool0")  # no model folder to search
     assert robot.nq == 6 and robot.collision_summary()["shoulder_link"] == {"Convex": 1}
+
+
+def test_unreadable_visual_mesh_only_warns(tmp_path, caplog):
+    path = write_arm(tmp_path / "arm")
+    (tmp_path / "arm" / "meshes" / "bad.ply").write_bytes(b"garbage")
+    path.write_text(path.read_text().replace(
+        '<visual><geometry><mesh filename="meshes/link.stl"/>',
+        '<visual><geometry><mesh filename="meshes/bad.ply"/>'))
+    with caplog.at_level("WARNING", logger="drake_mh.robot_loading"):
+        robot = drake_mh.load_robot(path, ee_frame="hand")
+    assert robot.nq == 2 and "bad.ply not shown" in caplog.text
