@@ -237,6 +237,12 @@ def rewrite_meshes(root: ET.Element, fmt: str, resolver: UriResolver,
         if fmt == "sdf":
             for inc in root.iter("include"):
                 uri_elem = inc.find("uri")
+                text = (uri_elem.text or "").strip() if uri_elem is not None else ""
+                if text.startswith(("package://", "model://")):  # Drake resolves it: find the package
+                    name, _, rest = text.split("://", 1)[1].partition("/")
+                    folder = resolver.package_dir(name, rest, [])
+                    if folder is not None:
+                        resolver.found.setdefault(name, folder)
                 if uri_elem is not None and uri_elem.text and "://" not in uri_elem.text:
                     path = Path(uri_elem.text.strip()).expanduser()
                     if not path.is_absolute() and resolver.model_dir is not None:
