@@ -194,3 +194,23 @@ def test_demo_key_figures_come_from_the_study_report(tmp_path):
     figures = key_figures(_results(tmp_path / "s", FIELDS, _two_kinds()), "s")
     assert [f.name for f in figures] == ["s-boxplots"]
     assert figures[0].png.startswith(b"\x89PNG") and "case" in figures[0].caption
+
+
+def test_examples_show_an_animation_per_group_and_method(tmp_path):
+    from drake_mh.study.report import _attachment_blocks
+    from drake_mh.study.report.document import Animation
+    from drake_mh.study.report.plots import FigureFile
+
+    store = RecordStore(tmp_path)
+    store.prepare({"name": "ex", "fields": FIELDS.to_dict(), "grid_keys": ["case", "method", "rep"]})
+    png = b"\x89PNG\r\n\x1a\n" + b"0" * 16
+    for case in ("small", "big"):
+        for rep in range(2):
+            store.append({"key": f"case={case}/method=woa/rep={rep}", "case_id": f"{case}{rep}", "case": case,
+                          "method": "woa", "rep": rep, "status": "ok"},
+                         attachments={"a.png": png, "b.png": png, "c.png": png, "motion.html": "<html>m</html>"})
+    blocks = _attachment_blocks(ReportData.load(tmp_path))
+    animations = [b for b in blocks if isinstance(b, Animation)]
+    figures = [b for b in blocks if isinstance(b, FigureFile)]
+    assert sorted(a.title.split(" ")[1] for a in animations) == ["case=big/method=woa/rep=0", "case=small/method=woa/rep=0"]
+    assert len(figures) == 4  # two per case: the animation does not crowd out the figures or the other case

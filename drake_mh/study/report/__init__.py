@@ -23,7 +23,7 @@ __all__ = ["write_report", "build_document", "ReportData", "rank_stats", "method
 
 #: embedded animations at most (each Meshcat page is ~2 MB); the others are linked
 MAX_EMBEDDED_ANIMATIONS = 4
-#: attachments shown per method
+#: attached figures shown per method (per group and method with ``fields.group_by``); plus one animation
 ATTACHMENTS_PER_METHOD = 2
 
 
@@ -62,30 +62,33 @@ def _stats_blocks(stats: RankStats | None, data: ReportData) -> list:
 
 
 def _attachment_blocks(data: ReportData) -> list:
+    """Attached figures and animations: per method (per group and method when the study
+    declares ``fields.group_by``) at most :data:`ATTACHMENTS_PER_METHOD` figures and one
+    animation; at most :data:`MAX_EMBEDDED_ANIMATIONS` animations embedded, the others linked."""
     blocks: list = []
     embedded = 0
-    counts: dict[str, int] = {}
+    counts: dict[tuple, int] = {}
     for record in data.records:
         method = method_of(record, data.fields)
+        owner = (tuple(record.get(k) for k in data.group_keys), method)
         for relative in record.get("attachments") or []:
-            if counts.get(method, 0) >= ATTACHMENTS_PER_METHOD:
-                break
             path = data.folder / relative
-            if not path.is_file():
-                continue
             suffix = path.suffix.lower()
+            kind = "animation" if suffix in (".html", ".htm", ".svg") else "figure" if suffix == ".png" else None
+            if kind is None or not path.is_file():
+                continue
+            if counts.get((owner, kind), 0) >= (1 if kind == "animation" else ATTACHMENTS_PER_METHOD):
+                continue
             title = f"{method}: {record.get('key')} ({path.name})"
-            if suffix == ".png":
+            if kind == "figure":
                 blocks.append(FigureFile(f"attachment-{record.get('case_id')}-{path.stem}", path.read_bytes(), title))
-            elif suffix in (".html", ".htm", ".svg"):
+            else:
                 page = None
                 if embedded < MAX_EMBEDDED_ANIMATIONS:
                     page = path.read_text(encoding="utf-8", errors="replace")
                     embedded += 1
                 blocks.append(Animation(relative, title, page))
-            else:
-                continue
-            counts[method] = counts.get(method, 0) + 1
+            counts[(owner, kind)] = counts.get((owner, kind), 0) + 1
     return blocks
 
 
