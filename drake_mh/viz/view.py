@@ -33,7 +33,7 @@ __all__ = ["View", "COLOURS"]
 
 COLOURS = {
     "ghost": (0.3, 0.55, 1.0, 0.3),
-    "obstacle": (0.95, 0.45, 0.1, 0.7),
+    "obstacle": (0.9, 0.08, 0.08, 0.45),  # translucent red: apart from orange/yellow arms, white Panda
     "path": (0.1, 0.35, 0.9, 1.0),
     "target": (0.1, 0.75, 0.2, 0.9),
     "clear": (0.2, 0.6, 0.2, 1.0),
