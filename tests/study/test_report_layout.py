@@ -214,3 +214,24 @@ def test_examples_show_an_animation_per_group_and_method(tmp_path):
     figures = [b for b in blocks if isinstance(b, FigureFile)]
     assert sorted(a.title.split(" ")[1] for a in animations) == ["case=big/method=woa/rep=0", "case=small/method=woa/rep=0"]
     assert len(figures) == 4  # two per case: the animation does not crowd out the figures or the other case
+
+
+def test_report_of_earlier_results_takes_the_layout_from_the_study_file(tmp_path):
+    study_file = tmp_path / "grouped.py"
+    study_file.write_text(
+        "from drake_mh.study import Fields, Study\n"
+        "study = Study(name='grouped', run=lambda case: {}, grid={'case': ['a'], 'method': ['m'], 'rep': [0]},\n"
+        "              fields=Fields(error='fitness', group_by=('case',), error_unit='rad', conditions='c'))\n")
+    old = Fields(error="fitness").to_dict()
+    for key in ("group_by", "error_unit", "conditions", "message"):
+        old.pop(key)  # a study.json written before these existed
+    store = RecordStore(tmp_path / "out")
+    store.prepare({"name": "grouped", "fields": old, "source": str(study_file)})
+    for case in ("a", "b"):
+        store.append({"key": f"case={case}/method=m/rep=0", "case_id": case, "case": case, "method": "m", "rep": 0,
+                      "status": "ok", "fitness": 1.0})
+    data = ReportData.load(tmp_path / "out")
+    assert data.fields.group_by == ("case",) and data.fields.error_unit == "rad"
+    assert method_table(data).headers[:2] == ["case", "method"]
+    (tmp_path / "grouped.py").unlink()  # the study file gone: the report still works, ungrouped
+    assert ReportData.load(tmp_path / "out").fields.group_by is None

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import logging
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -12,6 +13,8 @@ import numpy as np
 
 from drake_mh.study.spec import Fields
 from drake_mh.study.store import RecordStore
+
+logger = logging.getLogger(__name__)
 
 
 def as_float(value: Any) -> float:
@@ -61,7 +64,7 @@ class ReportData:
         store = RecordStore(folder)
         records = store.records()
         meta = store.read_meta() or {}
-        fields = Fields.from_dict(meta.get("fields", {}))
+        fields = _with_declared_layout(Fields.from_dict(meta.get("fields", {})), meta)
         records.sort(key=lambda r: r.get("key", ""))
         grid_keys = meta.get("grid_keys") or []
         if fields.instance is not None:
@@ -145,6 +148,31 @@ class ReportData:
     def errors(self) -> list[dict[str, Any]]:
         """Records of cases that raised."""
         return [r for r in self.records if r.get("status") == "error"]
+
+
+#: Fields entries added after results may have been written; taken from the study file when missing
+_LAYOUT_FIELDS = ("group_by", "error_unit", "conditions")
+
+
+def _with_declared_layout(fields: Fields, meta: dict[str, Any]) -> Fields:
+    """Fills report-layout fields that ``study.json`` predates (written before ``group_by``,
+    ``error_unit`` and ``conditions`` existed) from the study file it names, so that
+    ``drake-mh report`` on earlier results groups and labels like a new run. Any problem
+    loading the study leaves the fields as they are."""
+    stored = meta.get("fields") or {}
+    source = meta.get("source")
+    if not source or all(k in stored for k in _LAYOUT_FIELDS) or not Path(source).is_file():
+        return fields
+    try:
+        from drake_mh.study.loader import load_study
+
+        declared = load_study(source)[0].fields
+    except Exception as exc:  # an old or moved study file must not stop the report
+        logger.info("report layout of %s not read: %s", source, exc)
+        return fields
+    if declared.method != fields.method:
+        return fields
+    return replace(fields, **{k: getattr(declared, k) for k in _LAYOUT_FIELDS if k not in stored})
 
 
 def method_of(record: dict[str, Any], fields: Fields) -> str:
