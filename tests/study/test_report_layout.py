@@ -95,6 +95,7 @@ def test_html_renders_inline_code_and_keeps_numbers_whole():
     assert "<td>12,345.678</td>" in page and "<td>1.5e-05</td>" in page  # numbers: nowrap (CSS td)
     assert "td{white-space:nowrap}" in page
     assert '<td class="name">ga</td>' in page and '<td class="text">' in page
+    assert '<th class="text">note</th>' in page  # a column of long text is left-aligned, header included
 
 
 def test_units_in_headers_do_not_break():

@@ -115,7 +115,7 @@ h1{font-size:1.6em}h2{font-size:1.25em;margin-top:1.6em;border-bottom:1px solid 
 table{border-collapse:collapse;margin:.5em 0;font-size:.9em}
 th,td{border:1px solid #ccc;padding:.25em .6em;text-align:right}th{background:#f3f3f3}
 td:first-child,th:first-child{text-align:left}
-td{white-space:nowrap}td.name{text-align:left}td.text{white-space:normal;text-align:left;min-width:14em}
+td{white-space:nowrap}td.name{text-align:left}td.text,th.text{white-space:normal;text-align:left;min-width:14em}
 .caption{color:#555;font-size:.85em;font-style:italic;margin:.2em 0 1em}
 code{background:#f3f3f3;padding:0 .25em;border-radius:3px;font-size:.92em}
 img{max-width:100%;height:auto}pre{background:#f7f7f7;padding:.8em;overflow-x:auto;font-size:.85em}
@@ -138,10 +138,12 @@ def inline_html(text: str) -> str:
     return "".join(out)
 
 
-def _header(text) -> str:
-    """A header cell: a unit in brackets stays on one line (``[m + rad]``)."""
+def _header(text, text_column: bool = False) -> str:
+    """A header cell: a unit in brackets stays on one line (``[m + rad]``); left-aligned over
+    a column of long text."""
     body = re.sub(r"\[[^\]]*\]", lambda m: m.group(0).replace(" ", "\u00a0"), str(text))
-    return f"<th>{inline_html(body)}</th>"
+    css = ' class="text"' if text_column else ""
+    return f"<th{css}>{inline_html(body)}</th>"
 
 
 _NUMBER = re.compile(r"[-+]?(\d[\d,]*\.?\d*|\.\d+)(e[-+]?\d+)?\s*(%|x|[a-zµ]{1,3})?(\s*\(.*\))?|-|inf|-inf|nan",
@@ -235,7 +237,8 @@ def to_html(doc: Document) -> str:
         elif isinstance(block, Preformatted):
             parts.append(f"<pre>{esc(block.text)}</pre>")
         elif isinstance(block, Table):
-            head = "".join(_header(h) for h in block.headers)
+            text_columns = {j for row in block.rows for j, c in enumerate(row) if len(str(c)) > WRAP_ABOVE}
+            head = "".join(_header(h, j in text_columns) for j, h in enumerate(block.headers))
             body = "".join("<tr>" + "".join(_cell(c) for c in row) + "</tr>" for row in block.rows)
             parts.append(f'<div class="scroll"><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>')
             if block.caption:
