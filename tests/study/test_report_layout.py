@@ -40,6 +40,14 @@ def _two_kinds(n_reps=6):
     return records
 
 
+def _filled(rows):
+    """``(group of the row, row)``: the group name carried down to the rows that leave it blank."""
+    group = None
+    for row in rows:
+        group = row[0] or group
+        yield group, row
+
+
 FIELDS = Fields(error="fitness", group_by=("case",), error_unit="rad",
                 conditions="2000 evaluations; success = fitness below the reference + 1e-6")
 
@@ -53,7 +61,8 @@ def test_rows_per_group_do_not_pool_instances(tmp_path):
     data = ReportData.load(_results(tmp_path, FIELDS, _two_kinds()))
     table = method_table(data)
     assert table.headers[:2] == ["case", "method"]
-    rows = {(r[0], r[1]): dict(zip(table.headers, r)) for r in table.rows}
+    assert [r[0] for r in table.rows] == ["big", "", "small", ""]  # a group's name on its first row
+    rows = {(r[0] or prev, r[1]): dict(zip(table.headers, r)) for prev, r in _filled(table.rows)}
     assert list(rows) == [("big", "ga"), ("big", "pso"), ("small", "ga"), ("small", "pso")]
     # medians per instance (15.025 and 21.025), never the pooled 18 of both
     assert rows[("small", "ga")]["fitness median [rad]"] == "15"
@@ -76,11 +85,10 @@ def test_a_failing_row_says_why(tmp_path):
     data = ReportData.load(_results(tmp_path, FIELDS, _two_kinds()))
     table = method_table(data)
     assert table.headers[-1] == "why not 100 %"
-    rows = {(r[0], r[1]): r[-1] for r in table.rows}
+    rows = {(r[0] or prev, r[1]): r[-1] for prev, r in _filled(table.rows)}
     note = rows[("big", "pso")]
-    assert note.startswith("6 of 6 failed")
-    assert "2,000 evaluations" in note and "budget" in note
-    assert '"budget exhausted"' in note
+    assert note.startswith("6/6 failed: budget spent (2,000 evaluations each); fitness 21 rad (median)")
+    assert note.endswith('6x "budget exhausted"')
     assert rows[("small", "ga")] == ""
     assert "2000 evaluations; success = fitness below" in table.caption
 

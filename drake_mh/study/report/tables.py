@@ -23,6 +23,8 @@ def fmt(value: float, digits: int = 3) -> str:
         return "-"
     if math.isinf(value):
         return "inf" if value > 0 else "-inf"
+    if digits <= 4 and 1e3 <= abs(value) < 1e6:
+        return f"{value:,.0f}"  # 3,040 rather than 3.04e+03
     return f"{value:.{digits}g}"
 
 
@@ -64,41 +66,43 @@ def failure_note(data: ReportData, records: list[dict], time_scale: tuple[str, f
     failed = [r for r in records if not is_success(r, fields)]
     if not failed:
         return ""
-    parts = [f"{len(failed)} of {len(records)} failed"]
+    parts = [f"{len(failed)}/{len(records)} failed"]
     raised = [r for r in failed if r.get("status") == "error"]
     if raised:
-        kinds = Counter(str(r.get("exception_type") or "exception") for r in raised).most_common(1)[0]
-        parts.append(f"{len(raised)} raised ({kinds[0]})")
+        kind = Counter(str(r.get("exception_type") or "exception") for r in raised).most_common(1)[0][0]
+        parts.append(f"{len(raised)} raised {kind}")
     ran = [r for r in failed if r.get("status") == "ok"]
     nfe = np.array([as_float(r.get(fields.nfe)) for r in ran])
     nfe = nfe[np.isfinite(nfe)]
     if nfe.size:
         most = max(as_float(r.get(fields.nfe)) for r in records if np.isfinite(as_float(r.get(fields.nfe))))
         if np.all(nfe == most) and most > 0:
-            parts.append(f"each used {most:,.0f} evaluations (the most of any case: budget spent)")
+            parts.append(f"budget spent ({most:,.0f} evaluations each)")
         else:
-            parts.append(f"evaluations median {np.median(nfe):,.0f}")
+            parts.append(f"{np.median(nfe):,.0f} evaluations (median)")
     error = np.array([as_float(r.get(fields.error)) for r in ran])
     error = error[np.isfinite(error)]
     if error.size:
-        parts.append(f"{fields.error} median {fmt(np.median(error))}" + (f" {fields.error_unit}" if fields.error_unit else ""))
+        unit = f" {fields.error_unit}" if fields.error_unit else ""
+        parts.append(f"{fields.error} {fmt(np.median(error))}{unit} (median)")
     times = np.array([as_float(r.get(fields.time)) for r in ran])
     times = times[np.isfinite(times)]
-    if times.size and time_scale is not None:
+    if times.size and time_scale is not None and not nfe.size:
         unit, factor = time_scale
-        parts.append(f"time median {fmt(np.median(times) * factor)} {unit}")
+        parts.append(f"time {fmt(np.median(times) * factor)} {unit} (median)")
     messages = Counter(str(r.get(fields.message)).strip() for r in ran if r.get(fields.message))
     if messages:
         text, count = messages.most_common(1)[0]
-        parts.append(f"commonest message ({count}): \"{text[:120]}\"")
-    return "; ".join(parts)
+        parts.append(f"{count}x \"{text[:80]}\"")
+    return parts[0] + ": " + "; ".join(parts[1:]) if len(parts) > 1 else parts[0]
 
 
 def method_table(data: ReportData) -> Table:
     """Per-method table: cases, exceptions, success rate, time / error spread, evaluations.
 
     One row per method, or per (group, method) when the study declares ``fields.group_by``
-    (instances of a different kind are never pooled). Every header states its unit; times
+    (instances of a different kind are never pooled; the group's values are written on its
+    first row only). Every header states its unit; times
     are shown in the unit (s, ms, µs) that suits the column. Rows with failures get a note
     saying why (see :func:`failure_note`). Time, error and evaluation statistics are over
     the cases that did not raise; the success rate is over all cases (a case that raised
@@ -123,10 +127,11 @@ def method_table(data: ReportData) -> Table:
         headers += [f"{fields.nfe} median [count]", f"{fields.nfe} mean [count]"]
     rows, notes = [], []
     for group, group_records in data.by_group().items():
-        for method, records in data.by_method(group_records).items():
+        for index, (method, records) in enumerate(data.by_method(group_records).items()):
             n = len(records)
             raised = sum(1 for r in records if r.get("status") == "error")
-            row = [str(v) for v in group] + [method, str(n), str(raised)]
+            # the group's values on its first row only: the eye finds where a group starts
+            row = [str(v) if index == 0 else "" for v in group] + [method, str(n), str(raised)]
             if has_success:
                 rate = sum(1 for r in records if is_success(r, fields)) / n if n else math.nan
                 row.append(f"{100 * rate:.1f}")
