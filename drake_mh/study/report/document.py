@@ -110,10 +110,10 @@ def to_markdown(doc: Document) -> str:
 
 
 _CSS = """
-body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:2em auto;max-width:1200px;padding:0 1em;color:#222}
+body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:2em auto;max-width:1320px;padding:0 1em;color:#222}
 h1{font-size:1.6em}h2{font-size:1.25em;margin-top:1.6em;border-bottom:1px solid #ddd}h3{font-size:1.05em}
-table{border-collapse:collapse;margin:.5em 0;font-size:.9em}
-th,td{border:1px solid #ccc;padding:.25em .6em;text-align:right}th{background:#f3f3f3}
+table{border-collapse:collapse;margin:.5em 0;font-size:.88em}
+th,td{border:1px solid #ccc;padding:.25em .5em;text-align:right}th.name{text-align:left}th{background:#f3f3f3}
 td:first-child,th:first-child{text-align:left}
 td{white-space:nowrap}td.name{text-align:left}td.text,th.text{white-space:normal;text-align:left;min-width:14em}
 .caption{color:#555;font-size:.85em;font-style:italic;margin:.2em 0 1em}
@@ -138,12 +138,26 @@ def inline_html(text: str) -> str:
     return "".join(out)
 
 
-def _header(text, text_column: bool = False) -> str:
-    """A header cell: a unit in brackets stays on one line (``[m + rad]``); left-aligned over
-    a column of long text."""
+def _header(text, kind: str = "") -> str:
+    """A header cell aligned like its column (``kind``: ``""`` numbers, ``"name"`` words,
+    ``"text"`` long text); a unit in brackets stays on one line (``[m + rad]``)."""
     body = re.sub(r"\[[^\]]*\]", lambda m: m.group(0).replace(" ", "\u00a0"), str(text))
-    css = ' class="text"' if text_column else ""
+    css = f' class="{kind}"' if kind else ""
     return f"<th{css}>{inline_html(body)}</th>"
+
+
+def _cell_kind(text: str) -> str:
+    """``"text"`` (long, may wrap), ``""`` (a number or empty: right-aligned, never wraps) or ``"name"``."""
+    if len(text) > WRAP_ABOVE:
+        return "text"
+    return "" if not text.strip() or _NUMBER.fullmatch(text.strip()) else "name"
+
+
+def _column_kind(cells: list) -> str:
+    """A column's alignment: ``"text"`` if any cell is long text, ``""`` if every cell is a
+    number (or empty), else ``"name"``."""
+    kinds = {_cell_kind(str(c)) for c in cells}
+    return "text" if "text" in kinds else "name" if "name" in kinds else ""
 
 
 _NUMBER = re.compile(r"[-+]?(\d[\d,]*\.?\d*|\.\d+)(e[-+]?\d+)?\s*(%|x|[a-zµ]{1,3})?(\s*\(.*\))?|-|inf|-inf|nan",
@@ -154,12 +168,8 @@ def _cell(text) -> str:
     """A body cell: long text may wrap (left-aligned), numbers never wrap (right-aligned),
     short words (names) are left-aligned."""
     text = str(text)
-    if len(text) > WRAP_ABOVE:
-        css = ' class="text"'
-    elif _NUMBER.fullmatch(text.strip()) or not text.strip():
-        css = ""
-    else:
-        css = ' class="name"'
+    kind = _cell_kind(text)
+    css = f' class="{kind}"' if kind else ""
     return f"<td{css}>{inline_html(text)}</td>"
 
 
@@ -237,8 +247,8 @@ def to_html(doc: Document) -> str:
         elif isinstance(block, Preformatted):
             parts.append(f"<pre>{esc(block.text)}</pre>")
         elif isinstance(block, Table):
-            text_columns = {j for row in block.rows for j, c in enumerate(row) if len(str(c)) > WRAP_ABOVE}
-            head = "".join(_header(h, j in text_columns) for j, h in enumerate(block.headers))
+            kinds = [_column_kind([row[j] for row in block.rows if j < len(row)]) for j in range(len(block.headers))]
+            head = "".join(_header(h, kind) for h, kind in zip(block.headers, kinds))
             body = "".join("<tr>" + "".join(_cell(c) for c in row) + "</tr>" for row in block.rows)
             parts.append(f'<div class="scroll"><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>')
             if block.caption:

@@ -147,6 +147,8 @@ def convergence_figure(data: ReportData) -> FigureFile | None:
 
 #: fewer cases than this per method and panel are drawn as points (a box of 1-4 values says little)
 STRIP_BELOW = 5
+#: widest figure [in] (at 100 dpi: about the report's page width)
+MAX_FIGURE_WIDTH = 16.0
 #: box-plot panels at most (groups x metrics); the others are left out (the table has them all)
 MAX_BOX_PANELS = 24
 
@@ -281,10 +283,11 @@ def box_figure(data: ReportData) -> FigureFile | None:
         return None
     left_out = max(0, len(panels) - MAX_BOX_PANELS)
     panels = panels[:MAX_BOX_PANELS]
-    columns = len(panels) if side_by_side or len(groups) == 1 else min(len(groups), 4)
-    rows = -(-len(panels) // columns)
     most = max(len(p[2]) for p in panels)
-    width = max(3.4, 1.0 + 0.75 * most)
+    width = max(3.4, 1.0 + 0.55 * most)
+    columns = len(panels) if side_by_side or len(groups) == 1 else min(len(groups), 4)
+    columns = max(1, min(columns, int(MAX_FIGURE_WIDTH // width)))  # legible when shown 1300 px wide
+    rows = -(-len(panels) // columns)
     fig = _figure(width * columns, 3.3 * rows)
     axes = fig.subplots(rows, columns, squeeze=False).ravel()
     for ax in axes[len(panels):]:
