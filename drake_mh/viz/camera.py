@@ -116,7 +116,7 @@ def camera_pose(points_W, normal=None, margin: float = 1.2, min_radius: float = 
     half = np.radians(FIELD_OF_VIEW_DEG) / 2
     if aspect < 1:
         half = np.arctan(np.tan(half) * aspect)
-    distance = radius / np.sin(half) if normal is None else radius / np.tan(half)
+    distance = radius / np.tan(half)  # the bounding circle fits the vertical field of view
     return target + distance * direction, target
 
 
