@@ -138,18 +138,34 @@ def reuse_message(out: Path, earlier: Earlier) -> str:
 
 
 def key_figures(folder: Path, study: str) -> list:
-    """The study report's key figures (:data:`KEY_FIGURES`, at most two) as report blocks."""
+    """The study report's key blocks for the demo page: the reasons of success rates below
+    100 % (a small table, when there are any) and its key figures (:data:`KEY_FIGURES`, at
+    most two)."""
     from drake_mh.study.report import ReportData, build_document
     from drake_mh.study.report.plots import FigureFile
+    from drake_mh.study.report.tables import Table, method_table
 
     try:
-        doc = build_document(ReportData.load(folder))
+        data = ReportData.load(folder)
+        doc = build_document(data)
     except Exception as exc:  # a figure must not sink the demo page
         logger.warning("no figures from %s: %s", folder, exc)
         return []
+    blocks: list = []
+    table = method_table(data)
+    if table.headers[-1] == "why not 100 %":
+        names = len(data.group_keys) + 1  # group columns and the method
+        rate = table.headers.index("success [%]")
+        rows, group = [], []
+        for row in table.rows:
+            group = row[:names - 1] if any(row[:names - 1]) else group  # the table names a group once
+            if row[-1]:
+                rows.append(group + row[names - 1:names] + [row[rate], row[-1]])
+        caption = f"A case succeeds within: {data.fields.conditions.rstrip('.')}." if data.fields.conditions else ""
+        blocks.append(Table(table.headers[:names] + ["success [%]", "why not 100 %"], rows, caption))
     figures = {b.name: b for b in doc.blocks if isinstance(b, FigureFile)}
     chosen = [figures[n] for n in KEY_FIGURES if n in figures][:2]
-    return [FigureFile(f"{study}-{f.name}", f.png, f.caption) for f in chosen]
+    return blocks + [FigureFile(f"{study}-{f.name}", f.png, f.caption) for f in chosen]
 
 
 def demo_animation(out: Path) -> object | None:

@@ -199,10 +199,15 @@ def test_demo_move_aside_keeps_earlier_results(tmp_path):
 
 def test_demo_key_figures_come_from_the_study_report(tmp_path):
     from drake_mh.study.demo import key_figures
+    from drake_mh.study.report.plots import FigureFile
 
-    figures = key_figures(_results(tmp_path / "s", FIELDS, _two_kinds()), "s")
-    assert [f.name for f in figures] == ["s-boxplots"]
-    assert figures[0].png.startswith(b"\x89PNG") and "case" in figures[0].caption
+    blocks = key_figures(_results(tmp_path / "s", FIELDS, _two_kinds()), "s")
+    why, figure = blocks
+    assert isinstance(why, Table) and why.headers == ["case", "method", "success [%]", "why not 100 %"]
+    assert why.rows == [["big", "pso", "0.0", why.rows[0][-1]]] and "budget spent" in why.rows[0][-1]
+    assert "2000 evaluations" in why.caption
+    assert isinstance(figure, FigureFile) and figure.name == "s-boxplots"
+    assert figure.png.startswith(b"\x89PNG") and "case" in figure.caption
 
 
 def test_examples_show_an_animation_per_group_and_method(tmp_path):
