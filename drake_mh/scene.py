@@ -10,8 +10,14 @@ asked, robot self-distances (Drake already filters adjacent links) — come from
 (:mod:`drake_mh.segment_distance`), because Drake 1.51 was measured up to 6.7 mm optimistic there.
 
 For populations, :meth:`Scene.batch_min_distance` uses the robot's
-:class:`drake_mh.spheres.SphereModel` and the obstacles' closed-form signed distances:
-it never reports more clearance than Drake and is at most ``sphere_model.bound`` pessimistic.
+:class:`drake_mh.spheres.SphereModel` and the obstacles' closed-form signed distances. Its
+guarantee (``d`` the exact distance, ``m`` the model's): ``m <= d`` everywhere, penetration
+included (where a sphere reports penetration, :mod:`drake_mh.penetration` replaces the value by
+a lower bound of the exact one), and ``d - bound <= m`` where ``d >= 0`` (exception in
+:mod:`drake_mh.spheres`).
+
+A robot without collision geometry has no clearance: every query that needs one raises
+:class:`drake_mh.errors.SceneError` instead of answering ``inf`` (which would read as "clear").
 """
 
 from __future__ import annotations
@@ -244,22 +250,50 @@ class Scene:
 
     def _refine(self, query, robot_id, obstacle: Obstacle):
         """Exact capsule-vs-box/cylinder/capsule distance where Drake uses GJK (see
-        :mod:`drake_mh.segment_distance`: Drake 1.51 was measured up to 6.7 mm optimistic)."""
+        :mod:`drake_mh.segment_distance`: Drake 1.51 was measured up to 6.7 mm optimistic), for
+        a capsule link or a capsule obstacle."""
         from drake_mh.segment_distance import capsule_distance
         from drake_mh.shapes import Capsule, Sphere, from_drake
+
+        from drake_mh.shapes import Box, Cylinder
 
         if isinstance(obstacle.shape, Sphere):
             return None  # sphere pairs are closed-form in Drake
         if robot_id not in self._robot_shapes:
             self._robot_shapes[robot_id] = from_drake(query.inspector().GetShape(robot_id))
         shape = self._robot_shapes[robot_id]
-        if not isinstance(shape, Capsule):
-            return None
-        X_WC = query.GetPoseInWorld(robot_id).GetAsMatrix4()
-        return capsule_distance(X_WC, shape.radius, shape.length, obstacle.X_WO, obstacle.shape)
+        X_WG = query.GetPoseInWorld(robot_id).GetAsMatrix4()
+        if isinstance(shape, Capsule):
+            return capsule_distance(X_WG, shape.radius, shape.length, obstacle.X_WO, obstacle.shape)
+        if isinstance(obstacle.shape, Capsule) and isinstance(shape, (Box, Cylinder)):
+            # the same search with the roles swapped (Drake's GJK measured 13 mm optimistic for a
+            # box link and a capsule obstacle)
+            out = capsule_distance(obstacle.X_WO, obstacle.shape.radius, obstacle.shape.length, X_WG, shape)
+            return out[0], out[2], out[1], -out[3]
+        return None
+
+    def _require_geometry(self) -> None:
+        if not self._robot_ids:
+            raise SceneError(
+                f"robot {self.robot.name!r} has no collision geometry, so its distance to obstacles "
+                "is unknown (not infinite); add <collision> elements to its links in the model file")
 
     def min_distance(self, q) -> float:
-        """Smallest exact signed distance [m] over all pairs; ``inf`` if there is none."""
+        """Smallest exact signed distance [m] over all pairs (link-obstacle, and link-link with
+        ``self_collision``).
+
+        Exact means Drake's value, refined for capsule links against boxes, cylinders and
+        capsules (:meth:`distances`); for mesh links against those shapes it is Drake's GJK/EPA
+        value (refine with the sphere model's lower bound if in doubt).
+
+        Returns:
+            The distance; ``inf`` when there is nothing to collide with (no obstacle, and no
+            self-collision pair).
+
+        Raises:
+            SceneError: the robot has no collision geometry.
+        """
+        self._require_geometry()
         pairs = self.distances(q)
         return pairs[0].distance if pairs else np.inf
 
@@ -276,8 +310,13 @@ class Scene:
 
     @functools.cached_property
     def sphere_model(self) -> SphereModel:
-        """The robot's :class:`SphereModel` (the robot's own unless another tolerance was asked)."""
-        if self._sphere_tolerance == self.robot.sphere_model.tolerance:
+        """The robot's :class:`SphereModel` (the robot's own unless another tolerance was asked).
+
+        Raises:
+            SceneError: the robot has no collision geometry.
+        """
+        self._require_geometry()
+        if self._sphere_tolerance == DEFAULT_TOLERANCE:
             return self.robot.sphere_model
         return SphereModel.from_robot(self.robot, self._sphere_tolerance)
 
@@ -286,27 +325,59 @@ class Scene:
         model = self.sphere_model
         return self.robot.batch.compile_points(list(model.links), model.centres_B)
 
+    @functools.cached_property
+    def _compiled_cores(self):
+        from drake_mh.penetration import core_points
+
+        return self.robot.batch.compile_points(*core_points(self.sphere_model))
+
     def sphere_centres(self, Q) -> np.ndarray:
         """World positions ``(N, S, 3)`` of the sphere model's centres."""
         return self.robot.batch.points(Q, *self._compiled_spheres)
 
     def batch_obstacle_distances(self, Q) -> np.ndarray:
-        """Conservative clearance ``(N, K)`` of the robot to each of the K obstacles [m]."""
+        """Conservative clearance ``(N, K)`` of the robot to each of the K obstacles [m].
+
+        Never more than the exact distance (penetration included); at most
+        ``sphere_model.bound`` less where the exact distance is >= 0 (module docstring).
+
+        Raises:
+            SceneError: the robot has no collision geometry.
+        """
+        from drake_mh.penetration import corrected_min
+
+        model = self.sphere_model
         centres_W = self.sphere_centres(Q)
-        radii = self.sphere_model.radii
+        radii = model.radii
         out = np.empty((centres_W.shape[0], len(self._obstacles)))
+        deep = []
         for k, obstacle in enumerate(self._obstacles.values()):
             R, p = obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3]
             centres_O = (centres_W - p) @ R
-            out[:, k] = (obstacle.shape.signed_distance(centres_O) - radii).min(axis=1)
+            per_sphere = obstacle.shape.signed_distance(centres_O) - radii
+            out[:, k] = per_sphere.min(axis=1)
+            rows = np.flatnonzero(out[:, k] < 0)
+            if len(rows):  # a sphere penetrates: the union's value may be too shallow there
+                deep.append((k, obstacle, rows, per_sphere[rows]))
+        if deep:
+            Q = self.robot.check_Q(Q)
+            rows_all = np.unique(np.concatenate([rows for _, _, rows, _ in deep]))
+            points_W = self.robot.batch.points(Q[rows_all], *self._compiled_cores)
+            for k, obstacle, rows, per_sphere in deep:
+                out[rows, k] = corrected_min(model, per_sphere, points_W[np.searchsorted(rows_all, rows)], obstacle)
         return out
 
     def batch_min_distance(self, Q) -> np.ndarray:
-        """Conservative minimum clearance ``(N,)`` to the obstacles [m] (``inf`` if none).
+        """Conservative minimum clearance ``(N,)`` to the obstacles [m] (``inf`` if there is none).
 
-        Never more than Drake's exact distance, at most ``sphere_model.bound`` less. Robot
-        self-distances are not included (use :meth:`distances` with ``self_collision``).
+        Never more than the exact distance of :meth:`min_distance` (in penetration too), at most
+        ``sphere_model.bound`` less where that is >= 0 (module docstring). Robot self-distances
+        are not included (use :meth:`distances` with ``self_collision``).
+
+        Raises:
+            SceneError: the robot has no collision geometry.
         """
+        self._require_geometry()
         if not self._obstacles:
             Q = self.robot.check_Q(Q)
             return np.full(Q.shape[0], np.inf)

@@ -9,6 +9,10 @@ of cylinders and capsules is z, as in Drake) with
 
 These closed forms are used by the batched distance queries of the sphere model; the exact
 robot-obstacle distances always come from Drake.
+
+A robot's collision geometry may also be an :class:`Ellipsoid` or a :class:`ConvexPolytope`
+(Drake's ``Convex`` and ``Mesh``, both used by Drake's proximity queries as their convex hull).
+These two are not obstacle shapes: the sphere model covers them (:mod:`drake_mh.sphere_cover`).
 """
 
 from __future__ import annotations
@@ -117,19 +121,89 @@ class Capsule:
         return np.sqrt(p_O[..., 0] ** 2 + p_O[..., 1] ** 2 + (p_O[..., 2] - z) ** 2) - self.radius
 
 
-Shape = Sphere | Box | Cylinder | Capsule
+@dataclass(frozen=True)
+class Ellipsoid:
+    """Ellipsoid with semi-axes ``(a, b, c)`` [m] along x, y, z, centred at the frame origin.
+
+    Robot collision geometry only (no closed-form signed distance; the sphere model covers it
+    through a circumscribed polytope).
+    """
+
+    a: float
+    b: float
+    c: float
+
+    def __post_init__(self):
+        for name in "abc":
+            object.__setattr__(self, name, _positive(f"Ellipsoid semi-axis {name}", getattr(self, name)))
 
 
-def from_drake(shape) -> Shape:
-    """Convert a ``pydrake.geometry`` shape to a drake_mh shape.
+@dataclass(frozen=True, eq=False)
+class ConvexPolytope:
+    """The convex hull of ``vertices_G (V, 3)`` [m], in the geometry frame G.
+
+    Attributes:
+        vertices: ``(V, 3)`` the hull's vertices (interior points dropped).
+        normals: ``(F, 3)`` outward unit facet normals.
+        offsets: ``(F,)``; a point p is inside iff ``normals @ p + offsets <= 0`` for every facet.
 
     Raises:
-        UnsupportedGeometry: meshes, ellipsoids, half spaces ... (model the link with
-            spheres, capsules, cylinders or boxes instead).
+        UnsupportedGeometry: fewer than 4 points or all points in a plane (no volume).
+    """
+
+    vertices: np.ndarray
+    normals: np.ndarray = None
+    offsets: np.ndarray = None
+
+    def __post_init__(self):
+        from scipy.spatial import ConvexHull, QhullError
+
+        points = np.asarray(self.vertices, dtype=float).reshape(-1, 3)
+        if len(points) < 4 or not np.all(np.isfinite(points)):
+            raise UnsupportedGeometry(f"a convex collision mesh needs at least 4 finite vertices, got {len(points)}")
+        try:
+            hull = ConvexHull(points)
+        except QhullError as exc:
+            raise UnsupportedGeometry(
+                "the convex hull of a collision mesh has no volume (all vertices in a plane?); "
+                "give the link a solid collision shape") from exc
+        # coplanar triangles give repeated facet planes: keep one of each
+        planes = np.unique(np.round(hull.equations, 12), axis=0)
+        planes /= np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+        object.__setattr__(self, "vertices", np.ascontiguousarray(points[hull.vertices]))
+        object.__setattr__(self, "normals", np.ascontiguousarray(planes[:, :3]))
+        object.__setattr__(self, "offsets", np.ascontiguousarray(planes[:, 3]))
+
+    def halfspace_distance(self, p_G: np.ndarray) -> np.ndarray:
+        """``max_k (n_k . p + d_k)`` ``(...)`` [m]: the exact signed distance for points inside,
+        a lower bound of it (>= 0) for points outside."""
+        return (np.asarray(p_G) @ self.normals.T + self.offsets).max(axis=-1)
+
+    def fingerprint(self) -> bytes:
+        """Bytes that identify the polytope (for cache keys)."""
+        return np.ascontiguousarray(self.vertices).tobytes()
+
+
+Shape = Sphere | Box | Cylinder | Capsule
+RobotShape = Sphere | Box | Cylinder | Capsule | Ellipsoid | ConvexPolytope
+
+
+def from_drake(shape) -> RobotShape:
+    """Convert a ``pydrake.geometry`` shape to a drake_mh shape.
+
+    ``Convex`` and ``Mesh`` become the :class:`ConvexPolytope` of their convex hull (scale
+    included), which is what Drake's distance queries use for them.
+
+    Raises:
+        UnsupportedGeometry: half spaces, mesh files Drake cannot read ... (the message says
+            which shape and what to use instead).
     """
     from pydrake.geometry import Box as DBox
     from pydrake.geometry import Capsule as DCapsule
+    from pydrake.geometry import Convex as DConvex
     from pydrake.geometry import Cylinder as DCylinder
+    from pydrake.geometry import Ellipsoid as DEllipsoid
+    from pydrake.geometry import Mesh as DMesh
     from pydrake.geometry import Sphere as DSphere
 
     if isinstance(shape, DSphere):
@@ -140,9 +214,21 @@ def from_drake(shape) -> Shape:
         return Cylinder(shape.radius(), shape.length())
     if isinstance(shape, DBox):
         return Box((shape.width(), shape.depth(), shape.height()))
+    if isinstance(shape, DEllipsoid):
+        return Ellipsoid(shape.a(), shape.b(), shape.c())
+    if isinstance(shape, (DConvex, DMesh)):
+        try:
+            hull = shape.GetConvexHull()
+        except Exception as exc:  # Drake reads the file here (RuntimeError on formats it lacks)
+            raise UnsupportedGeometry(
+                f"cannot take the convex hull of collision mesh {shape.source().description()!r}: "
+                f"{str(exc).strip().splitlines()[-1] if str(exc).strip() else exc}; "
+                "convert it to .obj (drake_mh.load_robot does this for .stl/.dae)") from exc
+        return ConvexPolytope(np.array([hull.vertex(i) for i in range(hull.num_vertices())]))
     raise UnsupportedGeometry(
         f"collision shape {type(shape).__name__} is not supported by the sphere model; "
-        "describe the link's collision geometry with spheres, capsules, cylinders or boxes")
+        "describe the link's collision geometry with spheres, capsules, cylinders, boxes, "
+        "ellipsoids or convex meshes")
 
 
 def as_shape(shape) -> Shape:

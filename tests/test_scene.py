@@ -7,7 +7,8 @@ from hypothesis import strategies as st
 
 import drake_mh
 from drake_mh.errors import FrameNotFound, SceneError, UnknownObstacle
-from drake_mh.scene import Box, Cylinder, Scene, Sphere
+from drake_mh.scene import Box, Capsule, Cylinder, Scene, Sphere
+from sphere_fixtures import mesh_arm_urdf, no_geometry_urdf, primitive_arm_urdf
 
 PANDA = drake_mh.load_robot("panda")
 
@@ -84,24 +85,138 @@ def test_self_collision_pairs():
     assert all({p.link, p.other} != {"panda_link5", "panda_link7"} for p in filtered.distances(np.zeros(7)))
 
 
+def _check_guarantee(scene, Q, extra_pessimism=0.0):
+    """The sphere model's guarantee against the exact distance (module docstring of scene.py)."""
+    exact = scene.exact_min_distance(Q)
+    approx = scene.batch_min_distance(Q)
+    # never more clearance than the exact distance, penetration included (1e-9: round-off)
+    assert np.all(approx <= exact + 1e-9), f"model above exact by {np.max(approx - exact):.3g} m"
+    # every collision Drake sees, the sphere model sees
+    assert np.all(approx[exact < 0] < 0)
+    # at most `bound` pessimistic where the exact distance is >= 0
+    clear = exact >= 0
+    assert np.all(exact[clear] - approx[clear] <= scene.sphere_model.bound + extra_pessimism + 1e-9)
+    return exact, approx
+
+
 @settings(max_examples=20, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1))
 def test_sphere_model_is_conservative_and_tight(seed):
     scene = make_scene()
-    Q = PANDA.random_configurations(40, seed)
-    exact = scene.exact_min_distance(Q)
-    approx = scene.batch_min_distance(Q)
-    clear = exact >= 0
-    # never more clearance than the exact distance, at most `bound` less (Scene refines the
-    # capsule-box/cylinder pairs that Drake's GJK gets up to 6.7 mm wrong; 1e-9 for round-off)
-    gjk = 1e-9
-    assert np.all(approx[clear] <= exact[clear] + gjk)
-    assert np.all(exact[clear] - approx[clear] <= scene.sphere_model.bound + gjk)
-    # every collision Drake sees, the sphere model sees
-    assert np.all(approx[~clear] < 0)
+    _check_guarantee(scene, PANDA.random_configurations(40, seed), extra_pessimism=0.02 * 0.05)
+
+
+def _obstacle_near_the_arm(robot, rng, kind):
+    """A random obstacle centred near a random point of the arm (so that some configurations
+    collide, some nearly touch)."""
+    model = robot.sphere_model
+    q = robot.random_configurations(1, int(rng.integers(1 << 31)))
+    centre = robot.batch.sphere_centres(q)[0][rng.integers(model.num_spheres)] + rng.normal(0, 0.08, 3)
+    size = rng.uniform(0.02, 0.12)
+    shape = {"sphere": Sphere(size), "box": Box(rng.uniform(0.02, 0.25, 3)),
+             "cylinder": Cylinder(size, rng.uniform(0.05, 0.5)), "capsule": Capsule(size, rng.uniform(0.0, 0.4))}[kind]
+    return shape, centre, rng.uniform(-np.pi, np.pi, 3)
+
+
+def _random_scene_check(robot, seed, n=60):
+    """Random obstacles of every kind near the arm; the guarantee against Scene's exact distance.
+
+    Two allowances on the *pessimism* side only (the never-more-clearance side stays strict):
+    a cylinder obstacle is handled as its circumscribed 16-gon prism (2 % of its radius), and
+    Drake's GJK distance of a mesh, box or cylinder link to a box, cylinder or capsule obstacle
+    is not refined by Scene and was seen 0.2 mm optimistic (3 mm allowed; capsule links are
+    refined exactly)."""
+    rng = np.random.default_rng(seed)
+    polytope_links = any(core.kind == 1 for core in robot.sphere_model.geometries)
+    for kind in ("sphere", "box", "cylinder", "capsule"):
+        scene = Scene(robot)
+        shape, centre, rpy = _obstacle_near_the_arm(robot, rng, kind)
+        scene.add("o", shape, centre, rpy=rpy)
+        extra = 0.02 * shape.radius if isinstance(shape, Cylinder) else 0.0
+        if polytope_links and not isinstance(shape, Sphere):
+            extra += 0.003
+        _check_guarantee(scene, robot.random_configurations(n, int(rng.integers(1 << 31))), extra)
+
+
+@pytest.mark.parametrize("name", drake_mh.available_robots())
+@settings(max_examples=3, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_sphere_model_guarantee_on_every_bundled_robot(name, seed):
+    _random_scene_check(drake_mh.load_robot(name), seed)
+
+
+@pytest.fixture(scope="module")
+def mesh_and_primitive_robots(tmp_path_factory):
+    """Robots with convex-mesh links and with cylinder/box/ellipsoid links (models built with a
+    private cache)."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("DRAKE_MH_CACHE", str(tmp_path_factory.mktemp("cache")))
+        robots = [drake_mh.Robot(mesh_arm_urdf(tmp_path_factory.mktemp("mesh_arm"))),
+                  drake_mh.Robot(primitive_arm_urdf())]
+        for robot in robots:
+            robot.sphere_model  # noqa: B018 (built here, under the private cache)
+    return robots
+
+
+@settings(max_examples=4, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_sphere_model_guarantee_on_mesh_and_primitive_robots(seed, mesh_and_primitive_robots):
+    for robot in mesh_and_primitive_robots:
+        _random_scene_check(robot, seed)
+
+
+def test_deep_penetration_is_never_shallower_than_exact():
+    """A ball centred on a Panda capsule's axis midway between two sphere centres: its depth in
+    either sphere is smaller than in the capsule. The per-sphere value alone reported more
+    clearance than Drake here (up to 7.8 mm on random Panda configurations)."""
+    scene = Scene(PANDA)
+    model = scene.sphere_model
+    q = PANDA.home
+    centres = scene.sphere_centres(q[None])[0]
+    g = next(i for i, c in enumerate(model.geometries) if c.half_length > 0.05)
+    idx = np.flatnonzero(model.geometry == g)[:2]
+    midpoint = centres[idx].mean(axis=0)
+    scene.add("ball", Sphere(0.02), midpoint)
+    exact = scene.min_distance(q)
+    per_sphere = (np.linalg.norm(centres - midpoint, axis=1) - model.radii - 0.02).min()
+    assert per_sphere > exact + 1e-3  # the case is real: spheres alone are too shallow
+    assert exact == pytest.approx(-model.geometries[g].radius - 0.02, abs=1e-9)
+    assert scene.batch_min_distance(q[None])[0] <= exact + 1e-9
+
+
+def test_no_collision_geometry_raises_instead_of_infinite_clearance():
+    robot = drake_mh.Robot(no_geometry_urdf())
+    scene = Scene(robot)
+    scene.add("ball", Sphere(0.1), [0.3, 0.0, 0.3])
+    q = np.zeros(robot.nq)
+    for query in (lambda: scene.min_distance(q), lambda: scene.batch_min_distance(q[None]),
+                  lambda: scene.batch_obstacle_distances(q[None]), lambda: scene.sphere_model,
+                  lambda: scene.in_collision(q)):
+        with pytest.raises(SceneError, match="no collision geometry"):
+            query()
+
+
+def test_example_robot_data_arms_sphere_guarantee(tmp_path_factory, monkeypatch):
+    """Real mesh robots as shipped (example-robot-data), when the loader can read them."""
+    monkeypatch.setenv("DRAKE_MH_CACHE", str(tmp_path_factory.getbasetemp() / "cache"))
+    try:
+        from robot_fixtures import ERD_ROBOTS, erd_root
+
+        root = erd_root()
+    except ImportError:  # the loading work (package:// resolution, mesh conversion) not there
+        pytest.skip("tests/robot_fixtures.py (example-robot-data paths) not available")
+    for name in ("panda", "ur5"):
+        rel, ee, _ = ERD_ROBOTS[name]
+        try:
+            robot = drake_mh.load_robot(root / rel, ee_frame=ee)
+        except Exception as exc:  # the loader is not there yet: say why
+            pytest.skip(f"example-robot-data {name} does not load: {exc}")
+        assert robot.sphere_model.bound <= 0.01 + 1e-12
+        _random_scene_check(robot, seed=7, n=25)
 
 
 def test_no_obstacles_gives_infinite_clearance():
+    """A robot with geometry and nothing around it: inf is the true answer (no pair)."""
     scene = Scene(PANDA)
     assert scene.min_distance(PANDA.home) == np.inf
     assert np.all(scene.batch_min_distance(PANDA.random_configurations(3, 0)) == np.inf)

@@ -1,0 +1,233 @@
+"""Lower bounds of a geometry-obstacle signed distance where the sphere model reports penetration.
+
+The sphere model's value for one collision geometry H and an obstacle O is
+``s = min_i (sdf_O(c_i) - R_i)`` over H's spheres. Because the spheres contain H:
+
+* if the exact signed distance ``d >= 0``, then ``s <= d`` (the closest point of H lies in a
+  sphere);
+* if ``d < 0``, then ``s < 0`` (a point of H inside O lies in a sphere), but ``s`` can exceed
+  ``d``: ``-s`` is the obstacle's depth in *one* sphere, and O can reach deeper into H than into
+  any single sphere (a ball obstacle centred on a capsule's axis between two sphere centres).
+
+So wherever ``s < 0`` this module computes ``v <= d`` from the geometry's *core* (see
+:class:`drake_mh.spheres.GeometryCore`) and the model reports ``min(s, v)``, which is never more
+than ``d``. ``v`` is exact (to round-off) for:
+
+* ball and capsule obstacles against capsule / sphere links (segment-to-segment distance);
+* ball obstacles against any link whose centre lies inside the link's polytope (a ball
+  centred outside a convex geometry meets ``s <= d`` already, so nothing changes there);
+* box obstacles against capsule / sphere links (the exact segment-box distance when the axis is
+  outside the box; the separating-axis theorem, complete for a segment and a box, inside).
+
+Otherwise ``v`` is a separating-axis lower bound over the facet normals of the link's polytope
+and the obstacle's (a cylinder obstacle is replaced by its circumscribed 16-gon prism, which
+contains it): valid, possibly lower than ``d``. It is applied only where ``v < 0``; with the
+axis set incomplete (no edge-edge axes for a polytope link) a link within ``bound`` of a box or
+cylinder edge-on-edge may then read up to the separating-axis error below the exact distance.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numba
+import numpy as np
+
+from drake_mh.segment_distance import CAPSULE, SPHERE, primitive_code, segment_min_sdf
+from drake_mh.shapes import Box, Capsule, Sphere
+
+_PRISM_SIDES = 16
+
+
+@numba.njit(cache=True)
+def _segment_min_sdf_rows(kind, dims, A, B):
+    """``min_t sdf(A_n + t (B_n - A_n))`` for each row (obstacle frame)."""
+    out = np.empty(A.shape[0])
+    for n in range(A.shape[0]):
+        out[n] = segment_min_sdf(kind, dims, A[n], B[n])[1]
+    return out
+
+
+@numba.njit(cache=True)
+def _segment_core_kernel(kind, dims, R_WO, p_WO, pts, half_length, radius):
+    """For each pair m: ``min_t sdf_O(axis_m(t)) - radius_m`` (obstacle frame) and the axis' end
+    points ``a_O, b_O``; ``pts (m, 4, 3)`` are the geometry's origin and unit-axis tips in W."""
+    m_count = pts.shape[0]
+    out = np.empty(m_count)
+    a_O = np.empty((m_count, 3))
+    b_O = np.empty((m_count, 3))
+    for m in range(m_count):
+        for i in range(3):
+            c = 0.0
+            z = 0.0
+            for j in range(3):
+                c += R_WO[j, i] * (pts[m, 0, j] - p_WO[j])
+                z += R_WO[j, i] * (pts[m, 3, j] - pts[m, 0, j])
+            a_O[m, i] = c - half_length[m] * z
+            b_O[m, i] = c + half_length[m] * z
+        out[m] = segment_min_sdf(kind, dims, a_O[m], b_O[m])[1] - radius[m]
+    return out, a_O, b_O
+
+
+@functools.lru_cache(maxsize=256)
+def _obstacle_polytope(shape):
+    """``(vertices_O (V, 3), face normals_O (F, 3), edge directions_O (E, 3))`` of a box, or of
+    the prism with ``_PRISM_SIDES`` sides circumscribing a cylinder (it contains the cylinder)."""
+    if isinstance(shape, Box):
+        h = 0.5 * np.asarray(shape.size)
+        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * h
+        return corners, np.eye(3), np.eye(3)
+    k = _PRISM_SIDES
+    angles = 2.0 * np.pi * (np.arange(k) + 0.5) / k  # corner directions; faces at multiples of 2pi/k
+    ring = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(k)]) * (shape.radius / np.cos(np.pi / k))
+    half = np.array([0.0, 0.0, 0.5 * shape.length])
+    corners = np.vstack([ring - half, ring + half])
+    face = 2.0 * np.pi * np.arange(k // 2) / k  # k/2 directions, both signs are tried
+    normals = np.vstack([[0.0, 0.0, 1.0], np.column_stack([np.cos(face), np.sin(face), np.zeros(k // 2)])])
+    edges = np.vstack([[0.0, 0.0, 1.0], np.column_stack([-np.sin(angles[: k // 2] + np.pi / k),
+                                                         np.cos(angles[: k // 2] + np.pi / k), np.zeros(k // 2)])])
+    return corners, normals, edges
+
+
+def _sat(A: np.ndarray, B: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """Separating-axis lower bound ``(n,)`` of the signed distance between conv(A_n) and conv(B_n).
+
+    Args:
+        A: ``(n, Va, 3)`` or ``(Va, 3)``; B: ``(n, Vb, 3)`` or ``(Vb, 3)``;
+        axes: ``(n, M, 3)`` or ``(M, 3)`` (need not be unit; near-zero ones are skipped).
+
+    For every unit axis u, the gap between the two projections is a lower bound of the signed
+    distance (it is the distance when positive along the best axis of a complete set, and minus
+    the penetration depth when the sets overlap and the set is complete).
+    """
+    n = max(len(x) if np.ndim(x) == 3 else 1 for x in (A, B, axes))
+    A, B, axes = (np.broadcast_to(np.asarray(x, dtype=float), (n,) + np.shape(x)[-2:]) for x in (A, B, axes))
+    norm = np.linalg.norm(axes, axis=-1, keepdims=True)
+    valid = norm[..., 0] > 1e-9
+    u = axes / np.where(norm > 1e-9, norm, 1.0)
+    pa = np.einsum("nvk,nmk->nvm", A, u)
+    pb = np.einsum("nvk,nmk->nvm", B, u)
+    gap = np.maximum(pb.min(axis=1) - pa.max(axis=1), pa.min(axis=1) - pb.max(axis=1))
+    return np.where(valid, gap, -np.inf).max(axis=1)
+
+
+def _to_obstacle_frame(R_WG, p_WG, obstacle):
+    """``(R_GO (n, 3, 3), p_GO (n, 3))``: the obstacle's pose in each geometry frame."""
+    R_WO, p_WO = obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3]
+    R_GO = np.einsum("nji,jk->nik", R_WG, R_WO)  # R_WG^T R_WO
+    p_GO = np.einsum("nji,nj->ni", R_WG, p_WO - p_WG)
+    return R_GO, p_GO
+
+
+def segment_lower_bound(half_length, radius, pts_W, obstacle) -> np.ndarray:
+    """``v (n,)`` <= the signed distance [m] between capsules (``half_length (n,)``, ``radius (n,)``,
+    axis z of G; ``pts_W (n, 4, 3)`` the origin and unit-axis tips of G in W) and an obstacle
+    (module docstring)."""
+    shape = obstacle.shape
+    kind, dims = primitive_code(shape)
+    v, a_O, b_O = _segment_core_kernel(kind, dims, obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3],
+                                       np.ascontiguousarray(pts_W), half_length, radius)
+    if kind in (SPHERE, CAPSULE):
+        return v  # segment to a point / segment core: exact
+    inside = v + radius <= 0  # the axis enters the obstacle: separating axes (complete for a box)
+    if inside.any():
+        corners, normals, edges = _obstacle_polytope(shape)
+        seg = np.stack([a_O[inside], b_O[inside]], axis=1)
+        direction = seg[:, 1] - seg[:, 0]
+        axes = np.concatenate([np.broadcast_to(normals, (len(seg),) + normals.shape),
+                               np.cross(direction[:, None, :], edges[None])], axis=1)
+        v[inside] = _sat(seg, corners, axes) - radius[inside]
+    return v
+
+
+def _segment_hits_polytope(a, b, normals, offsets) -> np.ndarray:
+    """Whether each segment ``a_n -> b_n`` meets the polytope ``normals @ p + offsets <= 0``
+    (clipping the parameter interval facet by facet)."""
+    fa = a @ normals.T + offsets
+    fb = b @ normals.T + offsets
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = fa / (fa - fb)  # where the segment crosses each facet plane
+    lo = np.where(fb < fa, t, -np.inf).max(axis=1, initial=0.0)  # entering facets
+    hi = np.where(fb > fa, t, np.inf).min(axis=1, initial=1.0)  # leaving facets
+    parallel_out = ((fa == fb) & (fa > 0)).any(axis=1)
+    return (np.maximum(lo, 0.0) <= np.minimum(hi, 1.0)) & ~parallel_out
+
+
+def polytope_lower_bound(core, R_WG: np.ndarray, p_WG: np.ndarray, obstacle) -> np.ndarray:
+    """``v (n,)`` <= the signed distance [m] between a polytope core (a
+    :class:`drake_mh.spheres.GeometryCore`) at poses ``R_WG, p_WG`` and an obstacle; ``+inf``
+    where the sphere value needs no correction (module docstring)."""
+    shape = obstacle.shape
+    R_GO, p_GO = _to_obstacle_frame(R_WG, p_WG, obstacle)
+    N, off = core.normals_G, core.offsets
+    if isinstance(shape, Sphere):
+        depth = (p_GO @ N.T + off).max(axis=1)
+        return np.where(depth < 0, depth - shape.radius, np.inf)
+    if isinstance(shape, Capsule):
+        # a capsule whose axis misses P meets s <= d already (as a ball centred outside P does)
+        half = 0.5 * shape.length * R_GO[:, :, 2]
+        a, b = p_GO - half, p_GO + half
+        hits = _segment_hits_polytope(a, b, N, off)
+        v = np.full(len(p_GO), np.inf)
+        if hits.any():
+            seg = np.stack([a[hits], b[hits]], axis=1)
+            axes = np.concatenate([np.broadcast_to(N, (len(seg),) + N.shape),
+                                   np.cross((seg[:, 1] - seg[:, 0])[:, None, :], core.edges_G[None])], axis=1)
+            v[hits] = _sat(core.vertices_G, seg, axes) - shape.radius
+        return v
+    else:
+        corners, normals, edges = _obstacle_polytope(shape)
+        corners_G = np.einsum("nij,vj->nvi", R_GO, corners) + p_GO[:, None, :]
+        edges_G = np.einsum("nij,mj->nmi", R_GO, edges)  # (n, E_O, 3)
+        cross = np.cross(core.edges_G[None, :, None, :], edges_G[:, None, :, :]).reshape(len(p_GO), -1, 3)
+        axes = np.concatenate([np.broadcast_to(N, (len(p_GO),) + N.shape),
+                               np.einsum("nij,mj->nmi", R_GO, normals), cross], axis=1)
+        v = _sat(core.vertices_G, corners_G, axes)
+    return np.where(v < 0, v, np.inf)
+
+
+def core_points(model) -> tuple[list, np.ndarray]:
+    """Link names ``(4G,)`` and offsets ``(4G, 3)``: each geometry's origin and its origin plus
+    each unit axis, in the link frame (compile them once; their world positions give X_WG)."""
+    links, offsets = [], []
+    for core in model.geometries:
+        R, p = core.X_BG[:3, :3], core.X_BG[:3, 3]
+        links.extend([core.link] * 4)
+        offsets.extend([p, p + R[:, 0], p + R[:, 1], p + R[:, 2]])
+    return links, np.asarray(offsets, dtype=float).reshape(-1, 3)
+
+
+def corrected_min(model, per_sphere: np.ndarray, geometry_points_W: np.ndarray, obstacle) -> np.ndarray:
+    """``(n,)`` the model's clearance to ``obstacle`` with penetrating geometries corrected.
+
+    Args:
+        model: the :class:`drake_mh.spheres.SphereModel`.
+        per_sphere: ``(n, S)`` per-sphere signed distances to the obstacle [m].
+        geometry_points_W: ``(n, 4G, 3)`` world positions of :func:`core_points`.
+        obstacle: the :class:`drake_mh.scene.Obstacle`.
+    """
+    from drake_mh.spheres import SEGMENT
+
+    starts, kind, half_length, radius = model.core_arrays
+    per_geometry = np.minimum.reduceat(per_sphere, starts, axis=1)  # (n, G)
+    rows, geoms = np.nonzero(per_geometry < 0)
+    if not len(rows):
+        return per_geometry.min(axis=1)
+    pts = geometry_points_W.reshape(len(per_sphere), -1, 4, 3)[rows, geoms]  # (m, 4, 3)
+    seg = kind[geoms] == SEGMENT
+    if seg.all():
+        v = segment_lower_bound(half_length[geoms], radius[geoms], pts, obstacle)
+    else:
+        v = np.full(len(rows), np.inf)
+        if seg.any():
+            v[seg] = segment_lower_bound(half_length[geoms[seg]], radius[geoms[seg]], pts[seg], obstacle)
+        p_WG = pts[:, 0]
+        R_WG = np.stack([pts[:, 1] - p_WG, pts[:, 2] - p_WG, pts[:, 3] - p_WG], axis=2)
+        for g in np.unique(geoms[~seg]):
+            sel = geoms == g
+            v[sel] = polytope_lower_bound(model.geometries[g], R_WG[sel], p_WG[sel], obstacle)
+    per_geometry[rows, geoms] = np.minimum(per_geometry[rows, geoms], v)
+    return per_geometry.min(axis=1)
+
+
+__all__ = ["segment_lower_bound", "polytope_lower_bound", "corrected_min", "core_points"]
