@@ -11,19 +11,24 @@ The sphere model's value for one collision geometry H and an obstacle O is
 
 So wherever ``s < 0`` this module computes ``v <= d`` from the geometry's *core* (see
 :class:`drake_mh.spheres.GeometryCore`) and the model reports ``min(s, v)``, which is never more
-than ``d``. ``v`` is exact (to round-off) for:
+than ``d``:
 
-* ball and capsule obstacles against capsule / sphere links (segment-to-segment distance);
-* ball obstacles against any link whose centre lies inside the link's polytope (a ball
-  centred outside a convex geometry meets ``s <= d`` already, so nothing changes there);
-* box obstacles against capsule / sphere links (the exact segment-box distance when the axis is
-  outside the box; the separating-axis theorem, complete for a segment and a box, inside).
+* capsule / sphere links: ``v`` is the exact distance from the axis segment to a ball or capsule
+  obstacle's core, or to a box / cylinder when the axis stays outside it (golden-section search
+  of :mod:`drake_mh.segment_distance`); when the axis enters a box, the separating-axis theorem
+  over the box's face normals and the axis x box-edge directions, which is complete for a
+  segment and a box, gives minus the exact penetration depth.
+* polytope links (meshes, boxes, cylinder prisms, ellipsoid polytopes): a ball obstacle whose
+  centre is inside gets its exact depth from the facet planes; a ball centred outside needs
+  nothing (``s <= d`` already, as the closest point of H lies in a sphere); the same holds for a
+  capsule obstacle whose axis misses the polytope (exact clipping test), and one whose axis
+  meets it gets the separating-axis bound over the facet normals and axis x edge directions.
+  Box and cylinder obstacles get the separating-axis bound over both polytopes' face normals
+  and every edge x edge direction (complete: exact depth when they overlap, a positive
+  separation when they do not, so it is applied only where negative).
 
-Otherwise ``v`` is a separating-axis lower bound over the facet normals of the link's polytope
-and the obstacle's (a cylinder obstacle is replaced by its circumscribed 16-gon prism, which
-contains it): valid, possibly lower than ``d``. It is applied only where ``v < 0``; with the
-axis set incomplete (no edge-edge axes for a polytope link) a link within ``bound`` of a box or
-cylinder edge-on-edge may then read up to the separating-axis error below the exact distance.
+A cylinder obstacle is replaced by its circumscribed 16-gon prism (it contains the cylinder,
+so ``v`` stays a lower bound, up to 2 % of the radius low).
 """
 
 from __future__ import annotations

@@ -8,22 +8,26 @@ the geometry, and every point of whose spheres lies within ``link_bound[link]`` 
 (:mod:`drake_mh.sphere_cover` gives the construction and the proof; the bound is at most the
 tolerance, 1 cm by default).
 
-The guarantee :class:`drake_mh.scene.Scene` derives from it, per obstacle, with ``d`` the exact
-signed distance of the robot to the obstacle (Drake's, refined where Drake is optimistic) and
-``m`` the model's value (``bound`` = the largest ``link_bound``):
+The guarantee :class:`drake_mh.scene.Scene` derives from it, per obstacle, with ``d`` the true
+signed distance of the robot's collision geometry to the obstacle and ``m`` the model's value
+(``bound`` = the largest ``link_bound``):
 
-* ``m <= d`` for every configuration, in penetration too (to round-off, 1e-9 m): the model never
-  reports more clearance than there is, and never reports a colliding configuration as free.
-* ``d - bound <= m`` wherever ``d >= 0`` (the model is at most ``bound`` pessimistic), with one
-  exception: a link described by a mesh or box within ``bound`` of a box or cylinder obstacle
-  edge-on-edge may read lower (see :mod:`drake_mh.penetration`).
+* ``m <= d`` for every configuration, penetration included (to round-off, 1e-9 m): the model
+  never reports more clearance than there is, and never reports a colliding configuration as
+  free (``d < 0`` implies ``m < 0``).
+* ``d - bound <= m`` wherever ``d >= 0``: the model is at most ``bound`` pessimistic (plus 2 % of
+  a cylinder obstacle's radius, handled as its circumscribed 16-gon prism in penetration).
+
+Drake's own value can be optimistic where it runs GJK (mesh, box or cylinder links against box,
+cylinder or capsule obstacles; :class:`drake_mh.scene.Scene` refines the capsule cases), so
+against Drake ``m <= d`` holds a fortiori and the pessimism can read up to Drake's error more.
 
 Why penetration needs care: the per-sphere signed distance is the obstacle's depth inside *one*
 sphere, while the obstacle can be deeper inside the covered geometry than inside any single
 sphere (a ball obstacle centred on a capsule's axis between two sphere centres: up to 7.8 mm
 shallower on the Panda). Where a sphere reports penetration, :mod:`drake_mh.penetration`
 replaces the value by a lower bound of the exact one computed from each geometry's *core* (its
-axis segment or its bounding polytope), which is exact for ball and capsule obstacles.
+axis segment or its bounding polytope).
 
 Models are cached on disk (:func:`drake_mh.cache.cache_dir` ``("spheres")``) by a content hash of
 each geometry's shape, the tolerance and :data:`ALGORITHM_VERSION`, so a mesh robot's second
@@ -48,7 +52,7 @@ log = logging.getLogger(__name__)
 DEFAULT_TOLERANCE = 0.01
 """Default covering tolerance [m]: every sphere point lies within it of the geometry."""
 
-ALGORITHM_VERSION = "sphere-cover-1"
+ALGORITHM_VERSION = "sphere-cover-2"
 """Part of every cache key: change it whenever :mod:`drake_mh.sphere_cover` changes its output."""
 
 SEGMENT, POLYTOPE = 0, 1
