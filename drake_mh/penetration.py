@@ -54,13 +54,43 @@ def _segment_min_sdf_rows(kind, dims, A, B):
 
 
 @numba.njit(cache=True)
-def _segment_core_kernel(kind, dims, R_WO, p_WO, pts, half_length, radius):
-    """For each pair m: ``min_t sdf_O(axis_m(t)) - radius_m`` (obstacle frame) and the axis' end
-    points ``a_O, b_O``; ``pts (m, 4, 3)`` are the geometry's origin and unit-axis tips in W."""
+def _sat_segment(a, b, corners, normals, edges):
+    """Separating-axis value of the segment a-b against conv(corners): the largest gap over the
+    face normals and the segment x edge directions (minus the penetration depth if negative)."""
+    d0, d1, d2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    best = -np.inf
+    for m in range(normals.shape[0] + edges.shape[0]):
+        if m < normals.shape[0]:
+            u0, u1, u2 = normals[m, 0], normals[m, 1], normals[m, 2]
+        else:
+            e = edges[m - normals.shape[0]]
+            u0, u1, u2 = d1 * e[2] - d2 * e[1], d2 * e[0] - d0 * e[2], d0 * e[1] - d1 * e[0]
+        norm = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+        if norm <= 1e-9:
+            continue
+        u0, u1, u2 = u0 / norm, u1 / norm, u2 / norm
+        pa = u0 * a[0] + u1 * a[1] + u2 * a[2]
+        pb = u0 * b[0] + u1 * b[1] + u2 * b[2]
+        lo_s, hi_s = min(pa, pb), max(pa, pb)
+        lo_o, hi_o = np.inf, -np.inf
+        for v in range(corners.shape[0]):
+            p = u0 * corners[v, 0] + u1 * corners[v, 1] + u2 * corners[v, 2]
+            lo_o = min(lo_o, p)
+            hi_o = max(hi_o, p)
+        best = max(best, max(lo_o - hi_s, lo_s - hi_o))
+    return best
+
+
+@numba.njit(cache=True)
+def _segment_core_kernel(kind, dims, R_WO, p_WO, pts, half_length, radius, corners, normals, edges):
+    """For each pair m, a lower bound of the signed distance between the capsule core (axis z of
+    G with ``half_length[m]``, ``radius[m]``; ``pts (m, 4, 3)`` the origin and unit-axis tips of G
+    in W) and the obstacle: ``min_t sdf_O(axis(t)) - radius`` while the axis stays outside the
+    obstacle, the separating-axis value against ``corners`` (box or prism) once it enters."""
     m_count = pts.shape[0]
     out = np.empty(m_count)
-    a_O = np.empty((m_count, 3))
-    b_O = np.empty((m_count, 3))
+    a = np.empty(3)
+    b = np.empty(3)
     for m in range(m_count):
         for i in range(3):
             c = 0.0
@@ -68,10 +98,13 @@ def _segment_core_kernel(kind, dims, R_WO, p_WO, pts, half_length, radius):
             for j in range(3):
                 c += R_WO[j, i] * (pts[m, 0, j] - p_WO[j])
                 z += R_WO[j, i] * (pts[m, 3, j] - pts[m, 0, j])
-            a_O[m, i] = c - half_length[m] * z
-            b_O[m, i] = c + half_length[m] * z
-        out[m] = segment_min_sdf(kind, dims, a_O[m], b_O[m])[1] - radius[m]
-    return out, a_O, b_O
+            a[i] = c - half_length[m] * z
+            b[i] = c + half_length[m] * z
+        f = segment_min_sdf(kind, dims, a, b)[1]
+        if f <= 0.0 and corners.shape[0] > 0:
+            f = _sat_segment(a, b, corners, normals, edges)
+        out[m] = f - radius[m]
+    return out
 
 
 @functools.lru_cache(maxsize=256)
@@ -130,19 +163,12 @@ def segment_lower_bound(half_length, radius, pts_W, obstacle) -> np.ndarray:
     (module docstring)."""
     shape = obstacle.shape
     kind, dims = primitive_code(shape)
-    v, a_O, b_O = _segment_core_kernel(kind, dims, obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3],
-                                       np.ascontiguousarray(pts_W), half_length, radius)
-    if kind in (SPHERE, CAPSULE):
-        return v  # segment to a point / segment core: exact
-    inside = v + radius <= 0  # the axis enters the obstacle: separating axes (complete for a box)
-    if inside.any():
+    if kind in (SPHERE, CAPSULE):  # segment to a point / segment core: exact
+        corners = normals = edges = np.zeros((0, 3))
+    else:  # the axis may enter the obstacle: separating axes (complete for a box)
         corners, normals, edges = _obstacle_polytope(shape)
-        seg = np.stack([a_O[inside], b_O[inside]], axis=1)
-        direction = seg[:, 1] - seg[:, 0]
-        axes = np.concatenate([np.broadcast_to(normals, (len(seg),) + normals.shape),
-                               np.cross(direction[:, None, :], edges[None])], axis=1)
-        v[inside] = _sat(seg, corners, axes) - radius[inside]
-    return v
+    return _segment_core_kernel(kind, dims, obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3],
+                                np.ascontiguousarray(pts_W), half_length, radius, corners, normals, edges)
 
 
 def _segment_hits_polytope(a, b, normals, offsets) -> np.ndarray:
