@@ -121,7 +121,8 @@ def solve_ik(problem: IKProblem, method: str = "hybrid", seed=0, budget: int | N
     if name not in methods:
         raise UnknownMethod(str(method), methods, what="IK method")
     budget, timeout = _check_limits(budget, timeout)
-    make_rng(seed)  # a bad seed fails here, with a message, not deep inside numpy
+    if not (type(seed) is int and seed >= 0):  # ints are fine (and building a Generator costs 7 µs)
+        make_rng(seed)  # a bad seed fails here, with a message, not deep inside numpy
     _check_config(name, config)
     if params and name in GRADIENT_METHODS:
         raise InvalidArgument(f"{name} takes no optimizer options ({sorted(params)}); pass config=... instead")
@@ -167,6 +168,11 @@ def prepare(problem: IKProblem, method: str = "hybrid", config=None, **params) -
     if budget is None:
         budget = 2 * int(params.get("pop_size") or 50) + 1
     _solve(problem, name, 0, budget, None, config, time.perf_counter(), params, check_reach=False)
+    if name == "hybrid":  # the first phase may succeed alone: load the population phase too
+        from drake_mh.ik.hybrid import HybridConfig
+
+        population_only = dataclasses.replace(config or HybridConfig(), first_starts=0)
+        _solve(problem, name, 0, budget, None, population_only, time.perf_counter(), params, check_reach=False)
     done.add(key)
     return time.perf_counter() - start
 
