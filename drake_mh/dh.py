@@ -227,12 +227,21 @@ def _origin(X) -> str:
 # --- validation -----------------------------------------------------------------------
 
 
+#: largest magnitude accepted in a DH table or its limits (1e200 m overflowed the reach sums)
+MAX_MAGNITUDE = 1e6
+
+
 def _column(values, name, n=None, default=None, error=InvalidDHTable, positive=False):
     if values is None:
         if default is None:
             return None
         values = default
-    arr = np.asarray(values, dtype=float)
+    if np.iscomplexobj(values):
+        raise error(f"{name} must be real numbers, got complex values")
+    try:
+        arr = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise error(f"{name} must be numbers (one per joint), got {values!r}") from None
     if arr.ndim == 0 and n is not None:
         arr = np.full(n, float(arr))
     if arr.ndim != 1:
@@ -245,6 +254,10 @@ def _column(values, name, n=None, default=None, error=InvalidDHTable, positive=F
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
         raise error(f"{name}[{int(bad[0])}] = {arr[bad[0]]} is not finite; give finite numbers")
+    huge = np.flatnonzero(np.abs(arr) > MAX_MAGNITUDE)
+    if huge.size:
+        raise error(f"{name}[{int(huge[0])}] = {arr[huge[0]]:g} is beyond {MAX_MAGNITUDE:g} (metres, radians, "
+                    "kg, N m ...): check the units")
     if positive and (arr <= 0).any():
         i = int(np.flatnonzero(arr <= 0)[0])
         raise error(

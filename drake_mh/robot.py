@@ -309,6 +309,12 @@ class Robot:
         """
         from drake_mh.dh import dh_to_urdf
 
+        import inspect
+
+        unknown = sorted(set(dh_kwargs) - set(inspect.signature(dh_to_urdf).parameters))
+        if unknown:
+            raise InvalidArgument(f"Robot.from_dh got unknown options {unknown}; it accepts "
+                                  f"{sorted(set(inspect.signature(dh_to_urdf).parameters) - {'a', 'alpha', 'd'})}")
         urdf = dh_to_urdf(a, alpha, d, offset, lower, upper, name=name, **dh_kwargs)
         return cls(urdf, ee_frame=ee_frame, source=f"<DH table {name}>", name=name)
 
@@ -355,6 +361,8 @@ class Robot:
 
     def check_q(self, q, name: str = "q") -> np.ndarray:
         """Return ``q`` as a float array ``(nq,)``, or raise :class:`InvalidConfiguration`."""
+        if np.iscomplexobj(q):
+            raise InvalidConfiguration(f"{name} must be real [rad or m], got complex values", name)
         try:
             arr = np.asarray(q, dtype=float)
         except (TypeError, ValueError) as exc:
@@ -370,6 +378,8 @@ class Robot:
 
     def check_Q(self, Q, name: str = "Q") -> np.ndarray:
         """Return a batch as a C-contiguous float array ``(N, nq)`` or raise."""
+        if np.iscomplexobj(Q):
+            raise InvalidConfiguration(f"{name} must be real [rad or m], got complex values", name)
         try:
             arr = np.ascontiguousarray(Q, dtype=float)
         except (TypeError, ValueError) as exc:
@@ -393,8 +403,11 @@ class Robot:
 
     def random_configurations(self, n: int, rng: np.random.Generator | int | None = None) -> np.ndarray:
         """``(n, nq)`` configurations drawn uniformly within ``[lower, upper]``."""
-        rng = np.random.default_rng(rng)
-        return rng.uniform(self.lower, self.upper, size=(int(n), self.nq))
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+            raise InvalidArgument(f"n must be a whole number of configurations >= 0, got {n!r}")
+        from drake_mh.optim.base import make_rng
+
+        return make_rng(rng, "rng").uniform(self.lower, self.upper, size=(int(n), self.nq))
 
     @property
     def home(self) -> np.ndarray:
@@ -468,7 +481,12 @@ class Robot:
         self.plant.SetVelocities(self.plant_context, v)
         forces = MultibodyForces(self.plant)
         self.plant.CalcForceElementsContribution(self.plant_context, forces)
-        return self.plant.CalcInverseDynamics(self.plant_context, a, forces)
+        tau = self.plant.CalcInverseDynamics(self.plant_context, a, forces)
+        if not np.all(np.isfinite(tau)):
+            raise InvalidConfiguration(
+                "inverse dynamics overflowed (torque not finite): q, v and a must be physically "
+                f"meaningful, got max |q| {np.abs(q).max():.3g}, |v| {np.abs(v).max():.3g}, |a| {np.abs(a).max():.3g}", "q")
+        return tau
 
     def gravity_torques(self, q) -> np.ndarray:
         """Static holding torques ``g(q)`` [N·m] (inverse dynamics at rest)."""
@@ -478,6 +496,9 @@ class Robot:
     def _frame(self, frame: str | None):
         if frame is None:
             return self.ee_frame
+        if not isinstance(frame, str):
+            raise InvalidArgument(f"frame must be a frame name (str) or None, got {frame!r}; "
+                                  f"frames: {', '.join(self.frame_names()[:20])} ...")
         if frame not in self._frames:
             raise FrameNotFound(frame, self._frames)
         return self._frames[frame]
@@ -525,6 +546,57 @@ def _check_urdf(root: ET.Element, source: str) -> None:
             if lo > hi:
                 raise InvalidLimits(
                     f"{source}: joint {jname!r} has lower limit {lo} > upper limit {hi}; swap them")
+        if limit is not None:  # Drake aborts the process on a negative velocity limit
+            for key in ("velocity", "effort"):
+                try:
+                    value = float(limit.get(key, "0"))
+                except ValueError as exc:
+                    raise InvalidURDF(source, f"joint {jname!r}: non-numeric <limit {key}> ({exc})") from exc
+                if not value >= 0:
+                    raise InvalidLimits(f"{source}: joint {jname!r} has {key} limit {value}; a limit is a "
+                                        "magnitude >= 0 (Drake would abort the process on it)")
+    children: dict[str, str] = {}
+    for joint in root.findall("joint"):
+        child = joint.find("child")
+        name = child.get("link") if child is not None else None
+        if name in children:  # Drake raises deep inside; a tree needs one parent per link
+            raise UnsupportedModel(f"{source}: link {name!r} is the child of joints {children[name]!r} and "
+                                   f"{joint.get('name')!r} (a kinematic loop); only tree-shaped arms are supported")
+        if name is not None:
+            children[name] = joint.get("name")
+    for link in root.findall("link"):
+        _check_inertial(link, source)
+
+
+def _check_inertial(link: ET.Element, source: str) -> None:
+    """A link's mass must be >= 0 and its inertia physical (principal moments >= 0, triangle inequality)."""
+    inertial = link.find("inertial")
+    if inertial is None:
+        return
+    name = link.get("name")
+    try:
+        mass = float(inertial.find("mass").get("value", "0")) if inertial.find("mass") is not None else 0.0
+        el = inertial.find("inertia")
+        I = None
+        if el is not None:
+            v = {k: float(el.get(k, "0")) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+            I = np.array([[v["ixx"], v["ixy"], v["ixz"]], [v["ixy"], v["iyy"], v["iyz"]],
+                          [v["ixz"], v["iyz"], v["izz"]]])
+    except ValueError as exc:
+        raise InvalidURDF(source, f"link {name!r}: non-numeric <inertial> ({exc})") from exc
+    if not (np.isfinite(mass) and mass >= 0):
+        raise InvalidURDF(source, f"link {name!r} has mass {mass}; a mass must be a finite number >= 0 [kg]")
+    if I is not None:
+        if not np.all(np.isfinite(I)):
+            raise InvalidURDF(source, f"link {name!r}: the inertia is not finite")
+        ev = np.linalg.eigvalsh(I)
+        scale = max(abs(ev).max(), 1e-12)
+        if ev[0] < -1e-9 * scale or 2 * ev.max() > ev.sum() + 1e-9 * scale:
+            # many shipped descriptions carry such CAD inertias (example-robot-data: 14 models);
+            # kinematics and distances do not need them, so warn rather than refuse the model
+            logger.warning("%s: link %r has an inertia with principal moments %s that is not physical "
+                           "(each must be >= 0 and <= the sum of the other two); torques computed with it "
+                           "are not trustworthy", source, name, np.round(ev, 9).tolist())
 
 
 def _ordered_joints(plant) -> list:

@@ -233,3 +233,55 @@ def test_within_limits_and_random_configurations(panda):
     q = panda.home.copy()
     q[3] = 0.5  # joint 4 must stay negative
     assert not panda.within_limits(q)
+
+
+@pytest.mark.parametrize("call, error", [
+    (lambda r: r.random_configurations(2.7), "InvalidArgument"),
+    (lambda r: r.random_configurations(-1), "InvalidArgument"),
+    (lambda r: r.fk(r.home, frame=["a"]), "InvalidArgument"),
+    (lambda r: r.fk(r.home + 1j), "InvalidConfiguration"),
+    (lambda r: r.batch.fk(r.random_configurations(2, rng=0) + 1j), "InvalidConfiguration"),
+    (lambda r: r.inverse_dynamics(r.home, np.full(r.nq, 1e300), np.zeros(r.nq)), "InvalidConfiguration"),
+    (lambda r: drake_mh.Robot.from_dh(a="abc", alpha=[0], d=[0]), "InvalidDHTable"),
+    (lambda r: drake_mh.Robot.from_dh(a=[1e200, 1e200], alpha=[0, 0], d=[0, 0]), "InvalidDHTable"),
+    (lambda r: drake_mh.Robot.from_dh(a=[1], alpha=[0], d=[0], bogus=1), "InvalidArgument"),
+])
+def test_bad_input_gets_a_named_error(panda, call, error):
+    """Reliability battery: each of these raised a numpy/Python error or returned garbage."""
+    with pytest.raises(drake_mh.errors.DrakeMhError) as info:
+        call(panda)
+    assert type(info.value).__name__ == error
+
+
+_ONE_JOINT = ('<robot name="r"><link name="world"/><link name="a"><inertial><mass value="MASS"/>'
+              '<inertia ixx="IXX" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>'
+              '<collision><geometry><sphere radius="0.05"/></geometry></collision></link>'
+              '<link name="b"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" '
+              'ixz="0" iyz="0"/></inertial></link><joint name="j0" type="fixed"><parent link="world"/>'
+              '<child link="a"/></joint><joint name="j1" type="revolute"><parent link="a"/><child link="b"/>'
+              '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="EFF" velocity="VEL"/></joint>EXTRA</robot>')
+
+
+def _model(**values):
+    text = _ONE_JOINT
+    for key, value in {"MASS": "1", "IXX": "0.01", "EFF": "10", "VEL": "1", "EXTRA": "", **values}.items():
+        text = text.replace(key, value)
+    return text
+
+
+@pytest.mark.parametrize("values, error, words", [
+    ({"EFF": "-5"}, "InvalidLimits", "effort limit -5"),        # was read as 'no torque limit'
+    ({"VEL": "-1"}, "InvalidLimits", "velocity limit -1"),      # Drake aborted the process
+    ({"MASS": "-1"}, "InvalidURDF", "mass -1"),
+    ({"EXTRA": '<joint name="loop" type="fixed"><parent link="world"/><child link="b"/></joint>'},
+     "UnsupportedModel", "kinematic loop"),
+])
+def test_questionable_models_are_refused(values, error, words):
+    with pytest.raises(drake_mh.errors.DrakeMhError, match=words) as info:
+        Robot(_model(**values))
+    assert type(info.value).__name__ == error
+
+
+def test_unphysical_inertia_loads_with_a_warning(caplog):
+    robot = Robot(_model(IXX="1.0"))                     # 1.0 > 0.01 + 0.01: triangle inequality broken
+    assert robot.nq == 1 and "not physical" in caplog.text
