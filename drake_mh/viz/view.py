@@ -17,6 +17,7 @@ no second diagram is built. :meth:`View.html` returns the self-contained page
 
 from __future__ import annotations
 
+import functools
 import logging
 from pathlib import Path
 
@@ -53,6 +54,17 @@ def _transform(X, what: str):
                               "with determinant +1 and the last row [0, 0, 0, 1]); orthonormalize it, "
                               "e.g. with pydrake.math.RotationMatrix.ProjectToRotationMatrix")
     return RigidTransform(RotationMatrix(R), X[:3, 3])
+
+
+def _same_thread(method):
+    """Drawing methods check the calling thread first: Drake's Meshcat aborts the process
+    (SIGABRT) when called from another thread than the one that made it."""
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        check_thread(self.meshcat)
+        return method(self, *args, **kwargs)
+
+    return wrapper
 
 
 class View:
@@ -116,6 +128,7 @@ class View:
         self._ghosts.clear()
         self._scene_names = set()
 
+    @_same_thread
     def set_q(self, q) -> View:
         """Pose the robot at ``q (nq,)``; returns the view (calls chain)."""
         q = self.robot.check_q(q)
@@ -136,6 +149,7 @@ class View:
             raise InvalidArgument(f"no ghost named {name!r}; ghosts: {sorted(self._ghosts) or '(none)'}")
         return self._ghosts[name]
 
+    @_same_thread
     def add_ghost(self, q, name: str | None = None, colour=COLOURS["ghost"], opacity: float | None = None) -> str:
         """Draw a semi-transparent copy of the robot at ``q (nq,)``.
 
@@ -158,6 +172,7 @@ class View:
         self._ghosts[name] = path
         return name
 
+    @_same_thread
     def add_ghosts(self, Q, colour=COLOURS["ghost"], name: str = "ghost") -> list[str]:
         """One ghost per row of ``Q (N, nq)``, named ``<name>0``, ``<name>1`` ..."""
         Q = self.robot.check_Q(Q, "Q")
@@ -165,6 +180,7 @@ class View:
 
     # --- obstacles -----------------------------------------------------------------------
 
+    @_same_thread
     def add_obstacles(self, scene, colour=COLOURS["obstacle"]) -> list[str]:
         """Draw every obstacle of a :class:`drake_mh.scene.Scene` at its pose.
 
@@ -180,6 +196,7 @@ class View:
         self._scene, self._scene_names = scene, set(scene.obstacles)
         return list(scene.obstacles)
 
+    @_same_thread
     def update_obstacles(self, scene=None, colour=COLOURS["obstacle"]) -> None:
         """Move the drawn obstacles to the scene's current poses (live views: cheap, no redraw).
 
@@ -207,6 +224,7 @@ class View:
 
     # --- paths, targets, distances ------------------------------------------------------------
 
+    @_same_thread
     def add_path(self, P_W, name: str = "path", colour=COLOURS["path"], line_width: float = 3.0) -> str:
         """Draw a polyline through the points ``P_W (N, 3)`` [m] (N >= 2).
 
@@ -221,6 +239,7 @@ class View:
         self.meshcat.SetLine(path, np.asfortranarray(P.T), float(line_width), rgba(colour, "colour"))
         return path
 
+    @_same_thread
     def add_ee_path(self, Q, name: str = "ee_path", frame: str | None = None, **kwargs) -> str:
         """Draw the path of the end effector (or ``frame``) through the configurations ``Q (N, nq)``."""
         P = self.robot.batch.positions(self.robot.check_Q(Q, "Q"), frame)
@@ -228,6 +247,7 @@ class View:
             P = np.vstack([P, P])
         return self.add_path(P, name, **kwargs)
 
+    @_same_thread
     def add_target(self, X_WT, name: str = "target", radius: float = 0.02, colour=COLOURS["target"],
                    triad_length: float = 0.08) -> str:
         """Draw a target: a sphere at a point ``p_WT (3,)``, plus an x/y/z triad for a pose ``X_WT (4, 4)``.
@@ -250,6 +270,7 @@ class View:
             _draw_triad(self.meshcat, f"{path}/triad", float(triad_length), float(radius) / 4)
         return path
 
+    @_same_thread
     def add_distances(self, scene, q=None, max_distance: float = 0.3, margin: float = 0.02,
                       max_pairs: int | None = 10) -> list:
         """Draw closest-point segments from :meth:`drake_mh.scene.Scene.distances`.

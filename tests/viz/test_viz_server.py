@@ -84,3 +84,29 @@ def test_use_from_another_thread_raises_instead_of_exiting(meshcat, planar2r):
     thread.join(timeout=60)
     assert "another thread" in found["error"]
     assert found["own_is_shared"] is False and found["drawn"] is True
+
+
+def test_every_drawing_method_checks_the_thread(meshcat, planar2r):
+    """A view made here and drawn from another thread: each call raises (Drake would abort)."""
+    view = View(planar2r, meshcat=meshcat)
+    calls = {
+        "set_q": lambda: view.set_q(planar2r.home),
+        "add_ghost": lambda: view.add_ghost(planar2r.home),
+        "add_path": lambda: view.add_path([[0, 0, 0], [0.1, 0, 0]]),
+        "add_target": lambda: view.add_target([0.3, 0, 0]),
+        "clear": view.clear,
+    }
+    errors = {}
+
+    def worker():
+        for name, call in calls.items():
+            try:
+                call()
+            except VisualizationError:
+                errors[name] = True
+
+    thread = threading.Thread(target=worker)
+    thread.start()
+    thread.join(timeout=60)
+    assert errors == {name: True for name in calls}
+    view.set_q(planar2r.home)                    # the owner thread still draws
