@@ -66,6 +66,7 @@ def get_meshcat(port: int | None = None, *, announce: bool = True):
 
     params = MeshcatParams()
     params.host = DEFAULT_HOST
+    params.show_stats_plot = False  # the "rtr%" frame-rate box means nothing to a planning user
     params.port = port
     try:
         meshcat = Meshcat(params)
@@ -103,6 +104,7 @@ def private_meshcat():
 
     params = MeshcatParams()
     params.host = DEFAULT_HOST
+    params.show_stats_plot = False
     params.port = 0
     drake_logger = logging.getLogger("drake")
     level = drake_logger.level
