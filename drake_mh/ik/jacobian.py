@@ -10,8 +10,10 @@ against: from a start configuration, repeat ``q ← clamp(q + Δq)`` with
 
 every step taken (no line search), joint limits by clamping. The first start is the
 mid-range configuration (or ``q_ref`` when the problem has one), later starts are uniform
-within the limits (random restarts) until the budget or the timeout is spent. Both share the
-batched kernel of :mod:`drake_mh.ik.lm` with one candidate.
+within the limits (random restarts, drawn by :func:`drake_mh.ik.lm.uniform_hash` from the
+seed) until the budget or the timeout is spent. Both run in the compiled restart loop of
+:mod:`drake_mh.ik.lm` (:func:`~drake_mh.ik.lm.lm_run`, one candidate): Python is entered once
+per converged point (for the obstacle check and Drake's verification) or per ~0.15 ms.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drake_mh.ik.lm import CONVERGED, STALLED, BatchLM, LMSettings
+from drake_mh.ik.lm import STALLED, BatchLM, LMSettings
 from drake_mh.ik.problem import IKProblem
 from drake_mh.ik.result import IKResult, verify
 
@@ -40,6 +42,9 @@ class JacobianConfig:
     lm: LMSettings = field(default_factory=lambda: LMSettings(adaptive=False, lam0=1e-12, max_iter=100, stall_iters=20))
     first_start: str = "mid"
 
+
+#: most configurations evaluated per compiled call (~0.15 ms); the timeout is checked between calls
+CHUNK = 256
 
 #: the pseudo-inverse baseline
 PINV = JacobianConfig()
@@ -63,39 +68,41 @@ def solve_jacobian(problem: IKProblem, method: str, seed=0, budget: int | None =
     """
     start = time.perf_counter() if start is None else start
     config = config or (DLS if method == "dls" else PINV)
-    rng = np.random.default_rng(seed)
-    lm = BatchLM(problem, 1, config.lm)
     deadline = np.inf if timeout is None else start + timeout
     budget = np.inf if budget is None else budget
-    lower, upper = problem.lower, problem.upper
+    lower, upper, nq = problem.lower, problem.upper, problem.nq
+    if type(seed) is int and seed >= 0:
+        gen_seed = seed
+    else:  # None, a Generator, a SeedSequence...: one draw seeds the restarts
+        gen_seed = int(np.random.default_rng(seed).integers(0, 2**63))
     if config.first_start == "mid":
         q0 = problem.q_ref if problem.q_ref is not None else 0.5 * (lower + upper)
+        starts = np.array(q0, dtype=float).reshape(1, nq)
     else:
-        q0 = lower + (upper - lower) * rng.random(problem.nq)
-    lm.start([0], q0[None])
-    nfe, attempts = 0, 1
-    best_q, best_f = np.array(q0, dtype=float), np.inf
+        starts = np.empty((0, nq))
+    lm = BatchLM(problem, 1, config.lm)
+    lm.status[:] = STALLED
+    nfe, cursor = 0, 0
     sphere_check = problem.scene is not None and bool(problem.scene.obstacles)
     while nfe < budget and time.perf_counter() <= deadline:
-        lm.iterate()
-        nfe += 1
-        status = lm.status[0]
-        if status == CONVERGED:
-            q = lm.Qa[0].copy()
-            # the sphere model first (microseconds, never more clearance than Drake), as hybrid does
-            if not sphere_check or problem.scene.batch_min_distance(q[None])[0] >= problem.clearance:
-                result = verify(problem, q, method=method, start=start, nfe=nfe, attempts=attempts,
-                                message=f"converged after {attempts} starts")
-                if result.success:
-                    return result
-            status = STALLED  # e.g. in collision: try another start
-        if status == STALLED:
-            if lm.fa[0] < best_f:
-                best_q, best_f = lm.Qa[0].copy(), lm.fa[0]
-            lm.start([0], (lower + (upper - lower) * rng.random(problem.nq))[None])
-            attempts += 1
-    if lm.fa[0] < best_f:
-        best_q = lm.Qa[0].copy()
+        # restarts without end (the cursor runs on); one compiled call per converged point or chunk
+        row, evals, cursor = lm.run(starts, cursor, min(CHUNK, budget - nfe), n_starts=2**62, gen_seed=gen_seed)
+        nfe += evals
+        if row < 0:
+            if evals == 0:
+                break  # not enough budget left for one more iteration
+            continue
+        q = lm.Qa[0].copy()
+        # the sphere model first (microseconds, never more clearance than Drake), as hybrid does
+        if not sphere_check or problem.scene.batch_min_distance(q[None])[0] >= problem.clearance:
+            result = verify(problem, q, method=method, start=start, nfe=nfe, attempts=cursor,
+                            message=f"converged after {cursor} starts")
+            if result.success:
+                return result
+        lm.status[0] = STALLED  # e.g. in collision: try another start
+    best_q = lm.best_q if lm.best_f[0] <= lm.fa[0] else lm.Qa[0]
+    if not np.isfinite(min(lm.best_f[0], lm.fa[0])):
+        best_q = starts[0] if len(starts) else 0.5 * (lower + upper)
     why = "timeout" if time.perf_counter() > deadline else "budget exhausted"
-    return verify(problem, best_q, method=method, start=start, nfe=nfe, attempts=attempts,
-                  message=f"{why} after {attempts} starts")
+    return verify(problem, best_q.copy(), method=method, start=start, nfe=nfe, attempts=cursor,
+                  message=f"{why} after {cursor} starts")

@@ -28,6 +28,7 @@ beyond the FK/Jacobian kernel.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numba
@@ -61,6 +62,10 @@ class LMSettings:
             revolute joints bring it within them (else the start counts as stalled), as
             robotics-toolbox's ``ik_LM`` does. Used by :meth:`BatchLM.run` only;
             :meth:`BatchLM.iterate` always projects.
+        error_damping: damp with ``λ |e_w|²`` instead of ``λ`` (Chan & Lawrence, "General
+            inverse kinematics with the error damped pseudoinverse", ICRA 1988; the default
+            of robotics-toolbox's ``ik_LM``, there in joint space): heavy damping far from the
+            target, Gauss-Newton steps near it. Used by :meth:`BatchLM.run` only.
     """
 
     adaptive: bool = True
@@ -74,6 +79,7 @@ class LMSettings:
     ref_gain: float = 0.0
     tol_factor: float = 0.5
     project_limits: bool = True
+    error_damping: bool = False
 
 
 @numba.njit(cache=True, inline="always")
@@ -150,7 +156,7 @@ def _lm_step(T, J, Qt, Qa, Ea, Ja, fa, lam, stall, iters, fresh, status,
     for k in range(Qt.shape[0]):
         if _lm_row(k, T, J, Qt, Qa, Ea, Ja, fa, lam, stall, iters, fresh, status, Qn,
                    p_t, R_t, has_rot, w_o, lower, upper, ref_gain, q_ref, tol_p2, tol_o2,
-                   (adaptive, lam_down, lam_up, lam_min, lam_max, max_iter, stall_iters, True),
+                   (adaptive, lam_down, lam_up, lam_min, lam_max, max_iter, stall_iters, True, False),
                    (e, A, L, y, z, r, E), lower) and fa[k] < best_f:
             best, best_f = k, fa[k]
     return best
@@ -161,11 +167,12 @@ def _lm_row(k, T, J, Qt, Qa, Ea, Ja, fa, lam, stall, iters, fresh, status, Qn,
             p_t, R_t, has_rot, w_o, lower, upper, ref_gain, q_ref, tol_p2, tol_o2, settings, work, revolute):
     """One iteration of row ``k`` (the loop body of :func:`lm_step`); returns whether it converged.
 
-    ``settings = (adaptive, lam_down, lam_up, lam_min, lam_max, max_iter, stall_iters, project)`` and
+    ``settings = (adaptive, lam_down, lam_up, lam_min, lam_max, max_iter, stall_iters, project,
+    error_damping)`` and
     ``work = (e, A, L, y, z, r, E)`` are packed in tuples: numba inlines calls of at most 32
     arguments, and an inlined row step saves ~0.25 µs of call overhead per iteration.
     """
-    adaptive, lam_down, lam_up, lam_min, lam_max, max_iter, stall_iters, project = settings
+    adaptive, lam_down, lam_up, lam_min, lam_max, max_iter, stall_iters, project, error_damping = settings
     e, A, L, y, z, r, E = work
     nq = Qt.shape[1]
     r0 = 0 if has_rot else 3
@@ -219,7 +226,7 @@ def _lm_row(k, T, J, Qt, Qa, Ea, Ja, fa, lam, stall, iters, fresh, status, Qn,
             for j in range(nq):
                 s += Ja[k, a + r0, j] * Ja[k, b + r0, j]
             A[a, b] = wa * wb * s
-        A[a, a] += lam[k]
+        A[a, a] += lam[k] * fa[k] if error_damping else lam[k]
     ok = True
     for a in range(m):  # Cholesky A = L Lᵀ
         for b in range(a + 1):
@@ -431,14 +438,16 @@ def lm_run(starts, n_starts, gen_seed, cursor, max_evals, Qt, Qa, Ea, Ja, fa, la
             iteration) this call may evaluate.
         Qt ... status: the state of :class:`BatchLM` (see :func:`lm_step`), updated in place.
         best_q, best_f: ``(nq,)`` and ``(1,)``: the accepted point with the smallest weighted
-            error of every start abandoned so far (updated in place; the answer of a failure).
+            error, within the limits, of every start abandoned so far (updated in place; the
+            answer of a failure).
         chain: ``(parent, KR, Kp, perm, kind, qidx, anchor, ER, Ep, on_path)``, the compiled
             chain and frame of ``BatchKinematics``.
         p_t ... upper, ref_gain ... tol_o2: as :func:`lm_step`; ``lam0``: damping of a new
             start; ``settings``: ``(adaptive, lam_down, lam_up, lam_min, lam_max, max_iter,
-            stall_iters, project)`` (``project``: clamp every step onto the limits, else let
-            iterates leave them and accept a converged point only if it is within them after
-            whole turns of its revolute joints); ``revolute``: ``(nq,)`` bool.
+            stall_iters, project, error_damping)`` (``project``: clamp every step onto the
+            limits, else let iterates leave them and accept a converged point only if it is
+            within them after whole turns of its revolute joints; ``error_damping``: damping
+            ``λ |e_w|²``); ``revolute``: ``(nq,)`` bool.
         Qn, T, J: work arrays ``(K, nq)``, ``(K, 4, 4)``, ``(K, 6, nq)``.
 
     Returns:
@@ -457,8 +466,8 @@ def lm_run(starts, n_starts, gen_seed, cursor, max_evals, Qt, Qa, Ea, Ja, fa, la
         for k in range(K):  # restart stalled rows from the next start
             if status[k] != STALLED:
                 continue
-            if fa[k] < best_f[0]:
-                best_f[0] = fa[k]
+            if fa[k] < best_f[0] and (settings[7] or _into_limits(Qa[k], lower, upper, revolute)):
+                best_f[0] = fa[k]  # the best point within the limits (free iterates may be outside)
                 for j in range(nq):
                     best_q[j] = Qa[k, j]
                 fa[k] = np.inf  # counted once
@@ -492,6 +501,20 @@ def lm_run(starts, n_starts, gen_seed, cursor, max_evals, Qt, Qa, Ea, Ja, fa, la
                 best, best_fk = k, fa[k]
         if best >= 0:
             return best, evals, cursor
+
+
+#: per BatchKinematics: {frame: (chain tuple of lm_run, revolute mask)}
+_CHAINS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _compiled_chain(batch, frame: str | None) -> tuple[tuple, np.ndarray]:
+    """``lm_run``'s chain tuple and the ``(nq,)`` revolute mask of ``batch`` (cached: ~4 µs a solve)."""
+    per_frame = _CHAINS.setdefault(batch, {})
+    if frame not in per_frame:
+        revolute = np.zeros(batch.nq, dtype=np.bool_)
+        revolute[batch.chain.qidx[batch.chain.kind == 0]] = True
+        per_frame[frame] = (tuple(batch._args) + tuple(batch._frame_anchor(frame)), revolute)
+    return per_frame[frame]
 
 
 class BatchLM:
@@ -576,18 +599,16 @@ class BatchLM:
             ``(row, evals, cursor)``: a converged row or -1, evaluations spent, next start.
         """
         if self._run_args is None:
-            batch = self.problem.robot.batch
             nq, K = self.problem.nq, self.K
             c = self._const
             self.best_q = np.zeros(nq)
             self.best_f = np.full(1, np.inf)
             self._T = np.empty((K, 4, 4))
             self._J = np.empty((K, 6, nq))
-            revolute = np.zeros(nq, dtype=np.bool_)
-            revolute[batch.chain.qidx[batch.chain.kind == 0]] = True
-            self._run_args = (tuple(batch._args) + tuple(batch._frame_anchor(self._frame)), *c[:6],
-                              float(self.settings.lam0), c[6:13] + (bool(self.settings.project_limits),), *c[13:],
-                              revolute)
+            chain, revolute = _compiled_chain(self.problem.robot.batch, self._frame)
+            self._run_args = (chain, *c[:6], float(self.settings.lam0),
+                              c[6:13] + (bool(self.settings.project_limits), bool(self.settings.error_damping)),
+                              *c[13:], revolute)
         n_starts = len(starts) if n_starts is None else int(n_starts)
         row, evals, cursor = lm_run(starts, n_starts, np.uint64(int(gen_seed) % 2**64), int(cursor),
                                     int(max_evals), self.Qt, self.Qa, self.Ea, self.Ja, self.fa, self.lam,

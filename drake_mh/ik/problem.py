@@ -63,7 +63,7 @@ class ReachBound:
 
     def distance(self, p_WT) -> float:
         """Distance [m] of a point from the centre."""
-        return float(np.linalg.norm(np.asarray(p_WT, dtype=float) - self.p_WO))
+        return math.dist(np.asarray(p_WT, dtype=float).tolist(), self.p_WO.tolist())
 
 
 _REACH_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
