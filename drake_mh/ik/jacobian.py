@@ -1,14 +1,22 @@
 """Jacobian baselines: pseudo-inverse and damped least squares with restarts.
 
 The classic single-chain iterations, as in KDL's Newton–Raphson solver that TRAC-IK compares
-against: from a start configuration, repeat ``q ← clamp(q + Δq)`` with
+against and robotics-toolbox-python's ``ik_NR``/``ik_GN``: from a start configuration, repeat
+``q ← q + Δq`` with
 
 * ``pinv``: ``Δq = J⁺ e`` (Whitney 1969), the minimum-norm Gauss–Newton step, computed as
   ``Jᵀ (J Jᵀ + ε I)⁻¹ e`` with ``ε = 1e-12`` (numerically the pseudo-inverse of a full-rank J);
 * ``dls``: ``Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e`` with a fixed damping ``λ = 0.03`` (Wampler 1986;
   Nakamura & Hanafusa 1986), robust near singularities at the price of slower convergence;
 
-every step taken (no line search), joint limits by clamping. The first start is the
+every step taken (no line search). Iterates may leave the joint limits (as in
+robotics-toolbox's solvers); a converged point is brought within them by whole turns of its
+revolute joints, or else rejected (a new start). Measured on 300 TRAC-IK targets against
+clamping every iterate onto the limits (KDL's ``ChainIkSolverPos_NR_JL``): seed000_6dof
+``pinv`` 100 % / 57 configurations per target instead of 93 % / 881, ``dls`` 100 % / 51
+instead of 98.7 % / 255; Panda ``pinv`` 97 instead of 125, ``dls`` 136 instead of 112 (both
+99.7-100 %). A search box narrower than the limits (``paths.continuity.LocalIKProblem``)
+clamps instead (``LMSettings.project_limits``). The first start is the
 mid-range configuration (or ``q_ref`` when the problem has one), later starts are uniform
 within the limits (random restarts, drawn by :func:`drake_mh.ik.lm.uniform_hash` from the
 seed) until the budget or the timeout is spent. Both run in the compiled restart loop of
@@ -18,6 +26,7 @@ per converged point (for the obstacle check and Drake's verification) or per ~0.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -35,11 +44,13 @@ class JacobianConfig:
     """Settings of :func:`solve_jacobian`.
 
     Attributes:
-        lm: the iteration (plain mode: every step taken, fixed damping ``lam0``).
+        lm: the iteration (plain mode: every step taken, fixed damping ``lam0``; free
+            iterates, see the module docstring).
         first_start: ``"mid"`` (mid-range, or ``q_ref`` when given) or ``"random"``.
     """
 
-    lm: LMSettings = field(default_factory=lambda: LMSettings(adaptive=False, lam0=1e-12, max_iter=100, stall_iters=20))
+    lm: LMSettings = field(default_factory=lambda: LMSettings(adaptive=False, lam0=1e-12, max_iter=100, stall_iters=20,
+                                                              project_limits=False))
     first_start: str = "mid"
 
 
@@ -49,7 +60,7 @@ CHUNK = 256
 #: the pseudo-inverse baseline
 PINV = JacobianConfig()
 #: the damped-least-squares baseline (λ = 0.03, λ² = 9e-4)
-DLS = JacobianConfig(lm=LMSettings(adaptive=False, lam0=9e-4, max_iter=100, stall_iters=20))
+DLS = JacobianConfig(lm=LMSettings(adaptive=False, lam0=9e-4, max_iter=100, stall_iters=20, project_limits=False))
 
 
 def solve_jacobian(problem: IKProblem, method: str, seed=0, budget: int | None = None,
@@ -80,7 +91,10 @@ def solve_jacobian(problem: IKProblem, method: str, seed=0, budget: int | None =
         starts = np.array(q0, dtype=float).reshape(1, nq)
     else:
         starts = np.empty((0, nq))
-    lm = BatchLM(problem, 1, config.lm)
+    settings = config.lm
+    if not settings.project_limits and (lower is not problem.robot.lower or upper is not problem.robot.upper):
+        settings = dataclasses.replace(settings, project_limits=True)  # a narrowed search box: stay inside
+    lm = BatchLM(problem, 1, settings)
     lm.status[:] = STALLED
     nfe, cursor = 0, 0
     sphere_check = problem.scene is not None and bool(problem.scene.obstacles)
@@ -100,8 +114,14 @@ def solve_jacobian(problem: IKProblem, method: str, seed=0, budget: int | None =
             if result.success:
                 return result
         lm.status[0] = STALLED  # e.g. in collision: try another start
-    best_q = lm.best_q if lm.best_f[0] <= lm.fa[0] else lm.Qa[0]
-    if not np.isfinite(min(lm.best_f[0], lm.fa[0])):
+    # the best point within the limits: of the abandoned starts, or the live one (free iterates may leave them)
+    live = lm.Qa[0]
+    inside = bool(((live >= lower) & (live <= upper)).all())
+    if inside and lm.fa[0] < lm.best_f[0]:
+        best_q = live
+    elif np.isfinite(lm.best_f[0]):
+        best_q = lm.best_q
+    else:
         best_q = starts[0] if len(starts) else 0.5 * (lower + upper)
     why = "timeout" if time.perf_counter() > deadline else "budget exhausted"
     return verify(problem, best_q.copy(), method=method, start=start, nfe=nfe, attempts=cursor,

@@ -560,6 +560,8 @@ class BatchLM:
         )
         self._fk_jacobian = problem.robot.batch.fk_jacobian
         self._frame = problem.frame
+        self.best_q = np.zeros(nq)  # see run()
+        self.best_f = np.full(1, np.inf)
         self._run_args = None  # built by the first run()
 
     def start(self, rows, Q0) -> None:
@@ -601,8 +603,6 @@ class BatchLM:
         if self._run_args is None:
             nq, K = self.problem.nq, self.K
             c = self._const
-            self.best_q = np.zeros(nq)
-            self.best_f = np.full(1, np.inf)
             self._T = np.empty((K, 4, 4))
             self._J = np.empty((K, 6, nq))
             chain, revolute = _compiled_chain(self.problem.robot.batch, self._frame)
