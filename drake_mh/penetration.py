@@ -184,37 +184,99 @@ def _segment_hits_polytope(a, b, normals, offsets) -> np.ndarray:
     return (np.maximum(lo, 0.0) <= np.minimum(hi, 1.0)) & ~parallel_out
 
 
-def polytope_lower_bound(core, R_WG: np.ndarray, p_WG: np.ndarray, obstacle) -> np.ndarray:
+@numba.njit(cache=True, inline="always")
+def _gap(u0, u1, u2, VH, VO, n):
+    """Gap between the projections of conv(VH) and conv(VO[n]) on the unit axis u."""
+    lo_h, hi_h = np.inf, -np.inf
+    for v in range(VH.shape[0]):
+        p = u0 * VH[v, 0] + u1 * VH[v, 1] + u2 * VH[v, 2]
+        lo_h = min(lo_h, p)
+        hi_h = max(hi_h, p)
+    lo_o, hi_o = np.inf, -np.inf
+    for v in range(VO.shape[1]):
+        p = u0 * VO[n, v, 0] + u1 * VO[n, v, 1] + u2 * VO[n, v, 2]
+        lo_o = min(lo_o, p)
+        hi_o = max(hi_o, p)
+    return max(lo_o - hi_h, lo_h - hi_o)
+
+
+@numba.njit(cache=True)
+def _polytope_sat_kernel(VH, NH, OH, EH, VO, NO, EO, certain):
+    """Separating-axis lower bound of the signed distance between conv(VH) and each conv(VO[n]),
+    ``+inf`` where they are separated (no correction needed).
+
+    Facet planes of H (``NH @ p + OH <= 0``) and face normals of O first: a non-negative gap proves
+    separation. Otherwise, unless the pair
+    is ``certain`` to overlap (its sphere value is below minus the link's excess), the edge x edge
+    axes are scanned too: one with a non-negative gap proves separation; if none has, the best
+    gap over the complete axis set is minus the exact penetration depth.
+    """
+    out = np.empty(VO.shape[0])
+    for n in range(VO.shape[0]):
+        best = -np.inf
+        for m in range(NH.shape[0]):  # H's facet planes: O beyond facet m (H's side is known)
+            lo_o = np.inf
+            for v in range(VO.shape[1]):
+                lo_o = min(lo_o, NH[m, 0] * VO[n, v, 0] + NH[m, 1] * VO[n, v, 1] + NH[m, 2] * VO[n, v, 2])
+            best = max(best, lo_o + OH[m])
+        for m in range(NO.shape[1]):
+            best = max(best, _gap(NO[n, m, 0], NO[n, m, 1], NO[n, m, 2], VH, VO, n))
+        if best >= 0.0:
+            out[n] = np.inf
+            continue
+        if not certain[n]:
+            for e in range(EH.shape[0]):
+                for f in range(EO.shape[1]):
+                    u0 = EH[e, 1] * EO[n, f, 2] - EH[e, 2] * EO[n, f, 1]
+                    u1 = EH[e, 2] * EO[n, f, 0] - EH[e, 0] * EO[n, f, 2]
+                    u2 = EH[e, 0] * EO[n, f, 1] - EH[e, 1] * EO[n, f, 0]
+                    norm = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+                    if norm <= 1e-9:
+                        continue
+                    best = max(best, _gap(u0 / norm, u1 / norm, u2 / norm, VH, VO, n))
+                    if best >= 0.0:
+                        break
+                if best >= 0.0:
+                    break
+        out[n] = np.inf if best >= 0.0 else best
+    return out
+
+
+def polytope_lower_bound(core, R_WG: np.ndarray, p_WG: np.ndarray, obstacle, sphere_value: np.ndarray) -> np.ndarray:
     """``v (n,)`` <= the signed distance [m] between a polytope core (a
     :class:`drake_mh.spheres.GeometryCore`) at poses ``R_WG, p_WG`` and an obstacle; ``+inf``
-    where the sphere value needs no correction (module docstring)."""
+    where the sphere value needs no correction (module docstring).
+
+    Args:
+        sphere_value: ``(n,)`` the spheres' value for this geometry (< 0); below ``-core.excess``
+            the pair certainly overlaps, and the edge x edge axes are skipped (the face-normal
+            bound is valid, only looser).
+    """
     shape = obstacle.shape
     R_GO, p_GO = _to_obstacle_frame(R_WG, p_WG, obstacle)
     N, off = core.normals_G, core.offsets
     if isinstance(shape, Sphere):
         depth = (p_GO @ N.T + off).max(axis=1)
         return np.where(depth < 0, depth - shape.radius, np.inf)
+    certain = sphere_value < -core.excess
+    n = len(p_GO)
     if isinstance(shape, Capsule):
         # a capsule whose axis misses P meets s <= d already (as a ball centred outside P does)
         half = 0.5 * shape.length * R_GO[:, :, 2]
         a, b = p_GO - half, p_GO + half
         hits = _segment_hits_polytope(a, b, N, off)
-        v = np.full(len(p_GO), np.inf)
+        v = np.full(n, np.inf)
         if hits.any():
-            seg = np.stack([a[hits], b[hits]], axis=1)
-            axes = np.concatenate([np.broadcast_to(N, (len(seg),) + N.shape),
-                                   np.cross((seg[:, 1] - seg[:, 0])[:, None, :], core.edges_G[None])], axis=1)
-            v[hits] = _sat(core.vertices_G, seg, axes) - shape.radius
+            seg = np.ascontiguousarray(np.stack([a[hits], b[hits]], axis=1))
+            direction = np.ascontiguousarray((seg[:, 1] - seg[:, 0])[:, None, :])
+            v[hits] = _polytope_sat_kernel(core.vertices_G, N, off, core.edges_G, seg, np.zeros((len(seg), 0, 3)),
+                                           direction, np.zeros(len(seg), np.bool_)) - shape.radius
         return v
-    else:
-        corners, normals, edges = _obstacle_polytope(shape)
-        corners_G = np.einsum("nij,vj->nvi", R_GO, corners) + p_GO[:, None, :]
-        edges_G = np.einsum("nij,mj->nmi", R_GO, edges)  # (n, E_O, 3)
-        cross = np.cross(core.edges_G[None, :, None, :], edges_G[:, None, :, :]).reshape(len(p_GO), -1, 3)
-        axes = np.concatenate([np.broadcast_to(N, (len(p_GO),) + N.shape),
-                               np.einsum("nij,mj->nmi", R_GO, normals), cross], axis=1)
-        v = _sat(core.vertices_G, corners_G, axes)
-    return np.where(v < 0, v, np.inf)
+    corners, normals, edges = _obstacle_polytope(shape)
+    corners_G = np.ascontiguousarray(np.einsum("nij,vj->nvi", R_GO, corners) + p_GO[:, None, :])
+    normals_G = np.ascontiguousarray(np.einsum("nij,mj->nmi", R_GO, normals))
+    edges_G = np.ascontiguousarray(np.einsum("nij,mj->nmi", R_GO, edges))
+    return _polytope_sat_kernel(core.vertices_G, N, off, core.edges_G, corners_G, normals_G, edges_G, certain)
 
 
 def core_points(model) -> tuple[list, np.ndarray]:
@@ -256,7 +318,8 @@ def corrected_min(model, per_sphere: np.ndarray, geometry_points_W: np.ndarray, 
         R_WG = np.stack([pts[:, 1] - p_WG, pts[:, 2] - p_WG, pts[:, 3] - p_WG], axis=2)
         for g in np.unique(geoms[~seg]):
             sel = geoms == g
-            v[sel] = polytope_lower_bound(model.geometries[g], R_WG[sel], p_WG[sel], obstacle)
+            v[sel] = polytope_lower_bound(model.geometries[g], R_WG[sel], p_WG[sel], obstacle,
+                                          per_geometry[rows[sel], g])
     per_geometry[rows, geoms] = np.minimum(per_geometry[rows, geoms], v)
     return per_geometry.min(axis=1)
 

@@ -196,6 +196,16 @@ def test_no_collision_geometry_raises_instead_of_infinite_clearance():
             query()
 
 
+@pytest.mark.parametrize("method", ["pso", "drake_snopt"])
+def test_ik_with_a_scene_needs_collision_geometry(method):
+    robot = drake_mh.Robot(no_geometry_urdf())
+    scene = Scene(robot)
+    scene.add("ball", Sphere(0.05), [0.2, 0.0, 0.3])
+    problem = drake_mh.IKProblem(robot=robot, target=robot.fk(np.array([0.3, 0.4]))[:3, 3], scene=scene)
+    with pytest.raises(SceneError, match="no collision geometry"):
+        drake_mh.solve_ik(problem, method=method, seed=0, budget=100)
+
+
 def test_example_robot_data_arms_sphere_guarantee(tmp_path_factory, monkeypatch):
     """Real mesh robots as shipped (example-robot-data), when the loader can read them."""
     monkeypatch.setenv("DRAKE_MH_CACHE", str(tmp_path_factory.getbasetemp() / "cache"))
