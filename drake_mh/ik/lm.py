@@ -539,11 +539,15 @@ class BatchLM:
         self.Qa = np.empty((K, nq))
         self.Ea = np.zeros((K, 6))
         self.Ja = np.zeros((K, 6, nq))
-        self.fa = np.full(K, np.inf)
-        self.lam = np.full(K, float(settings.lam0))
+        # np.empty + fill: np.full / np.ones are Python-level wrappers (~1.5 µs each per solve)
+        self.fa = np.empty(K)
+        self.fa.fill(np.inf)
+        self.lam = np.empty(K)
+        self.lam.fill(float(settings.lam0))
         self.stall = np.zeros(K, dtype=np.int64)
         self.iters = np.zeros(K, dtype=np.int64)
-        self.fresh = np.ones(K, dtype=np.bool_)
+        self.fresh = np.empty(K, dtype=np.bool_)
+        self.fresh.fill(True)
         self.status = np.zeros(K, dtype=np.int64)
         has_rot = problem.R_WT is not None
         ref = problem.q_ref is not None and settings.ref_gain > 0
@@ -561,7 +565,8 @@ class BatchLM:
         self._fk_jacobian = problem.robot.batch.fk_jacobian
         self._frame = problem.frame
         self.best_q = np.zeros(nq)  # see run()
-        self.best_f = np.full(1, np.inf)
+        self.best_f = np.empty(1)
+        self.best_f.fill(np.inf)
         self._run_args = None  # built by the first run()
 
     def start(self, rows, Q0) -> None:

@@ -252,17 +252,22 @@ class IKProblem:
         set_("p_WT", p_WT)
         set_("R_WT", R_WT)
         for name in ("position_tolerance", "orientation_tolerance"):
-            set_(name, _positive(name, getattr(self, name)))
+            value = getattr(self, name)
+            if not (type(value) is float and 0.0 < value < math.inf):  # the common case costs nothing
+                set_(name, _positive(name, value))
         for name in ("orientation_weight", "clearance", "collision_weight", "ref_weight", "manipulability_weight"):
-            set_(name, _positive(name, getattr(self, name), allow_zero=True))
-        from drake_mh.scene import Scene
+            value = getattr(self, name)
+            if not (type(value) is float and 0.0 <= value < math.inf):
+                set_(name, _positive(name, value, allow_zero=True))
+        if self.scene is not None:
+            from drake_mh.scene import Scene
 
-        if self.scene is not None and not isinstance(self.scene, Scene):
-            raise InvalidIKProblem(f"scene must be a drake_mh.scene.Scene (Scene(robot)) or None, got "
-                                   f"{type(self.scene).__name__}")
-        if self.scene is not None and self.scene.robot is not self.robot:
-            raise InvalidIKProblem("the scene belongs to another Robot object; build it with Scene(robot) "
-                                   "for the robot of this problem")
+            if not isinstance(self.scene, Scene):
+                raise InvalidIKProblem(f"scene must be a drake_mh.scene.Scene (Scene(robot)) or None, got "
+                                       f"{type(self.scene).__name__}")
+            if self.scene.robot is not self.robot:
+                raise InvalidIKProblem("the scene belongs to another Robot object; build it with Scene(robot) "
+                                       "for the robot of this problem")
         if self.q_ref is not None:
             set_("q_ref", self.robot.check_q(self.q_ref, "q_ref"))
         if self.frame is not None:

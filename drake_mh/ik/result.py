@@ -99,16 +99,19 @@ def check(problem: IKProblem, q) -> tuple[bool, float, float, float, bool, str]:
     robot = problem.robot
     X_WE = robot.fk(q, problem.frame)  # checks q (shape, finite) first
     q = np.asarray(q, dtype=float)
-    x, y, z = X_WE[:3, 3].tolist()
+    (r00, r01, r02, x), (r10, r11, r12, y), (r20, r21, r22, z), _ = X_WE.tolist()
     px, py, pz = problem.p_WT.tolist()
     e_p = math.sqrt((x - px) ** 2 + (y - py) ** 2 + (z - pz) ** 2)
     if problem.R_WT is None:
         e_o = 0.0
     else:  # rotation_angle: ||R_WE - R_WT||_F = 2√2 sin(θ/2)
-        D = (X_WE[:3, :3] - problem.R_WT).ravel()
-        e_o = 2.0 * math.asin(min(math.sqrt(float(D @ D)) / _SQRT8, 1.0))
+        (t00, t01, t02), (t10, t11, t12), (t20, t21, t22) = problem.R_WT.tolist()
+        d2 = ((r00 - t00) ** 2 + (r01 - t01) ** 2 + (r02 - t02) ** 2 + (r10 - t10) ** 2 + (r11 - t11) ** 2
+              + (r12 - t12) ** 2 + (r20 - t20) ** 2 + (r21 - t21) ** 2 + (r22 - t22) ** 2)
+        e_o = 2.0 * math.asin(min(math.sqrt(d2) / _SQRT8, 1.0))
     lower, upper = robot.lower, robot.upper
-    within = bool(((q >= lower - LIMIT_TOLERANCE) & (q <= upper + LIMIT_TOLERANCE)).all()) or \
+    within = all(lo - LIMIT_TOLERANCE <= v <= hi + LIMIT_TOLERANCE
+                 for v, lo, hi in zip(q.tolist(), lower.tolist(), upper.tolist())) or \
         robot.within_limits(q, tol=LIMIT_TOLERANCE)  # continuous joints may leave [-π, π]
     distance = problem.scene.min_distance(q) if problem.has_obstacles else math.inf
     if e_p <= problem.position_tolerance and e_o <= problem.orientation_tolerance and within and \
