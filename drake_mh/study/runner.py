@@ -96,6 +96,7 @@ def _meta(study: Study, specs: list[CaseSpec], quick: bool, seed: int, source: A
         "n_cases": len(specs),
         "methods": list(dict.fromkeys(str(s.params.get(study.fields.method, "(all)")) for s in specs)),
         "cases_digest": digest,
+        "case_keys": [s.key for s in specs],  # the report counts only these (a folder may hold others)
         "fields": study.fields.to_dict(),
         "source": getattr(source, "path", None) or study.source_file,
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),

@@ -168,3 +168,24 @@ def test_convergence_panels_per_field_combination(toy_results, monkeypatch):
     monkeypatch.setattr(plots, "_render", capture)
     assert plots.convergence_figure(data) is not None
     assert sorted(titles) == sorted(f"inst = {i}, rep = {r}" for i in "pq" for r in range(4))   # 8 panels, 2 rows
+
+
+def test_records_outside_the_grid_are_left_out_and_said(tmp_path):
+    """A folder holding a case of another grid reported '7 of 6 cases'."""
+    import shutil
+    from study_toys import write_toy
+
+    path = write_toy(tmp_path, reps=1)
+    out = tmp_path / "out"
+    run_study(path, out=out, workers=0, report=False)
+    store = RecordStore(out)
+    stray = dict(store.records()[0], key="inst=z|method=a|rep=9", case_id="stray")
+    store.append(stray)
+    with open(store.records_path, "ab") as handle:
+        handle.write(b"\x00" * 64 + b"\n")                 # and a damaged line
+    data = ReportData.load(out)
+    assert len(data.records) == 6 and data.outside_grid == 1
+    md = (write_report(out).parent / "report.md").read_text()
+    assert "6 of 6 cases finished (1 records of cases not in this grid left out)" in md
+    assert "1 damaged records skipped" in md
+    shutil.rmtree(out)

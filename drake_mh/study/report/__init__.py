@@ -101,6 +101,11 @@ def build_document(data: ReportData) -> Document:
     n_cases = meta.get("n_cases")
     finished = len(data.records)
     status = f"{finished} of {n_cases} cases finished" if n_cases else f"{finished} cases"
+    if data.outside_grid:
+        status += f" ({data.outside_grid} records of cases not in this grid left out)"
+    damaged = data.store.damaged if data.store is not None else []
+    if damaged:
+        status += f" ({len(damaged)} damaged records skipped: {damaged[0][0]}, {damaged[0][1]} ...; they run again)"
     doc.add(
         Paragraph(
             f"{status}; {len(data.errors())} raised. Study seed {meta.get('seed', '?')}"

@@ -43,6 +43,7 @@ class ReportData:
         methods: method names in order of first appearance.
         instance_keys: keys that define paired blocks.
         summary: the study's ``summary.md`` text ('' if none).
+        outside_grid: records left out because their key is not a case of the study's grid.
     """
 
     folder: Path
@@ -53,6 +54,7 @@ class ReportData:
     instance_keys: tuple[str, ...]
     summary: str = ""
     store: RecordStore = field(repr=False, default=None)
+    outside_grid: int = 0
 
     @classmethod
     def load(cls, folder: str | os.PathLike) -> ReportData:
@@ -64,6 +66,12 @@ class ReportData:
         store = RecordStore(folder)
         records = store.records()
         meta = store.read_meta() or {}
+        outside = 0
+        if meta.get("case_keys"):  # records of another grid (an edited study, copied lines) are not this study's
+            keys = set(meta["case_keys"])
+            kept = [r for r in records if r.get("key") in keys]
+            outside = len(records) - len(kept)
+            records = kept
         fields = _with_declared_layout(Fields.from_dict(meta.get("fields", {})), meta)
         records.sort(key=lambda r: r.get("key", ""))
         grid_keys = meta.get("grid_keys") or []
@@ -89,6 +97,7 @@ class ReportData:
             instance_keys=instance_keys,
             summary=summary,
             store=store,
+            outside_grid=outside,
         )
 
     @property
