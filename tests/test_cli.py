@@ -61,6 +61,8 @@ def test_subcommand_modules_plug_in():
         (["study", "x", "--bogus"], "unrecognized arguments: --bogus"),
         (["robots", "no_such_robot"], "unknown robot 'no_such_robot'"),
         (["report", "/no/such/folder"], "holds no study results"),
+        (["app", "--max-seconds", "1", "--status-file", "/no/such/dir/s.json"], "--status-file"),
+        (["study", "bench_kinematics", "--quick", "--out", "/proc/no_such"], "results folder /proc/no_such"),
     ],
 )
 def test_bad_input_exits_2_with_one_line(argv, words, capsys):

@@ -78,8 +78,24 @@ def cmd_app(args: argparse.Namespace) -> int:
     points = (tuple(args.start or defaults[0]), tuple(via[0]), tuple(via[1]), tuple(args.end or defaults[3]))
     if args.max_seconds is not None and not args.max_seconds > 0:
         raise InvalidArgument(f"--max-seconds must be > 0, got {args.max_seconds}")
+    if args.status_file is not None:
+        _check_writable(args.status_file)
     config = AppConfig(robots=robots, method=args.method, points=points, n_points=args.n_points,
                        obstacle=None if args.no_obstacle else tuple(args.obstacle),
                        obstacle_radius=args.obstacle_radius, seed=args.seed, budget=args.budget, fps=args.fps,
                        speed=args.speed, port=args.port, status_file=args.status_file)
     return run_app(config, generate=args.generate, run=args.run, max_seconds=args.max_seconds)
+
+
+def _check_writable(path: str) -> None:
+    """``--status-file`` must be writable before the app starts (not an internal error later)."""
+    import os
+    from pathlib import Path
+
+    from drake_mh.errors import InvalidArgument
+
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    if target.is_dir() or not folder.is_dir() or not os.access(folder, os.W_OK):
+        raise InvalidArgument(f"--status-file {path}: cannot write there (its folder must exist and be "
+                              "writable, and it must not be a folder)")
