@@ -23,8 +23,8 @@ declared (``world``) are declared.
 
 Robots: the bundled ``panda`` and ``seed000_6dof`` and, when ``example-robot-data`` is
 installed (test extra), its UR5, xArm7 and Kinova j2s6s200 (loaded by path with
-:func:`drake_mh.load_robot`). 1000 targets per bundled robot, 300 per other arm (10 and 5
-with ``--quick``).
+:func:`drake_mh.load_robot`). 1000 targets per robot (10 per bundled robot and 5 per other
+arm with ``--quick``); the full run takes about a minute here.
 
 Run: ``drake-mh study ik_peers [--quick]`` or ``python studies/ik_peers.py [--quick]``.
 """
@@ -182,7 +182,7 @@ def _grid(quick: bool) -> list[dict]:
     methods = list(OURS) + (list(PEERS) if rtb_available() else [])
     cases = []
     for robot in robots():
-        n = (10 if robot in BUNDLED else 5) if quick else (1000 if robot in BUNDLED else 300)
+        n = (10 if robot in BUNDLED else 5) if quick else 1000
         for t in range(n):
             order = methods if t % 2 == 0 else methods[::-1]
             cases += [{"robot": robot, "target": t, "method": m} for m in order]
