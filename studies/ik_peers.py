@@ -66,12 +66,10 @@ _WARM: set = set()
 
 
 def rtb_available() -> bool:
-    """Whether robotics-toolbox-python imports (the optional extra ``peers``)."""
-    try:
-        import roboticstoolbox  # noqa: F401
-    except Exception:  # noqa: BLE001 - any import failure means "not available"
-        return False
-    return True
+    """Whether robotics-toolbox-python is installed (the optional extra ``peers``; not imported here)."""
+    import importlib.util
+
+    return importlib.util.find_spec("roboticstoolbox") is not None
 
 
 def erd_root() -> Path | None:
