@@ -45,15 +45,6 @@ _PRISM_SIDES = 16
 
 
 @numba.njit(cache=True)
-def _segment_min_sdf_rows(kind, dims, A, B):
-    """``min_t sdf(A_n + t (B_n - A_n))`` for each row (obstacle frame)."""
-    out = np.empty(A.shape[0])
-    for n in range(A.shape[0]):
-        out[n] = segment_min_sdf(kind, dims, A[n], B[n])[1]
-    return out
-
-
-@numba.njit(cache=True)
 def _sat_segment(a, b, corners, normals, edges):
     """Separating-axis value of the segment a-b against conv(corners): the largest gap over the
     face normals and the segment x edge directions (minus the penetration depth if negative)."""
@@ -125,28 +116,6 @@ def _obstacle_polytope(shape):
     edges = np.vstack([[0.0, 0.0, 1.0], np.column_stack([-np.sin(angles[: k // 2] + np.pi / k),
                                                          np.cos(angles[: k // 2] + np.pi / k), np.zeros(k // 2)])])
     return corners, normals, edges
-
-
-def _sat(A: np.ndarray, B: np.ndarray, axes: np.ndarray) -> np.ndarray:
-    """Separating-axis lower bound ``(n,)`` of the signed distance between conv(A_n) and conv(B_n).
-
-    Args:
-        A: ``(n, Va, 3)`` or ``(Va, 3)``; B: ``(n, Vb, 3)`` or ``(Vb, 3)``;
-        axes: ``(n, M, 3)`` or ``(M, 3)`` (need not be unit; near-zero ones are skipped).
-
-    For every unit axis u, the gap between the two projections is a lower bound of the signed
-    distance (it is the distance when positive along the best axis of a complete set, and minus
-    the penetration depth when the sets overlap and the set is complete).
-    """
-    n = max(len(x) if np.ndim(x) == 3 else 1 for x in (A, B, axes))
-    A, B, axes = (np.broadcast_to(np.asarray(x, dtype=float), (n,) + np.shape(x)[-2:]) for x in (A, B, axes))
-    norm = np.linalg.norm(axes, axis=-1, keepdims=True)
-    valid = norm[..., 0] > 1e-9
-    u = axes / np.where(norm > 1e-9, norm, 1.0)
-    pa = np.einsum("nvk,nmk->nvm", A, u)
-    pb = np.einsum("nvk,nmk->nvm", B, u)
-    gap = np.maximum(pb.min(axis=1) - pa.max(axis=1), pa.min(axis=1) - pb.max(axis=1))
-    return np.where(valid, gap, -np.inf).max(axis=1)
 
 
 def _to_obstacle_frame(R_WG, p_WG, obstacle):
