@@ -39,6 +39,7 @@ from __future__ import annotations
 import functools
 import io
 import logging
+import zipfile
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -107,8 +108,8 @@ def _cover_cached(shape, tolerance: float, use_cache: bool):
     try:
         with np.load(path) as data:
             return data["centres"], data["radii"], float(data["excess"])
-    except (OSError, KeyError, ValueError):
-        pass
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
+        pass  # missing or unreadable: recompute (and overwrite)
     centres, radii, excess = cover(shape, tolerance)
     buffer = io.BytesIO()
     np.savez(buffer, centres=centres, radii=radii, excess=excess)
