@@ -1,9 +1,12 @@
 """Batched damped least-squares / Levenberg–Marquardt steps for K IK candidates at once.
 
-The Jacobian baselines (:mod:`drake_mh.ik.jacobian`) and the local phase of the hybrid
-(:mod:`drake_mh.ik.hybrid`) share this machinery. One iteration is two calls: the batched
-kernel ``Robot.batch.fk_jacobian(Q (K, nq))`` and :func:`lm_step` (numba), which for every
-candidate k
+The Jacobian baselines (:mod:`drake_mh.ik.jacobian`) and both phases of the hybrid
+(:mod:`drake_mh.ik.hybrid`) share this machinery. They run :func:`lm_run` (via
+:meth:`BatchLM.run`): iterations *and* restarts inside one compiled call, FK and Jacobian of
+each candidate by :func:`drake_mh.ik.kernels.fk_jacobian_one`, returning when a candidate
+converges or its starts run out. :meth:`BatchLM.iterate` (one iteration per call: the batched
+kernel ``Robot.batch.fk_jacobian(Q (K, nq))`` and :func:`lm_step`) remains for step-by-step
+use. Per candidate k, an iteration
 
 1. computes the task error ``e = [w_o ω; Δp]`` with ``Δp = p_WT - p_WE`` [m] and ``ω`` the
    rotation vector of ``R_WT R_WEᵀ`` [rad] (rows ordered as Drake's Jacobian ``[ω; v]``;
@@ -19,7 +22,10 @@ candidate k
    pseudo-inverse ``J⁺ e`` when J has full row rank) — plus, with a reference configuration,
    the secondary task ``α (I - Jᵀ (J Jᵀ + λ I)⁻¹ J)(q_ref - q)`` projected (approximately, for
    ``λ > 0``) into the null space of the task, so it does not pull the end effector off the
-   target; then projects the new point onto the joint limits (clamping).
+   target (the damping λ, or ``λ |e_w|²`` with ``error_damping``: Chan & Lawrence 1988); then
+   projects the new point onto the joint limits (clamping), unless ``project_limits`` is off:
+   then iterates may leave the limits and a converged point is accepted only if whole turns
+   of its revolute joints bring it within them.
 
 The ``m x m`` systems (m = 6 or 3) are solved by an unrolled Cholesky factorization per
 candidate inside the kernel: no Python loop over candidates and no per-iteration numpy calls
@@ -34,7 +40,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-__all__ = ["LMSettings", "BatchLM", "lm_step", "lm_run", "fk_jacobian_one", "uniform_hash", "CONVERGED", "STALLED", "RUNNING"]
+from drake_mh.ik.kernels import fk_jacobian_one, uniform_hash
+
+__all__ = ["LMSettings", "BatchLM", "lm_step", "lm_run", "fk_jacobian_one", "uniform_hash", "CONVERGED", "STALLED",
+           "RUNNING"]
 
 #: row states: iterating, converged (to the solver's tolerances), stalled (to be restarted)
 RUNNING, CONVERGED, STALLED = 0, 1, 2
@@ -308,112 +317,9 @@ def _into_limits(q, lower, upper, revolute):
     return True
 
 
-@numba.njit(cache=True, inline="always")
-def fk_jacobian_one(q, parent, KR, Kp, perm, kind, qidx, anchor, ER, Ep, on_path, want_jac, R, p, T, J):
-    """Pose ``T (4, 4)`` and geometric Jacobian ``J (6, nq)`` (rows ``[ω; v]``) of one configuration.
-
-    The same compiled chain and recursion as the batched kernel
-    (:func:`drake_mh._kernels.fk_jacobian`, see :mod:`drake_mh.kinematics`) for a single
-    ``q (nq,)``, with scalar ``sin``/``cos`` and no allocation: ``R (F, 3, 3)`` and ``p (F, 3)``
-    are work arrays (the world pose of every moving frame); ``J`` is left alone unless
-    ``want_jac``. Measured 0.2 µs on the Panda, a quarter of the block kernel's cost at N = 1
-    (which is what an LM iteration of one candidate needs). Tested against Drake.
-    """
-    F = parent.shape[0]
-    for k in range(F):
-        a = parent[k]
-        if a < 0:
-            for i in range(3):
-                p[k, i] = Kp[k, i]
-                for j in range(3):
-                    R[k, i, j] = KR[k, i, j]
-        else:
-            for i in range(3):
-                p[k, i] = p[a, i] + R[a, i, 0] * Kp[k, 0] + R[a, i, 1] * Kp[k, 1] + R[a, i, 2] * Kp[k, 2]
-            if perm[k, 0] >= 0:
-                for j in range(3):
-                    src = perm[k, j]
-                    sg = KR[k, src, j]
-                    for i in range(3):
-                        R[k, i, j] = sg * R[a, i, src]
-            else:
-                for i in range(3):
-                    for j in range(3):
-                        R[k, i, j] = R[a, i, 0] * KR[k, 0, j] + R[a, i, 1] * KR[k, 1, j] + R[a, i, 2] * KR[k, 2, j]
-        x = q[qidx[k]]
-        if kind[k] == 0:
-            sn = np.sin(x)
-            cs = np.cos(x)
-            for i in range(3):
-                r0 = R[k, i, 0]
-                r1 = R[k, i, 1]
-                R[k, i, 0] = r0 * cs + r1 * sn
-                R[k, i, 1] = r1 * cs - r0 * sn
-        else:
-            for i in range(3):
-                p[k, i] += R[k, i, 2] * x
-    for i in range(3):
-        if anchor < 0:
-            T[i, 3] = Ep[i]
-            for j in range(3):
-                T[i, j] = ER[i, j]
-        else:
-            T[i, 3] = p[anchor, i] + R[anchor, i, 0] * Ep[0] + R[anchor, i, 1] * Ep[1] + R[anchor, i, 2] * Ep[2]
-            for j in range(3):
-                T[i, j] = R[anchor, i, 0] * ER[0, j] + R[anchor, i, 1] * ER[1, j] + R[anchor, i, 2] * ER[2, j]
-        T[3, i] = 0.0
-    T[3, 3] = 1.0
-    if not want_jac:
-        return
-    for k in range(F):
-        col = qidx[k]
-        if not on_path[k]:
-            for i in range(6):
-                J[i, col] = 0.0
-        elif kind[k] == 0:
-            zx, zy, zz = R[k, 0, 2], R[k, 1, 2], R[k, 2, 2]
-            dx = T[0, 3] - p[k, 0]
-            dy = T[1, 3] - p[k, 1]
-            dz = T[2, 3] - p[k, 2]
-            J[0, col] = zx
-            J[1, col] = zy
-            J[2, col] = zz
-            J[3, col] = zy * dz - zz * dy
-            J[4, col] = zz * dx - zx * dz
-            J[5, col] = zx * dy - zy * dx
-        else:
-            J[0, col] = 0.0
-            J[1, col] = 0.0
-            J[2, col] = 0.0
-            J[3, col] = R[k, 0, 2]
-            J[4, col] = R[k, 1, 2]
-            J[5, col] = R[k, 2, 2]
-
-
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
-_MIX2 = np.uint64(0x94D049BB133111EB)
-
-
-@numba.njit(cache=True, inline="always")
-def uniform_hash(seed, n):
-    """A uniform number in [0, 1) from ``(seed, n)``: SplitMix64's output function (Steele,
-    Lea & Flood, "Fast splittable pseudorandom number generators", OOPSLA 2014) applied to
-    ``seed + (n + 1) γ``, i.e. draw ``n`` of the SplitMix64 stream started at ``seed``.
-
-    Counter-based, so a start depends on the seed and its index only (no state to carry
-    between compiled calls, no numpy ``Generator`` to build per solve: 7 µs). ``seed`` is a
-    ``uint64``, ``n`` an integer >= 0.
-    """
-    z = seed + (np.uint64(n) + np.uint64(1)) * _GOLDEN
-    z = (z ^ (z >> np.uint64(30))) * _MIX1
-    z = (z ^ (z >> np.uint64(27))) * _MIX2
-    z = z ^ (z >> np.uint64(31))
-    return np.float64(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
-
-
 @numba.njit(cache=True)
-def lm_run(starts, n_starts, gen_seed, cursor, max_evals, Qt, Qa, Ea, Ja, fa, lam, stall, iters, fresh, status, best_q, best_f,
+def lm_run(starts, n_starts, gen_seed, cursor, max_evals, Qt, Qa, Ea, Ja, fa, lam, stall, iters, fresh, status,
+           best_q, best_f,
            chain, p_t, R_t, has_rot, w_o, lower, upper, lam0, settings, ref_gain, q_ref, tol_p2, tol_o2, revolute,
            Qn, T, J):
     """Iterates K candidates with restarts inside one compiled call, until one converges.

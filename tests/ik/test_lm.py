@@ -12,7 +12,8 @@ from random_models import random_chain_urdf
 
 from drake_mh.ik import IKProblem, solve_ik
 from drake_mh.ik.hybrid import HybridConfig
-from drake_mh.ik.lm import STALLED, BatchLM, LMSettings, _compiled_chain, fk_jacobian_one, uniform_hash
+from drake_mh.ik.kernels import fk_jacobian_one, uniform_hash
+from drake_mh.ik.lm import STALLED, BatchLM, LMSettings, _compiled_chain
 from drake_mh.robot import Robot
 
 FIRST = HybridConfig().first_lm
