@@ -33,8 +33,9 @@ How each shape is covered (frame G of the shape, axis z as in Drake), for a tole
      ``B(c, depth(c))`` lies in P, so every point of ``B(c, depth(c) + tol)`` is within tol of P.
   3. **greedy set cover**: a candidate covers a target when ``|x - c| + rho <= R`` (the target
      ball lies in the sphere). The candidate covering most uncovered targets
-     is taken until all are covered; then each sphere shrinks to the largest ``|x - c| + rho`` of
-     the targets it was the first to cover. A target no candidate covers (rare, a poor
+     is taken until all are covered; picks whose targets the others all cover are dropped
+     (latest first), and each sphere shrinks to the largest ``|x - c| + rho`` of the targets
+     assigned to it. A target no candidate covers (rare, a poor
      projection) gets its own sphere ``B(c, |x - c| + rho)``.
 
   The excess of a sphere ``B(c, R)`` with c in P is at most ``R - depth(c)``; the covering's
@@ -238,6 +239,34 @@ def _covering_pairs(cand, reach, x, rho):
     return np.concatenate(ii), np.concatenate(jj), np.concatenate(dd)
 
 
+def _prune(by_cand, rho: np.ndarray, chosen: np.ndarray, covered: np.ndarray):
+    """Drop greedy picks whose targets the other picks all cover (latest picks first, they
+    cover least), then shrink each kept sphere to the targets assigned to it.
+
+    Returns:
+        ``(chosen (P,), radii (P,))``.
+    """
+    sub = by_cand[chosen]  # (P, T) rows of the picked candidates, data = distance + 1
+    times = np.bincount(sub.indices, minlength=sub.shape[1])  # picks covering each target
+    keep = np.ones(len(chosen), bool)
+    for k in range(len(chosen) - 1, -1, -1):
+        targets = sub.indices[sub.indptr[k]:sub.indptr[k + 1]]
+        if np.all(times[targets] >= 2):
+            keep[k] = False
+            times[targets] -= 1
+    sub = sub[np.flatnonzero(keep)].tocsc()
+    # each covered target goes to one kept pick that covers it; a pick's radius is the largest
+    # |x - c| + rho of its targets
+    targets = np.flatnonzero(covered)
+    owner_pos = sub.indptr[targets]  # first kept pick covering the target
+    owner = sub.indices[owner_pos]
+    need = sub.data[owner_pos] - 1.0 + rho[targets]
+    radii = np.zeros(int(keep.sum()))
+    np.maximum.at(radii, owner, need)
+    used = radii > 0  # a pick that owns no target is not needed
+    return chosen[keep][used], radii[used]
+
+
 def cover_polytope(poly: ConvexPolytope, tolerance: float) -> tuple[np.ndarray, np.ndarray, float]:
     """Spheres ``(centres (S, 3), radii (S,))`` whose union contains ``poly``, and their excess [m].
 
@@ -285,7 +314,8 @@ def cover_polytope(poly: ConvexPolytope, tolerance: float) -> tuple[np.ndarray, 
         radii.append(float(np.max(by_cand.data[sl][fresh] - 1.0 + rho[new_targets])))
         rows = _ranges(by_target.indptr[new_targets], by_target.indptr[new_targets + 1])
         counts -= np.bincount(by_target.indices[rows], minlength=n_cand)
-    centres, radii, depths = [cand[chosen]], [np.asarray(radii)], [depth[chosen]]
+    chosen, radii = _prune(by_cand, rho, np.asarray(chosen, np.int64), covered)
+    centres, radii, depths = [cand[chosen]], [radii], [depth[chosen]]
     left = np.flatnonzero(~covered)
     if len(left):  # a target no candidate covers (a poor projection): its own sphere
         c_left = cand_all[left]

@@ -53,7 +53,7 @@ log = logging.getLogger(__name__)
 DEFAULT_TOLERANCE = 0.01
 """Default covering tolerance [m]: every sphere point lies within it of the geometry."""
 
-ALGORITHM_VERSION = "sphere-cover-2"
+ALGORITHM_VERSION = "sphere-cover-3"
 """Part of every cache key: change it whenever :mod:`drake_mh.sphere_cover` changes its output."""
 
 SEGMENT, POLYTOPE = 0, 1
