@@ -200,8 +200,9 @@ class SphereModel:
         Args:
             robot: a :class:`drake_mh.robot.Robot`.
             tolerance: covering tolerance [m]: every sphere point lies within it of the
-                geometry. Smaller is tighter but takes more spheres (about 1 / tolerance^2
-                for meshes and boxes; capsules 1 / sqrt(tolerance)).
+                geometry. Smaller is tighter but takes more spheres: about
+                ``tolerance^-1.5`` for meshes (example-robot-data's Panda: 282 / 794 / 2,174
+                spheres at 2 / 1 / 0.5 cm), ``tolerance^-0.5`` for capsules.
             cache: read and write the on-disk cache (:mod:`drake_mh.cache`).
 
         Raises:
