@@ -174,6 +174,9 @@ class BatchKinematics:
                       np.ascontiguousarray(c.K[:, :3, 3]), _signed_permutations(c.K[:, :3, :3]),
                       c.kind, c.qidx)
         self._frame_cache: dict[str, tuple] = {}
+        self._one_args: dict[tuple, tuple] = {}
+        self._q_shape = (robot.nq,)
+        self._no_jacobian = np.empty((6, robot.nq))
 
     @property
     def nq(self) -> int:
@@ -203,6 +206,30 @@ class BatchKinematics:
         J = np.empty((N, 6, self.nq)) if want_jac else np.empty((0, 6, self.nq))
         _kernels.fk_jacobian(QT, *self._args, anchor, ER, Ep, on_path, want_jac, T, J)
         return T, J
+
+    def one(self, q, frame: str | None = None, want_jac: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
+        """Pose ``X_WF (4, 4)`` (and Jacobian ``(6, nq)`` if ``want_jac``) of one configuration.
+
+        What ``Robot.fk`` / ``Robot.jacobian`` run: one compiled call (no allocation inside,
+        finiteness checked there), about 1 µs from Python instead of Drake's 6-11 µs; any ``q``
+        that is not already a C-contiguous float ``(nq,)`` array goes through
+        ``Robot.check_q`` first, and a non-finite one gets its error from there.
+        """
+        key = (frame, want_jac)
+        args = self._one_args.get(key)
+        if args is None:
+            F = len(self.chain.parent)
+            args = self._args + tuple(self._frame_anchor(frame)) + (
+                want_jac, np.empty((F, 3, 3)), np.empty((F, 3)))
+            self._one_args[key] = args
+        if not (type(q) is np.ndarray and q.dtype == np.float64 and q.shape == self._q_shape
+                and q.flags.c_contiguous):
+            q = np.ascontiguousarray(self.robot.check_q(q))
+        T = np.empty((4, 4))
+        J = np.empty((6, self._q_shape[0])) if want_jac else self._no_jacobian
+        if not _kernels.fk_one(q, *args, T, J):
+            self.robot.check_q(q)  # raises, naming the joints
+        return T, (J if want_jac else None)
 
     def _transposed(self, Q) -> np.ndarray:
         """Checked batch as a C-contiguous ``(nq, N)`` array (the kernels' layout)."""

@@ -430,7 +430,18 @@ class Robot:
         return [self.plant.get_body(BodyIndex(i)).name() for i in range(1, self.plant.num_bodies())]
 
     def fk(self, q, frame: str | None = None) -> np.ndarray:
-        """Pose ``X_WF (4, 4)`` of the end effector (or ``frame``) at ``q``."""
+        """Pose ``X_WF (4, 4)`` of the end effector (or ``frame``) at ``q``.
+
+        Computed by the single-configuration kernel compiled from this plant
+        (:meth:`BatchKinematics.one`, ~1-2 µs from Python), equal to Drake's to 1e-12 (tests);
+        :meth:`fk_drake` is Drake's own (the reference that verification uses).
+        """
+        if frame is not None:
+            self._frame(frame)  # FrameNotFound / InvalidArgument with the frame list
+        return self.batch.one(q, frame)[0]
+
+    def fk_drake(self, q, frame: str | None = None) -> np.ndarray:
+        """Pose ``X_WF (4, 4)`` from Drake (``SetPositions`` + ``CalcPoseInWorld``, ~6 µs)."""
         self._set(q)
         return self._frame(frame).CalcPoseInWorld(self.plant_context).GetAsMatrix4()
 
@@ -446,7 +457,16 @@ class Robot:
         return out
 
     def jacobian(self, q, frame: str | None = None) -> np.ndarray:
-        """Geometric Jacobian ``(6, nq)`` of the frame origin: rows ``[ω_W; v_W]`` (Drake's order)."""
+        """Geometric Jacobian ``(6, nq)`` of the frame origin: rows ``[ω_W; v_W]`` (Drake's order).
+
+        Compiled single-configuration kernel like :meth:`fk`; :meth:`jacobian_drake` is Drake's.
+        """
+        if frame is not None:
+            self._frame(frame)
+        return self.batch.one(q, frame, want_jac=True)[1]
+
+    def jacobian_drake(self, q, frame: str | None = None) -> np.ndarray:
+        """Geometric Jacobian ``(6, nq)`` from Drake's ``CalcJacobianSpatialVelocity``."""
         from pydrake.multibody.tree import JacobianWrtVariable
 
         self._set(q)

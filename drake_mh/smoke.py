@@ -84,8 +84,8 @@ def kernel_errors(robot, n: int = 200, seed: int = 0) -> tuple[float, float]:
     """Largest |batched kernel - Drake| over ``n`` random configurations: ``(FK, Jacobian)``."""
     Q = robot.random_configurations(n, seed)
     T, J = robot.batch.fk_jacobian(Q)
-    fk_err = max(np.abs(T[i] - robot.fk(q)).max() for i, q in enumerate(Q))
-    jac_err = max(np.abs(J[i] - robot.jacobian(q)).max() for i, q in enumerate(Q))
+    fk_err = max(np.abs(T[i] - robot.fk_drake(q)).max() for i, q in enumerate(Q))
+    jac_err = max(np.abs(J[i] - robot.jacobian_drake(q)).max() for i, q in enumerate(Q))
     return float(fk_err), float(jac_err)
 
 

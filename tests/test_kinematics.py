@@ -17,8 +17,8 @@ ROBOTS = {name: drake_mh.load_robot(name) for name in drake_mh.available_robots(
 def assert_matches_drake(robot, Q, frame=None):
     T, J = robot.batch.fk_jacobian(Q, frame)
     for q, T_i, J_i in zip(Q, T, J):
-        np.testing.assert_allclose(T_i, robot.fk(q, frame), atol=TOL, rtol=0)
-        np.testing.assert_allclose(J_i, robot.jacobian(q, frame), atol=TOL, rtol=0)
+        np.testing.assert_allclose(T_i, robot.fk_drake(q, frame), atol=TOL, rtol=0)
+        np.testing.assert_allclose(J_i, robot.jacobian_drake(q, frame), atol=TOL, rtol=0)
 
 
 @pytest.mark.parametrize("name", sorted(ROBOTS))
@@ -91,8 +91,8 @@ def test_block_boundaries():
     for N in (63, 64, 65, 129):  # around the kernels' block size
         Q = robot.random_configurations(N, N)
         T = robot.batch.fk(Q)
-        np.testing.assert_allclose(T[-1], robot.fk(Q[-1]), atol=TOL)
-        np.testing.assert_allclose(T[0], robot.fk(Q[0]), atol=TOL)
+        np.testing.assert_allclose(T[-1], robot.fk_drake(Q[-1]), atol=TOL)
+        np.testing.assert_allclose(T[0], robot.fk_drake(Q[0]), atol=TOL)
 
 
 def test_sphere_centres_follow_their_links():

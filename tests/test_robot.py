@@ -285,3 +285,25 @@ def test_questionable_models_are_refused(values, error, words):
 def test_unphysical_inertia_loads_with_a_warning(caplog):
     robot = Robot(_model(IXX="1.0"))                     # 1.0 > 0.01 + 0.01: triangle inequality broken
     assert robot.nq == 1 and "not physical" in caplog.text
+
+
+@pytest.mark.parametrize("name", drake_mh.available_robots())
+def test_fk_and_jacobian_equal_drake(name):
+    """Robot.fk / jacobian run the compiled single-configuration kernel; Drake is the reference."""
+    robot = drake_mh.load_robot(name)
+    frames = [None, robot.link_names()[len(robot.link_names()) // 2]]
+    for q in robot.random_configurations(30, rng=5):
+        for frame in frames:
+            np.testing.assert_allclose(robot.fk(q, frame), robot.fk_drake(q, frame), atol=1e-12, rtol=0)
+            np.testing.assert_allclose(robot.jacobian(q, frame), robot.jacobian_drake(q, frame), atol=1e-12, rtol=0)
+    q = robot.home
+    np.testing.assert_allclose(robot.fk(list(q)), robot.fk_drake(q), atol=1e-12)         # lists take the slow path
+    np.testing.assert_allclose(robot.fk(q[::-1][::-1].copy()), robot.fk(q), atol=0)
+    np.testing.assert_allclose(robot.fk(np.asfortranarray(np.c_[q, q])[:, 0]), robot.fk(q), atol=0)  # strided view
+    T = robot.fk(q)
+    T[0, 0] = 99.0
+    assert robot.fk(q)[0, 0] != 99.0                                                     # a fresh array each call
+    bad = q.copy()
+    bad[0] = np.nan
+    with pytest.raises(InvalidConfiguration, match="NaN"):
+        robot.fk(bad)

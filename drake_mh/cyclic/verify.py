@@ -71,7 +71,7 @@ def verify(plan, robot, cycles: int = 1, samples_per_cycle: int = 1000, n_drake:
     ee = robot.batch.positions(Q)[:, :2]
     ee_error = float(np.max(np.linalg.norm(ee - path, axis=1)))
     idx = np.linspace(0, len(t) - 1, max(2, int(n_drake))).astype(int)
-    drake = np.array([robot.fk(Q[i])[:2, 3] for i in idx])
+    drake = np.array([robot.fk_drake(Q[i])[:2, 3] for i in idx])
     drake_fk_error = float(np.max(np.linalg.norm(drake - path[idx], axis=1)))
     excess = float(max(np.max(Q - robot.upper), np.max(robot.lower - Q), 0.0))
     links = _robot_links_W(robot, Q)

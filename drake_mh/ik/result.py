@@ -97,7 +97,7 @@ def check(problem: IKProblem, q) -> tuple[bool, float, float, float, bool, str]:
     numpy's per-call overhead cost ~40 µs: this check is part of every solve's time).
     """
     robot = problem.robot
-    X_WE = robot.fk(q, problem.frame)  # checks q (shape, finite) first
+    X_WE = robot.fk_drake(q, problem.frame)  # checks q (shape, finite) first
     q = np.asarray(q, dtype=float)
     (r00, r01, r02, x), (r10, r11, r12, y), (r20, r21, r22, z), _ = X_WE.tolist()
     px, py, pz = problem.p_WT.tolist()

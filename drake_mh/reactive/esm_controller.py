@@ -89,7 +89,7 @@ def _record_state(robot, scene, theta, r_d):
     pairs = scene.distances(theta)
     query_time = time.perf_counter() - tq
     obstacle_pairs = [p for p in pairs if not p.is_self]
-    X_WE = robot.fk(theta)
+    X_WE = robot.fk_drake(theta)  # verification: Drake itself
     error = float(np.linalg.norm(X_WE[:3, 3] - r_d))
     mu = robot.manipulability(theta)
     if obstacle_pairs:

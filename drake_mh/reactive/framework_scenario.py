@@ -152,7 +152,7 @@ def run_framework_scenario(method: str = "e3gsa", seed: int = 0, *, budget: int 
             swept[k - 1] = scene.exact_min_distance(Q_mid).min()
         scene.move("obstacle", obstacle_p[k])
         distances[k] = scene.min_distance(executed[k])
-    p_WE = np.array([robot.fk(q)[:3, 3] for q in executed])
+    p_WE = np.array([robot.fk_drake(q)[:3, 3] for q in executed])  # verified with Drake
     position_error = np.linalg.norm(p_WE - follower.points, axis=1)
     events = follower.events
     record = {

@@ -33,8 +33,8 @@ def test_single_configuration_kinematics_match_drake(panda, six_dof, prismatic):
     for robot in robots:
         for q in robot.random_configurations(20, 3):
             T, J = _fk_one(robot, q)
-            assert np.abs(T - robot.fk(q)).max() < 1e-12
-            assert np.abs(J - robot.jacobian(q)).max() < 1e-12
+            assert np.abs(T - robot.fk_drake(q)).max() < 1e-12
+            assert np.abs(J - robot.jacobian_drake(q)).max() < 1e-12
 
 
 def test_uniform_hash_is_deterministic_and_uniform():

@@ -81,7 +81,7 @@ def test_objective_matches_drake(robot, close_step):
                 close_step.lower, close_step.upper)
     F, e, mu = ESMObjective(robot, close_step).values(Q)
     for q, Fi, ei, mi in zip(Q, F, e, mu):
-        e_drake = np.linalg.norm(robot.fk(q)[:3, 3] - np.array(TARGET))
+        e_drake = np.linalg.norm(robot.fk_drake(q)[:3, 3] - np.array(TARGET))
         mu_drake = robot.manipulability(q)
         assert ei == pytest.approx(e_drake, abs=1e-12)
         assert mi == pytest.approx(mu_drake, rel=1e-10)
