@@ -218,7 +218,11 @@ class Scene:
 
         Returns:
             Pairs sorted by distance (closest first).
+
+        Raises:
+            SceneError: the robot has no collision geometry.
         """
+        self._require_geometry()
         q = self.robot.check_q(q)
         self.robot.plant.SetPositions(self._plant_context, q)
         query = self.robot.scene_graph.get_query_output_port().Eval(self._sg_context)

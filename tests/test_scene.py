@@ -197,7 +197,7 @@ def test_no_collision_geometry_raises_instead_of_infinite_clearance():
     scene = Scene(robot)
     scene.add("ball", Sphere(0.1), [0.3, 0.0, 0.3])
     q = np.zeros(robot.nq)
-    for query in (lambda: scene.min_distance(q), lambda: scene.batch_min_distance(q[None]),
+    for query in (lambda: scene.min_distance(q), lambda: scene.distances(q), lambda: scene.batch_min_distance(q[None]),
                   lambda: scene.batch_obstacle_distances(q[None]), lambda: scene.sphere_model,
                   lambda: scene.in_collision(q)):
         with pytest.raises(SceneError, match="no collision geometry"):
