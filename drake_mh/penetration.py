@@ -170,30 +170,34 @@ def _gap(u0, u1, u2, VH, VO, n):
 
 
 @numba.njit(cache=True)
-def _polytope_sat_kernel(VH, NH, OH, EH, VO, NO, EO, certain):
+def _polytope_sat_kernel(VH, NH, OH, EH, VO, NO, EO, sphere_value, certain):
     """Separating-axis lower bound of the signed distance between conv(VH) and each conv(VO[n]),
-    ``+inf`` where they are separated (no correction needed).
+    or ``+inf`` where it cannot lower ``sphere_value[n]`` (then the spheres' value stands).
 
-    Facet planes of H (``NH @ p + OH <= 0``) and face normals of O first: a non-negative gap proves
-    separation. Otherwise, unless the pair
-    is ``certain`` to overlap (its sphere value is below minus the link's excess), the edge x edge
-    axes are scanned too: one with a non-negative gap proves separation; if none has, the best
-    gap over the complete axis set is minus the exact penetration depth.
+    Every axis gives a lower bound and the best one is kept, so the scan stops as soon as the
+    best reaches ``sphere_value`` (it can no longer lower ``min(sphere_value, v)``; a
+    non-negative gap also proves separation). Facet planes of H (``NH @ p + OH <= 0``) and face
+    normals of O come first; the edge x edge axes follow unless the pair is ``certain`` to
+    overlap (its sphere value below minus the link's excess: the face bound is valid there,
+    only looser). With all axes scanned, the best gap is minus the exact penetration depth.
     """
     out = np.empty(VO.shape[0])
     for n in range(VO.shape[0]):
+        stop = sphere_value[n]
         best = -np.inf
         for m in range(NH.shape[0]):  # H's facet planes: O beyond facet m (H's side is known)
             lo_o = np.inf
             for v in range(VO.shape[1]):
                 lo_o = min(lo_o, NH[m, 0] * VO[n, v, 0] + NH[m, 1] * VO[n, v, 1] + NH[m, 2] * VO[n, v, 2])
             best = max(best, lo_o + OH[m])
-        for m in range(NO.shape[1]):
-            best = max(best, _gap(NO[n, m, 0], NO[n, m, 1], NO[n, m, 2], VH, VO, n))
-        if best >= 0.0:
-            out[n] = np.inf
-            continue
-        if not certain[n]:
+            if best >= stop:
+                break
+        if best < stop:
+            for m in range(NO.shape[1]):
+                best = max(best, _gap(NO[n, m, 0], NO[n, m, 1], NO[n, m, 2], VH, VO, n))
+                if best >= stop:
+                    break
+        if best < stop and not certain[n]:
             for e in range(EH.shape[0]):
                 for f in range(EO.shape[1]):
                     u0 = EH[e, 1] * EO[n, f, 2] - EH[e, 2] * EO[n, f, 1]
@@ -203,11 +207,11 @@ def _polytope_sat_kernel(VH, NH, OH, EH, VO, NO, EO, certain):
                     if norm <= 1e-9:
                         continue
                     best = max(best, _gap(u0 / norm, u1 / norm, u2 / norm, VH, VO, n))
-                    if best >= 0.0:
+                    if best >= stop:
                         break
-                if best >= 0.0:
+                if best >= stop:
                     break
-        out[n] = np.inf if best >= 0.0 else best
+        out[n] = np.inf if best >= stop else best
     return out
 
 
@@ -239,13 +243,15 @@ def polytope_lower_bound(core, R_WG: np.ndarray, p_WG: np.ndarray, obstacle, sph
             seg = np.ascontiguousarray(np.stack([a[hits], b[hits]], axis=1))
             direction = np.ascontiguousarray((seg[:, 1] - seg[:, 0])[:, None, :])
             v[hits] = _polytope_sat_kernel(core.vertices_G, N, off, core.edges_G, seg, np.zeros((len(seg), 0, 3)),
-                                           direction, np.zeros(len(seg), np.bool_)) - shape.radius
+                                           direction, sphere_value[hits] + shape.radius,
+                                           np.zeros(len(seg), np.bool_)) - shape.radius
         return v
     corners, normals, edges = _obstacle_polytope(shape)
     corners_G = np.ascontiguousarray(np.einsum("nij,vj->nvi", R_GO, corners) + p_GO[:, None, :])
     normals_G = np.ascontiguousarray(np.einsum("nij,mj->nmi", R_GO, normals))
     edges_G = np.ascontiguousarray(np.einsum("nij,mj->nmi", R_GO, edges))
-    return _polytope_sat_kernel(core.vertices_G, N, off, core.edges_G, corners_G, normals_G, edges_G, certain)
+    return _polytope_sat_kernel(core.vertices_G, N, off, core.edges_G, corners_G, normals_G, edges_G,
+                                np.ascontiguousarray(sphere_value, dtype=float), certain)
 
 
 def core_points(model) -> tuple[list, np.ndarray]:
