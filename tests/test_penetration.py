@@ -42,8 +42,9 @@ def test_polytope_core_exact_depth_for_boxes():
     outside = _obstacle(Sphere(0.05), (0.12, 0.0, 0.0))  # centre outside: spheres suffice
     assert polytope_lower_bound(core, I3, p0, outside, np.array([-0.05]))[0] == np.inf
     slab = _obstacle(Box((0.1, 1.0, 1.0)), (0.13, 0.0, 0.0))  # x in [0.08, 0.18]: 2 cm overlap
-    for certain in (-0.05, -0.001):  # face axes only / with edge axes
-        assert polytope_lower_bound(core, I3, p0, slab, np.array([certain]))[0] == pytest.approx(-0.02, abs=1e-12)
+    # the spheres' value stands where the bound cannot lower it (inf), else the exact depth
+    assert polytope_lower_bound(core, I3, p0, slab, np.array([-0.05]))[0] == np.inf
+    assert polytope_lower_bound(core, I3, p0, slab, np.array([-0.001]))[0] == pytest.approx(-0.02, abs=1e-12)
     # a box turned 45 degrees about z, its vertical edge 5 mm from the +x face: separated
     R = np.array([[np.cos(np.pi / 4), -np.sin(np.pi / 4), 0], [np.sin(np.pi / 4), np.cos(np.pi / 4), 0], [0, 0, 1]])
     near = _obstacle(Box((0.2, 0.2, 0.2)), (0.1 + 0.005 + 0.1 * np.sqrt(2), 0.0, 0.0), R=R)
@@ -64,10 +65,13 @@ def test_lower_bounds_never_exceed_the_sampled_truth():
         for _ in range(30):
             R = Rotation.random(random_state=int(rng.integers(1 << 31))).as_matrix()
             obstacle = _obstacle(shape, rng.uniform(-0.12, 0.12, 3), R)
-            v = polytope_lower_bound(core, np.eye(3)[None], np.zeros((1, 3)), obstacle, np.array([-0.001]))[0]
             # the deepest sampled point of the link in O bounds the exact distance from above
-            # (pushing the link out moves every point out); inf means "the spheres suffice": a
-            # ball centred, or a capsule axis, outside the link (module docstring)
+            # (pushing the link out moves every point out). Given that (+1 um) as the spheres' value,
+            # a bound is either below it or inf ("the spheres' value stands"), and inf is only
+            # right for a ball centred, or a capsule axis, outside the link (module docstring)
             depth = shape.signed_distance((grid - obstacle.X_WO[:3, 3]) @ obstacle.X_WO[:3, :3]).min()
-            if depth < 0 and not (np.isinf(v) and isinstance(shape, (Sphere, Capsule))):
+            if depth >= 0:
+                continue
+            v = polytope_lower_bound(core, np.eye(3)[None], np.zeros((1, 3)), obstacle, np.array([depth + 1e-6]))[0]
+            if not (np.isinf(v) and isinstance(shape, (Sphere, Capsule))):
                 assert v <= depth + 1e-9  # minus the penetration depth >= the deepest point's depth
