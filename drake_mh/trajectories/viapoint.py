@@ -278,15 +278,9 @@ class ViaPointProblem:
         return scene
 
     def _clearance(self, Q) -> np.ndarray:
-        """``(N,)`` sphere-model clearance to the spherical obstacles [m] (<= the exact distance)."""
-        centres = self._scene.sphere_centres(Q)  # (N, S, 3)
-        radii = self._scene.sphere_model.radii
-        d = np.full(centres.shape[0], np.inf)
-        for centre, radius in self.obstacles:
-            diff = centres - np.asarray(centre, float)
-            gap = np.sqrt(np.einsum("nsk,nsk->ns", diff, diff)) - radii - float(radius)
-            d = np.minimum(d, gap.min(axis=1))
-        return d
+        """``(N,)`` sphere-model clearance to the spherical obstacles [m] (<= the exact distance,
+        penetration depth included: :meth:`Scene.batch_min_distance`)."""
+        return self._scene.batch_min_distance(Q)
 
     @property
     def _reach(self) -> np.ndarray:
