@@ -31,9 +31,7 @@ Run: ``drake-mh study ik_peers [--quick]`` or ``python studies/ik_peers.py [--qu
 
 from __future__ import annotations
 
-import contextlib
 import os
-import platform
 import tempfile
 import time
 import xml.etree.ElementTree as ET
@@ -44,6 +42,7 @@ import numpy as np
 import drake_mh
 from drake_mh.ik import IKProblem, solve_ik, verify
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.machine import cpu_model
 
 TARGET_SEED = 20240605
 TOL = 1e-5  # [m] and [rad]
@@ -82,14 +81,6 @@ def erd_root() -> Path | None:
 def robots() -> list[str]:
     """The robots of this run: the bundled ones, then the example-robot-data arms if installed."""
     return list(BUNDLED) + (list(ERD_ARMS) if erd_root() is not None else [])
-
-
-def cpu_model() -> str:
-    with contextlib.suppress(OSError):
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    return platform.processor() or platform.machine()
 
 
 def _robot(name: str):

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import platform
 import tempfile
 import time
 from pathlib import Path
@@ -27,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.machine import cpu_model
 
 ROBOTS = {
     # name: (path inside example-robot-data, end-effector frame)
@@ -50,14 +50,6 @@ def erd_root() -> Path:
         raise MeshNotFound("example-robot-data", ["this Python's prefixes"],
                            hint="pip install example-robot-data (in the test extra)")
     return folder
-
-
-def cpu_model() -> str:
-    with contextlib.suppress(OSError):
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    return platform.processor() or platform.machine()
 
 
 @contextlib.contextmanager
