@@ -35,7 +35,12 @@ __all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Ca
 
 
 def _vector3(value, what: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=float).reshape(-1)
+    if isinstance(value, (str, bytes)) or np.iscomplexobj(value):
+        raise SceneError(f"{what} must be 3 finite numbers, got {value!r}")
+    try:
+        arr = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise SceneError(f"{what} must be 3 finite numbers, got {value!r}") from None
     if arr.shape != (3,) or not np.all(np.isfinite(arr)):
         raise SceneError(f"{what} must be 3 finite numbers, got {value!r}")
     return arr
@@ -100,6 +105,10 @@ class Scene:
                  sphere_tolerance: float = DEFAULT_TOLERANCE):
         from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, Role
 
+        from drake_mh.robot import Robot
+
+        if not isinstance(robot, Robot):
+            raise SceneError(f"Scene needs a drake_mh Robot (drake_mh.load_robot(...)), got {type(robot).__name__}")
         self.robot = robot
         self.self_collision = bool(self_collision)
         self._sphere_tolerance = sphere_tolerance
@@ -159,8 +168,9 @@ class Scene:
         X_WO = np.eye(4)
         X_WO[:3, :3] = _rotation(rpy)
         X_WO[:3, 3] = _vector3(position, "position [m]")
+        velocity_W = _vector3(velocity, "velocity [m/s]")  # every check before anything is registered
         self._ids[name] = self._register(name, shape, X_WO)
-        obstacle = Obstacle(name, shape, X_WO, _vector3(velocity, "velocity [m/s]"))
+        obstacle = Obstacle(name, shape, X_WO, velocity_W)
         self._obstacles[name] = obstacle
         return obstacle
 
@@ -173,7 +183,46 @@ class Scene:
                                     shape.to_drake(), f"obstacle::{name}")
         instance.set_proximity_properties(ProximityProperties())
         sg = self.robot.scene_graph
-        return sg.RegisterGeometry(self._sg_context, self.robot.obstacle_source_id, sg.world_frame_id(), instance)
+        gid = sg.RegisterGeometry(self._sg_context, self.robot.obstacle_source_id, sg.world_frame_id(), instance)
+        if isinstance(shape, Capsule) and self._capsule_links:
+            # Drake 1.51's capsule-capsule query never returns when the two axes are collinear and
+            # touch, and takes 8-10 s per pair in deep penetration: those pairs are filtered out of
+            # Drake's query and computed in closed form (_capsule_pairs)
+            from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
+
+            sg.collision_filter_manager(self._sg_context).Apply(
+                CollisionFilterDeclaration().ExcludeBetween(GeometrySet([gid]), GeometrySet(list(self._capsule_links))))
+        return gid
+
+    @functools.cached_property
+    def _capsule_links(self) -> dict:
+        """``{geometry id: Capsule}`` of the robot's capsule collision geometries."""
+        from drake_mh.shapes import from_drake
+
+        inspector = self.robot.scene_graph.model_inspector()
+        out = {}
+        for gid in self._robot_ids:
+            shape = inspector.GetShape(gid)
+            if type(shape).__name__ == "Capsule":
+                out[gid] = from_drake(shape)
+        return out
+
+    def _capsule_pairs(self, query, max_distance: float) -> list:
+        """Capsule link vs capsule obstacle pairs (filtered out of Drake's query), in closed form:
+        ``[(distance, link geometry id, obstacle name, p_W_link, p_W_obstacle, nhat_W)]``."""
+        from drake_mh.segment_distance import capsule_distance
+
+        out = []
+        for name, obstacle in self._obstacles.items():
+            if not isinstance(obstacle.shape, Capsule):
+                continue
+            for gid, capsule in self._capsule_links.items():
+                X_WG = query.GetPoseInWorld(gid).GetAsMatrix4()
+                d, p_link, p_other, nhat = capsule_distance(X_WG, capsule.radius, capsule.length,
+                                                            obstacle.X_WO, obstacle.shape)
+                if d <= max_distance:
+                    out.append((d, gid, name, p_link, p_other, nhat))
+        return out
 
     def _get(self, name: str) -> Obstacle:
         if name not in self._obstacles:
@@ -207,6 +256,8 @@ class Scene:
 
     def step(self, dt: float) -> None:
         """Advance every moving obstacle by ``velocity · dt`` [s]."""
+        if isinstance(dt, (bool, str, bytes)) or not isinstance(dt, (int, float, np.number)) or not np.isfinite(dt):
+            raise SceneError(f"dt must be a finite number of seconds, got {dt!r}")
         for name, obstacle in list(self._obstacles.items()):
             if np.any(obstacle.velocity_W != 0):
                 self.move(name, position=obstacle.position + obstacle.velocity_W * float(dt))
@@ -223,6 +274,9 @@ class Scene:
             SceneError: the robot has no collision geometry.
         """
         self._require_geometry()
+        if not (isinstance(max_distance, (int, float, np.number)) and not isinstance(max_distance, bool)
+                and max_distance >= 0):  # NaN fails this too (it gave [] before)
+            raise SceneError(f"max_distance must be a number >= 0 [m] (inf for all pairs), got {max_distance!r}")
         q = self.robot.check_q(q)
         self.robot.plant.SetPositions(self._plant_context, q)
         query = self.robot.scene_graph.get_query_output_port().Eval(self._sg_context)
@@ -249,6 +303,10 @@ class Scene:
                 other, is_self = plant.GetBodyFromFrameId(inspector.GetFrameId(ids[1])).name(), True
             out.append(DistancePair(distance, link, other, is_self,
                                     np.asarray(points[0]), np.asarray(points[1]), nhat))
+        for d, gid, other, p_link, p_other, nhat in self._capsule_pairs(query, float(max_distance)):
+            link = plant.GetBodyFromFrameId(inspector.GetFrameId(gid)).name()
+            out.append(DistancePair(float(d), link, other, False, np.asarray(p_link), np.asarray(p_other),
+                                    np.asarray(nhat)))
         out.sort(key=lambda p: p.distance)
         return out
 
@@ -303,6 +361,8 @@ class Scene:
 
     def in_collision(self, q, margin: float = 0.0) -> bool:
         """Whether some pair is closer than ``margin`` [m] (exact, Drake)."""
+        if isinstance(margin, bool) or not isinstance(margin, (int, float, np.number)) or not np.isfinite(margin):
+            raise SceneError(f"margin must be a finite number [m], got {margin!r}")  # NaN read 'no collision'
         return self.min_distance(q) < margin
 
     def exact_min_distance(self, Q) -> np.ndarray:

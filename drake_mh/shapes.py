@@ -25,7 +25,12 @@ from drake_mh.errors import SceneError, UnsupportedGeometry
 
 
 def _positive(name: str, value: float) -> float:
-    value = float(value)
+    if isinstance(value, (bool, str, bytes)) or value is None or np.iscomplexobj(value):
+        raise SceneError(f"{name} must be a positive finite length in metres, got {value!r}")
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise SceneError(f"{name} must be a positive finite length in metres, got {value!r}") from None
     if not np.isfinite(value) or value <= 0:
         raise SceneError(f"{name} must be a positive finite length in metres, got {value}")
     return value
@@ -49,14 +54,24 @@ class Sphere:
         return np.linalg.norm(p_O, axis=-1) - self.radius
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Box:
-    """Box of full side lengths ``size = (x, y, z)`` [m] centred at the frame origin."""
+    """Box of full side lengths ``size = (x, y, z)`` [m] centred at the frame origin.
+
+    ``Box((x, y, z))`` and ``Box(x, y, z)`` are the same box.
+    """
 
     size: tuple
 
+    def __init__(self, *size):
+        object.__setattr__(self, "size", size[0] if len(size) == 1 else size)
+        self.__post_init__()
+
     def __post_init__(self):
-        size = np.asarray(self.size, dtype=float).reshape(-1)
+        try:
+            size = np.asarray(self.size, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise SceneError(f"Box size must be 3 side lengths (x, y, z) in metres, got {self.size!r}") from None
         if size.shape != (3,):
             raise SceneError(f"Box size must be 3 side lengths (x, y, z) in metres, got {self.size!r}")
         object.__setattr__(self, "size", tuple(_positive("Box side", s) for s in size))

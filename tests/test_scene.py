@@ -290,3 +290,72 @@ def test_segment_distance_matches_dense_sampling():
             assert d == pytest.approx(sampled, abs=1e-7)
             if d > 1e-6:
                 assert np.linalg.norm(p_c - p_o) == pytest.approx(d, abs=1e-6)
+
+
+def _segment_distance_sampled(a0, a1, b0, b1, n=4001):
+    """min over 4001 points of segment A of the exact point-to-segment distance to B."""
+    s = np.linspace(0.0, 1.0, n)[:, None]
+    P = a0 + s * (a1 - a0)
+    u = b1 - b0
+    t = np.clip(((P - b0) @ u) / (u @ u), 0.0, 1.0)[:, None]
+    return float(np.linalg.norm(P - (b0 + t * u), axis=1).min())
+
+
+def test_capsule_obstacles_never_hang_and_match_the_closed_form():
+    """Drake's capsule-capsule query looped forever on collinear touching axes (reliability
+    issue): those pairs are computed in closed form; checked against segment distances."""
+    import signal
+
+    from drake_mh.scene import Capsule
+
+    def timeout(*_):
+        raise TimeoutError("Scene.min_distance hung on collinear capsules")
+
+    old = signal.signal(signal.SIGALRM, timeout)
+    signal.alarm(60)
+    try:
+        scene = Scene(PANDA)
+        scene.add("pole", Capsule(0.05, 0.2), [0.1, 0, 0.06], rpy=[0, np.pi / 2, 0])
+        assert scene.min_distance(PANDA.home) < 0                    # collinear with the base capsule
+        deep = Scene(PANDA)
+        deep.add("big", Capsule(2.5, 1.0), [0, 0, 0.4])              # 8-10 s per pair in Drake
+        assert deep.min_distance(PANDA.home) < -2.0
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+    rng = np.random.default_rng(4)
+    scene = Scene(PANDA)
+    scene.add("rod", Capsule(0.03, 0.3), [0.4, 0.1, 0.4], rpy=[0.3, 1.1, -0.4])
+    rod = scene.obstacles["rod"]
+    half = 0.15 * rod.X_WO[:3, 2]
+    links = {gid: c for gid, c in scene._capsule_links.items()}
+    for q in PANDA.random_configurations(5, rng=rng):
+        pairs = [p for p in scene.distances(q) if p.other == "rod"]
+        assert pairs
+        PANDA.plant.SetPositions(scene._plant_context, q)
+        query = PANDA.scene_graph.get_query_output_port().Eval(scene._sg_context)
+        best = np.inf
+        for gid, capsule in links.items():
+            X = query.GetPoseInWorld(gid).GetAsMatrix4()
+            h = 0.5 * capsule.length * X[:3, 2]
+            d = _segment_distance_sampled(X[:3, 3] - h, X[:3, 3] + h, rod.X_WO[:3, 3] - half, rod.X_WO[:3, 3] + half)
+            best = min(best, d - capsule.radius - 0.03)
+        assert min(p.distance for p in pairs) == pytest.approx(best, abs=2e-4)
+
+
+@pytest.mark.parametrize("call", [
+    lambda s: Sphere("abc"), lambda s: Sphere(None), lambda s: Box("abc"), lambda s: Scene(None),
+    lambda s: s.add("a", Sphere(0.1), "abc"), lambda s: s.step("abc"),
+    lambda s: s.distances(PANDA.home, max_distance=np.nan), lambda s: s.in_collision(PANDA.home, margin=np.nan),
+])
+def test_bad_input_is_a_scene_error(call):
+    with pytest.raises(SceneError):
+        call(Scene(PANDA))
+
+
+def test_failed_add_changes_nothing():
+    scene = Scene(PANDA)
+    with pytest.raises(SceneError, match="velocity"):
+        scene.add("b", Sphere(0.1), [1, 1, 1], velocity=[np.nan, 0, 0])
+    assert scene.obstacles == {} and scene.min_distance(PANDA.home) == np.inf   # no half-registered 'b'
+    assert Box(0.3, 0.3, 0.3) == Box((0.3, 0.3, 0.3))
