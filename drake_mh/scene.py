@@ -118,6 +118,7 @@ class Scene:
         self._obstacles: dict[str, Obstacle] = {}
         self._ids: dict[str, object] = {}
         self._robot_shapes: dict = {}
+        self._self_capsule_pairs: list = []
         inspector = robot.scene_graph.model_inspector()
         self._robot_ids = [g for g in inspector.GetAllGeometryIds(Role.kProximity)
                            if inspector.GetFrameId(g) != inspector.world_frame_id()]
@@ -128,6 +129,14 @@ class Scene:
             for a, b in ignore_link_pairs:
                 ga, gb = (self._link_geometries(link) for link in (a, b))
                 manager.Apply(CollisionFilterDeclaration().ExcludeBetween(GeometrySet(ga), GeometrySet(gb)))
+            # capsule-capsule self pairs: closed form (Drake's value was up to 1.1e-5 m optimistic, and
+            # its capsule-capsule query can hang on collinear axes), so they leave Drake's query
+            query_inspector = robot.scene_graph.get_query_output_port().Eval(self._sg_context).inspector()
+            capsules = sorted(self._capsule_links, key=lambda g: g.get_value())
+            self._self_capsule_pairs = [(a, b) for i, a in enumerate(capsules) for b in capsules[i + 1:]
+                                        if not query_inspector.CollisionFiltered(a, b)]
+            for a, b in self._self_capsule_pairs:
+                manager.Apply(CollisionFilterDeclaration().ExcludeBetween(GeometrySet([a]), GeometrySet([b])))
 
     def _link_geometries(self, link: str) -> list:
         from drake_mh.errors import FrameNotFound
@@ -208,8 +217,10 @@ class Scene:
         return out
 
     def _capsule_pairs(self, query, max_distance: float) -> list:
-        """Capsule link vs capsule obstacle pairs (filtered out of Drake's query), in closed form:
-        ``[(distance, link geometry id, obstacle name, p_W_link, p_W_obstacle, nhat_W)]``."""
+        """Capsule link vs capsule obstacle pairs and, with ``self_collision``, capsule link vs
+        capsule link pairs (all filtered out of Drake's query), in closed form:
+        ``[(distance, link geometry id, obstacle name or other link's geometry id, p_W_link,
+        p_W_other, nhat_W)]``."""
         from drake_mh.segment_distance import capsule_distance
 
         out = []
@@ -222,6 +233,12 @@ class Scene:
                                                             obstacle.X_WO, obstacle.shape)
                 if d <= max_distance:
                     out.append((d, gid, name, p_link, p_other, nhat))
+        for a, b in self._self_capsule_pairs:  # self pairs: the other link's geometry id stands for it
+            ca, cb = self._capsule_links[a], self._capsule_links[b]
+            d, p_a, p_b, nhat = capsule_distance(query.GetPoseInWorld(a).GetAsMatrix4(), ca.radius, ca.length,
+                                                 query.GetPoseInWorld(b).GetAsMatrix4(), cb)
+            if d <= max_distance:
+                out.append((d, a, b, p_a, p_b, nhat))
         return out
 
     def _get(self, name: str) -> Obstacle:
@@ -305,7 +322,10 @@ class Scene:
                                     np.asarray(points[0]), np.asarray(points[1]), nhat))
         for d, gid, other, p_link, p_other, nhat in self._capsule_pairs(query, float(max_distance)):
             link = plant.GetBodyFromFrameId(inspector.GetFrameId(gid)).name()
-            out.append(DistancePair(float(d), link, other, False, np.asarray(p_link), np.asarray(p_other),
+            is_self = other not in self._obstacles
+            if is_self:
+                other = plant.GetBodyFromFrameId(inspector.GetFrameId(other)).name()
+            out.append(DistancePair(float(d), link, other, is_self, np.asarray(p_link), np.asarray(p_other),
                                     np.asarray(nhat)))
         out.sort(key=lambda p: p.distance)
         return out
