@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drake_mh.errors import InvalidArgument, LimitViolation
+from drake_mh.trajectories.bound import kinematic_bound
 
 __all__ = ["Certificate", "certify", "QUANTITIES"]
 
@@ -201,6 +202,10 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
         times[quantity] = T.ravel()[idx].copy()
         _refine(trajectory, robot, quantity, T, r, lo, hi, scale, torque_backend, ratios[quantity],
                 times[quantity])
+        if quantity != "torque":  # polynomial between breaks: a bound, not a sample (bound.py)
+            ratios[quantity] = np.maximum(ratios[quantity], kinematic_bound(
+                trajectory, _ORDER[quantity], _range_ratio(robot, quantity, scale), breaks[:-1], breaks[1:],
+                ratios[quantity], samples=(tau, D[_ORDER[quantity]].reshape(P, K, nq))))
         if quantity == "position":
             Q = trajectory.derivatives(np.r_[T.ravel(), times[quantity]], 0)[0]
             excess = np.max(np.maximum(np.maximum(Q - robot.upper, robot.lower - Q), 0.0), axis=0)
@@ -238,6 +243,16 @@ def _ratio_from(D, robot, quantity: str, scale: float, backend: str) -> np.ndarr
             tq = np.array([robot.inverse_dynamics(q, v, a) for q, v, a in zip(D[0], D[1], D[2])])
         return np.abs(tq) / (scale * _limits(robot, quantity))
     return np.abs(D[order]) / (scale * _limits(robot, quantity))
+
+
+def _range_ratio(robot, quantity: str, scale: float):
+    """``(lo, hi) -> ratio``: the largest ratio a value in ``[lo, hi]`` can have (per joint)."""
+    if quantity == "position":
+        centre, half = 0.5 * (robot.upper + robot.lower), 0.5 * (robot.upper - robot.lower)
+        half = np.where(robot.continuous, np.inf, half)
+        return lambda lo, hi: np.maximum(hi - centre, centre - lo) / half
+    limit = scale * _limits(robot, quantity)
+    return lambda lo, hi: np.maximum(np.abs(lo), np.abs(hi)) / limit
 
 
 _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)

@@ -165,3 +165,24 @@ def test_check_skips_quantities_the_maker_did_not_enforce(panda):
     assert cert.check() is cert                               # jerk reported, not failed
     with pytest.raises(LimitViolation, match="jerk"):
         cert.check(["jerk"])                                  # asked for explicitly: checked
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_kinematic_ratios_are_bounds_not_samples(seed):
+    """Sparse samples (8 per piece) of random quintic pieces with bumps between samples: the
+    certified velocity and acceleration ratios never fall below a dense evaluation (they are
+    Bernstein bounds of each piece's polynomial) and are tight to 1e-6."""
+    robot = _robot("planar2r")
+    rng = np.random.default_rng(seed)
+    pieces = 5
+    c = rng.normal(size=(6, pieces, 2)) * np.array([40.0, 40, 10, 2, 0.5, 0.0])[:, None, None]
+    traj = Trajectory(PPoly(c, np.linspace(0.0, 1.0, pieces + 1)))
+    cert = certify(traj, robot, quantities=("velocity", "acceleration"), samples_per_piece=8, min_samples=1)
+    x = traj.path.x  # dense on every piece, ends one-sided (each piece's own polynomial)
+    t = np.concatenate([np.linspace(x[i] + 1e-12, x[i + 1] - 1e-12, 40_001) for i in range(pieces)])
+    D = traj.derivatives(t, 3)
+    for k, quantity in ((1, "velocity"), (2, "acceleration")):   # (random pieces: jerk has impulses)
+        limit = {"velocity": robot.velocity_limits, "acceleration": robot.acceleration_limits}[quantity]
+        dense = np.abs(D[k]).max(axis=0) / limit
+        assert np.all(cert.ratios[quantity] >= dense - 1e-7), quantity   # ends: certify stays 1e-9 h inside
+        assert np.all(cert.ratios[quantity] <= dense + 1e-6), quantity
