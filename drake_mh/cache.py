@@ -11,12 +11,14 @@ The folder is ``$DRAKE_MH_CACHE`` when set, else ``$XDG_CACHE_HOME/drake_mh``, e
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["cache_dir", "content_hash", "atomic_write_bytes"]
+__all__ = ["cache_dir", "content_hash", "atomic_write_bytes", "temporary_cache"]
 
 
 def cache_dir(kind: str) -> Path:
@@ -65,3 +67,19 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+@contextlib.contextmanager
+def temporary_cache() -> Iterator[Path]:
+    """Point ``$DRAKE_MH_CACHE`` at a new, empty folder for the block (benchmarks of first loads),
+    then restore it and delete the folder."""
+    old = os.environ.get("DRAKE_MH_CACHE")
+    with tempfile.TemporaryDirectory(prefix="drake_mh_cache_") as folder:
+        os.environ["DRAKE_MH_CACHE"] = folder
+        try:
+            yield Path(folder)
+        finally:
+            if old is None:
+                os.environ.pop("DRAKE_MH_CACHE", None)
+            else:
+                os.environ["DRAKE_MH_CACHE"] = old

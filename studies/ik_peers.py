@@ -41,6 +41,7 @@ import numpy as np
 
 import drake_mh
 from drake_mh.ik import IKProblem, solve_ik, verify
+from drake_mh.example_arms import example_robot_data_root, load_example_arm
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model
 
@@ -52,12 +53,8 @@ OURS = ("hybrid", "pinv", "dls")
 PEERS = ("rtb_ik_LM", "rtb_ik_GN")
 REFERENCE = "rtb_ik_LM"
 BUNDLED = ("panda", "seed000_6dof")
-#: name: (path inside example-robot-data, end-effector frame)
-ERD_ARMS = {
-    "ur5": ("robots/ur_description/urdf/ur5_robot.urdf", "tool0"),
-    "xarm7": ("robots/xarm_description/urdf/xarm7.urdf", "link_eef"),
-    "kinova": ("robots/kinova_description/robots/kinova.urdf", "j2s6s200_end_effector"),
-}
+#: arms of example-robot-data (drake_mh.example_arms) beside the bundled ones
+ERD_ARMS = ("ur5", "xarm7", "kinova")
 
 _ROBOTS: dict = {}
 _RTB: dict = {}
@@ -71,23 +68,15 @@ def rtb_available() -> bool:
     return importlib.util.find_spec("roboticstoolbox") is not None
 
 
-def erd_root() -> Path | None:
-    """The installed ``example-robot-data`` folder, or None."""
-    from drake_mh.packages import installed_package_dir
-
-    return installed_package_dir("example-robot-data")
-
-
 def robots() -> list[str]:
     """The robots of this run: the bundled ones, then the example-robot-data arms if installed."""
-    return list(BUNDLED) + (list(ERD_ARMS) if erd_root() is not None else [])
+    return list(BUNDLED) + (list(ERD_ARMS) if example_robot_data_root() is not None else [])
 
 
 def _robot(name: str):
     if name not in _ROBOTS:
         if name in ERD_ARMS:
-            path, ee = ERD_ARMS[name]
-            _ROBOTS[name] = drake_mh.load_robot(str(erd_root() / path), ee_frame=ee)
+            _ROBOTS[name] = load_example_arm(name)
         else:
             _ROBOTS[name] = drake_mh.load_robot(name)
     return _ROBOTS[name]

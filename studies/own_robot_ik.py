@@ -17,14 +17,10 @@ import os
 
 import numpy as np
 
+from drake_mh.example_arms import load_example_arm
 from drake_mh.study import Case, Fields, Study
 
-ROBOTS = {
-    "panda_hand": ("robots/panda_description/urdf/panda.urdf", "panda_hand_tcp"),
-    "ur5": ("robots/ur_description/urdf/ur5_robot.urdf", "tool0"),
-    "xarm7": ("robots/xarm_description/urdf/xarm7.urdf", "link_eef"),
-    "kinova": ("robots/kinova_description/robots/kinova.urdf", "j2s6s200_end_effector"),
-}
+ROBOTS = ("panda_hand", "ur5", "xarm7", "kinova")  # drake_mh.example_arms
 METHODS = ("hybrid", "drake_snopt")
 TARGETS, QUICK_TARGETS = 100, 10
 TIMEOUT = 0.005  # [s]
@@ -33,17 +29,8 @@ _ROBOTS: dict = {}
 
 
 def _robot(name: str):
-    import drake_mh
-    from drake_mh.errors import MeshNotFound
-    from drake_mh.packages import installed_package_dir
-
     if name not in _ROBOTS:
-        root = installed_package_dir("example-robot-data")
-        if root is None:
-            raise MeshNotFound("example-robot-data", ["this Python's prefixes"],
-                               hint="pip install example-robot-data (in the test extra)")
-        rel, ee = ROBOTS[name]
-        _ROBOTS[name] = drake_mh.load_robot(root / rel, ee_frame=ee)
+        _ROBOTS[name] = load_example_arm(name)
     return _ROBOTS[name]
 
 

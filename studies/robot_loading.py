@@ -17,65 +17,32 @@ Run: ``drake-mh study robot_loading [--quick]`` or ``python studies/robot_loadin
 
 from __future__ import annotations
 
-import contextlib
 import os
-import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
+from drake_mh.cache import temporary_cache
+from drake_mh.example_arms import EXAMPLE_ARMS, example_robot_data_root, load_example_arm
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model
 
-ROBOTS = {
-    # name: (path inside example-robot-data, end-effector frame)
-    "panda_hand": ("robots/panda_description/urdf/panda.urdf", "panda_hand_tcp"),
-    "ur5": ("robots/ur_description/urdf/ur5_robot.urdf", "tool0"),
-    "xarm7": ("robots/xarm_description/urdf/xarm7.urdf", "link_eef"),
-    "kinova": ("robots/kinova_description/robots/kinova.urdf", "j2s6s200_end_effector"),
-    "z1": ("robots/z1_description/urdf/z1.urdf", "gripperMover"),
-    "so100": ("robots/so_arm_description/urdf/so100.urdf", "jaw"),
-}
+ROBOTS = EXAMPLE_ARMS  # name -> (path inside example-robot-data, end-effector frame)
 CACHED_LOADS, QUICK_CACHED_LOADS = 5, 2
-
-
-def erd_root() -> Path:
-    """The installed ``example-robot-data`` package folder."""
-    from drake_mh.errors import MeshNotFound
-    from drake_mh.packages import installed_package_dir
-
-    folder = installed_package_dir("example-robot-data")
-    if folder is None:
-        raise MeshNotFound("example-robot-data", ["this Python's prefixes"],
-                           hint="pip install example-robot-data (in the test extra)")
-    return folder
-
-
-@contextlib.contextmanager
-def _fresh_cache():
-    old = os.environ.get("DRAKE_MH_CACHE")
-    with tempfile.TemporaryDirectory(prefix="drake_mh_cache_") as folder:
-        os.environ["DRAKE_MH_CACHE"] = folder
-        try:
-            yield Path(folder)
-        finally:
-            if old is None:
-                os.environ.pop("DRAKE_MH_CACHE", None)
-            else:
-                os.environ["DRAKE_MH_CACHE"] = old
 
 
 def run(case: Case) -> dict:
     """First and cached load of one robot, in a fresh mesh cache."""
     import drake_mh
 
-    root = erd_root()
+    root = example_robot_data_root()
+    if root is None:
+        load_example_arm(case["robot"])  # raises, saying how to install it
     rel, ee = ROBOTS[case["robot"]]
     path = root / rel
-    with _fresh_cache():  # warm-up: imports (Drake parser, trimesh, pycollada) off the clock
+    with temporary_cache():  # warm-up: imports (Drake parser, trimesh, pycollada) off the clock
         drake_mh.load_robot(root / ROBOTS["ur5"][0], ee_frame=ROBOTS["ur5"][1])
-    with _fresh_cache() as cache:
+    with temporary_cache() as cache:
         start = time.perf_counter()
         robot = drake_mh.load_robot(path, ee_frame=ee)
         first = time.perf_counter() - start

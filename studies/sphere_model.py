@@ -19,37 +19,23 @@ Run: ``drake-mh study sphere_model [--quick]`` or ``python studies/sphere_model.
 
 from __future__ import annotations
 
-import os
-import tempfile
 import time
 
 import numpy as np
 
+from drake_mh.cache import temporary_cache
+from drake_mh.example_arms import load_example_arm
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
 
-ROBOTS = {
-    # name: (path inside example-robot-data or None for a bundled robot, end-effector frame)
-    "panda (bundled, capsules)": (None, None),
-    "panda_hand": ("robots/panda_description/urdf/panda.urdf", "panda_hand_tcp"),
-    "ur5": ("robots/ur_description/urdf/ur5_robot.urdf", "tool0"),
-    "xarm7": ("robots/xarm_description/urdf/xarm7.urdf", "link_eef"),
-    "kinova": ("robots/kinova_description/robots/kinova.urdf", "j2s6s200_end_effector"),
-}
+ROBOTS = ("panda (bundled, capsules)", "panda_hand", "ur5", "xarm7", "kinova")  # then drake_mh.example_arms
 N_BATCH, N_EXACT = 1000, 20
 
 
 def _robot(name: str):
     import drake_mh
-    from drake_mh.packages import installed_package_dir
 
-    rel, ee = ROBOTS[name]
-    if rel is None:
-        return drake_mh.load_robot("panda")
-    root = installed_package_dir("example-robot-data")
-    if root is None:
-        raise RuntimeError("example-robot-data is not installed (pip install -e '.[test]')")
-    return drake_mh.load_robot(root / rel, ee_frame=ee)
+    return drake_mh.load_robot("panda") if name == ROBOTS[0] else load_example_arm(name)
 
 
 def _scene(robot, tolerance: float):
@@ -70,33 +56,25 @@ def run(case: Case) -> dict:
 
     robot = _robot(case["robot"])
     tolerance = float(case["tolerance"])
-    old = os.environ.get("DRAKE_MH_CACHE")
-    with tempfile.TemporaryDirectory(prefix="drake_mh_cache_") as folder:
-        os.environ["DRAKE_MH_CACHE"] = folder
-        try:
+    with temporary_cache():
+        start = time.perf_counter()
+        model = SphereModel.from_robot(robot, tolerance)
+        first = time.perf_counter() - start
+        start = time.perf_counter()
+        SphereModel.from_robot(robot, tolerance)
+        cached = time.perf_counter() - start
+        scene = _scene(robot, tolerance)
+        Q = robot.random_configurations(N_BATCH if not case.quick else 200, rng=case.rng)
+        d = scene.batch_min_distance(Q)  # compiles / loads the kernels
+        times = []
+        for _ in range(10):
             start = time.perf_counter()
-            model = SphereModel.from_robot(robot, tolerance)
-            first = time.perf_counter() - start
-            start = time.perf_counter()
-            SphereModel.from_robot(robot, tolerance)
-            cached = time.perf_counter() - start
-            scene = _scene(robot, tolerance)
-            Q = robot.random_configurations(N_BATCH if not case.quick else 200, rng=case.rng)
-            d = scene.batch_min_distance(Q)  # compiles / loads the kernels
-            times = []
-            for _ in range(10):
-                start = time.perf_counter()
-                scene.batch_min_distance(Q)
-                times.append(time.perf_counter() - start)
-            start = time.perf_counter()
-            for q in Q[:N_EXACT]:
-                scene.min_distance(q)
-            exact = (time.perf_counter() - start) / N_EXACT
-        finally:
-            if old is None:
-                os.environ.pop("DRAKE_MH_CACHE", None)
-            else:
-                os.environ["DRAKE_MH_CACHE"] = old
+            scene.batch_min_distance(Q)
+            times.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        for q in Q[:N_EXACT]:
+            scene.min_distance(q)
+        exact = (time.perf_counter() - start) / N_EXACT
     counts = model.link_counts()
     batch_us = float(np.median(times)) / len(Q) * 1e6
     return {
@@ -126,7 +104,7 @@ def summarize(records: list[dict]) -> str:
              "| robot | tolerance [m] | spheres | per link | bound [mm] | first build [s] | cached [s] | "
              "batch [µs/config] | exact [µs/config] | exact / batch | in collision |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in sorted(ok, key=lambda r: (list(ROBOTS).index(r["robot"]), r["tolerance"])):
+    for r in sorted(ok, key=lambda r: (ROBOTS.index(r["robot"]), r["tolerance"])):
         lines.append(f"| {r['robot']} | {r['tolerance']:g} | {r['spheres']} | {r['per_link_min']}-{r['per_link_max']} | "
                      f"{r['bound'] * 1e3:.2f} | {r['time']:.3f} | {r['time_cached']:.4f} | {r['batch_us']:.1f} | "
                      f"{r['exact_us']:.0f} | {r['exact_us'] / r['batch_us']:.1f}x | {r['colliding']:.0%} |")

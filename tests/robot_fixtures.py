@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from drake_mh.example_arms import EXAMPLE_ARMS
+
 
 def erd_root() -> Path:
     """The ``example-robot-data`` package folder, or skip the test when it is not installed."""
@@ -22,12 +24,10 @@ def erd_root() -> Path:
 
 
 ERD_ROBOTS = {
-    # name: (path inside the package, end-effector frame, nq)
-    "panda": ("robots/panda_description/urdf/panda.urdf", "panda_hand_tcp", 7),
-    "ur5": ("robots/ur_description/urdf/ur5_robot.urdf", "tool0", 6),
-    "xarm7": ("robots/xarm_description/urdf/xarm7.urdf", "link_eef", 7),
-    # continuous joints, and material names defined twice with different colours
-    "kinova": ("robots/kinova_description/robots/kinova.urdf", "j2s6s200_end_effector", 6),
+    # name: (path inside the package, end-effector frame, nq); Kinova: continuous joints, and
+    # material names defined twice with different colours
+    name: (*EXAMPLE_ARMS[arm], nq)
+    for name, arm, nq in (("panda", "panda_hand", 7), ("ur5", "ur5", 6), ("xarm7", "xarm7", 7), ("kinova", "kinova", 6))
 }
 
 
