@@ -435,9 +435,13 @@ class Robot:
         (:meth:`BatchKinematics.one`, ~1-2 µs from Python), equal to Drake's to 1e-12 (tests);
         :meth:`fk_drake` is Drake's own (the reference that verification uses).
         """
-        if frame is not None:
-            self._frame(frame)  # FrameNotFound / InvalidArgument with the frame list
-        return self.batch.one(q, frame)[0]
+        if frame is None:
+            function = self.__dict__.get("_fk_ee")  # the common call, without any lookup
+            if function is None:
+                function = self._fk_ee = self.batch.one_function(None)
+            return function(q)
+        self._frame(frame)  # FrameNotFound / InvalidArgument with the frame list
+        return self.batch.one_function(frame)(q)
 
     def fk_drake(self, q, frame: str | None = None) -> np.ndarray:
         """Pose ``X_WF (4, 4)`` from Drake (``SetPositions`` + ``CalcPoseInWorld``, ~6 µs)."""
@@ -460,9 +464,13 @@ class Robot:
 
         Compiled single-configuration kernel like :meth:`fk`; :meth:`jacobian_drake` is Drake's.
         """
-        if frame is not None:
-            self._frame(frame)
-        return self.batch.one(q, frame, want_jac=True)[1]
+        if frame is None:
+            function = self.__dict__.get("_jacobian_ee")
+            if function is None:
+                function = self._jacobian_ee = self.batch.one_function(None, want_jac=True)
+            return function(q)
+        self._frame(frame)
+        return self.batch.one_function(frame, want_jac=True)(q)
 
     def jacobian_drake(self, q, frame: str | None = None) -> np.ndarray:
         """Geometric Jacobian ``(6, nq)`` from Drake's ``CalcJacobianSpatialVelocity``."""
