@@ -1,0 +1,251 @@
+"""drake_mh's optimizers against mealpy and NiaPy on the CEC 2017 functions, same run (issue 17).
+
+Grid (full): CEC 2017 F1, F3, F4, F5 (as ``studies/optimizer_benchmark.py``, the
+same shift/rotation data), D = 10, shifted, 10 replicates, budget 10 000 D, box [-100, 100]^D.
+Algorithms: PSO, DE, GA, WOA, ABC, GSA of drake_mh (default parameters) and the same-named ones
+of mealpy 3.0.3 (``OriginalPSO``, ``OriginalDE``, ``BaseGA``, ``OriginalWOA``,
+``OriginalABC``; mealpy has no GSA) and NiaPy 2.7.1 (``ParticleSwarmAlgorithm``,
+``DifferentialEvolution``, ``GeneticAlgorithm``, ``ArtificialBeeColonyAlgorithm``,
+``GravitationalSearchAlgorithm``; NiaPy has no WOA), each at its library's default parameters
+but drake_mh's population size (ABC: 20 food sources everywhere). Quick (``--quick``): F5,
+D = 10, 1 replicate, budget 100 D.
+
+Evaluations are counted by *our* wrapper around the objective, not by the libraries: the
+wrapper stops a run (it raises, caught here) on the evaluation after the budget, so no library
+gets more than ``budget`` evaluations (mealpy's ABC checks its ``max_fe`` only once per
+generation and would overshoot; ``over_budget`` records whether a library asked for more), and,
+as ``optimizer_benchmark`` does for ours (CEC 2017 protocol), as soon as the error is <= 1e-8
+(reported as 0). The peers evaluate one vector per call (their interface); ours a population.
+
+Per (function, replicate, algorithm) the three libraries run back to back, the order reversed
+on every other replicate, so they share the machine's load. Wall time, process CPU time, the
+time spent in the objective and the 1-minute load average are recorded per run; the summary
+gives per cell the median error and the median time per run and, per algorithm, the ratio of
+time theirs / ours from the same cases, with the CPU model. A peer that is not installed
+(``pip install -e '.[peers]'``) is left out with a line in the summary.
+
+Run: ``drake-mh study optimizer_peers [--quick]`` or ``python studies/optimizer_peers.py [--quick]``.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import time
+
+import numpy as np
+
+from drake_mh.optim import get_method, minimize
+from drake_mh.optim.testfunctions import cec2017
+from drake_mh.study import Case, Fields, Study
+from drake_mh.study.machine import cpu_model, load_average
+
+SUCCESS_ERROR = 1e-8          # CEC 2017: errors at or below 1e-8 are reported as 0 (as optimizer_benchmark)
+
+ALGORITHMS = ("pso", "de", "ga", "woa", "abc", "gsa")
+LIBRARIES = ("drake_mh", "mealpy", "niapy")
+#: the peers' classes per algorithm (None: the library has no such algorithm)
+MEALPY = {"pso": ("swarm_based.PSO", "OriginalPSO"), "de": ("evolutionary_based.DE", "OriginalDE"),
+          "ga": ("evolutionary_based.GA", "BaseGA"), "woa": ("swarm_based.WOA", "OriginalWOA"),
+          "abc": ("swarm_based.ABC", "OriginalABC"), "gsa": None}
+NIAPY = {"pso": "ParticleSwarmAlgorithm", "de": "DifferentialEvolution", "ga": "GeneticAlgorithm",
+         "woa": None, "abc": "ArtificialBeeColonyAlgorithm", "gsa": "GravitationalSearchAlgorithm"}
+
+
+def installed(library: str) -> bool:
+    """Whether a peer library can be imported (``drake_mh`` always)."""
+    return library == "drake_mh" or importlib.util.find_spec(library) is not None
+
+
+def has(library: str, algorithm: str) -> bool:
+    """Whether ``library`` is installed and offers ``algorithm``."""
+    table = {"mealpy": MEALPY, "niapy": NIAPY}.get(library)
+    return installed(library) and (table is None or table[algorithm] is not None)
+
+
+class _Stop(Exception):
+    """Raised by :class:`Counted` to end a peer's run (budget spent or target reached)."""
+
+
+class Counted:
+    """The objective as the peers see it: one vector per call, counted and cut at the budget.
+
+    Args:
+        f: the vectorized test function ``f(X (P, D)) -> (P,)``.
+        budget: evaluations allowed; the call after them raises :class:`_Stop`.
+        target: stop (raise) as soon as a value is <= ``target``.
+    """
+
+    def __init__(self, f, budget: int, target: float):
+        self.f, self.budget, self.target = f, budget, target
+        self.nfe, self.best, self.over_budget, self.f_time = 0, np.inf, False, 0.0
+
+    def __call__(self, x) -> float:
+        if self.nfe >= self.budget:
+            self.over_budget = True
+            raise _Stop
+        t0 = time.perf_counter()
+        value = float(self.f(np.asarray(x, dtype=float).reshape(1, -1))[0])
+        self.f_time += time.perf_counter() - t0
+        self.nfe += 1
+        self.best = min(self.best, value)
+        if value <= self.target:
+            raise _Stop
+        return value
+
+
+def _run_mealpy(algorithm: str, counted: Counted, bounds: np.ndarray, pop: int, seed: int) -> None:
+    import importlib
+
+    from mealpy import FloatVar
+
+    module, name = MEALPY[algorithm]
+    cls = getattr(importlib.import_module(f"mealpy.{module}"), name)
+    size = pop // 2 if algorithm == "abc" else pop  # mealpy's ABC: pop_size = food sources
+    model = cls(epoch=100_000, pop_size=max(size, 5))
+    spec = {"bounds": FloatVar(lb=bounds[:, 0], ub=bounds[:, 1]), "minmax": "min", "obj_func": counted,
+            "log_to": None}
+    try:
+        model.solve(spec, termination={"max_fe": counted.budget}, seed=seed)
+    except _Stop:
+        pass
+
+
+def _run_niapy(algorithm: str, counted: Counted, bounds: np.ndarray, pop: int, seed: int) -> None:
+    import niapy.algorithms.basic as basic
+    from niapy.problems import Problem
+    from niapy.task import Task
+
+    class Wrapped(Problem):
+        def _evaluate(self, x):
+            return counted(x)
+
+    algo = getattr(basic, NIAPY[algorithm])(population_size=pop, seed=seed)
+    task = Task(problem=Wrapped(dimension=len(bounds), lower=bounds[:, 0], upper=bounds[:, 1]),
+                max_evals=counted.budget)
+    try:
+        algo.run(task)
+    except _Stop:
+        pass
+    if getattr(algo, "exception", None) is not None and not isinstance(algo.exception, _Stop):
+        raise algo.exception  # NiaPy keeps exceptions raised outside the main process
+
+
+def run(case: Case) -> dict:
+    """One run of one library's algorithm on one function instance."""
+    dim = int(case["dim"])
+    f = cec2017(int(case["function"]), dim, seed=0)   # optimizer_benchmark's "shifted" instance
+    algorithm, library = case["algorithm"], case["library"]
+    budget = int(case["budget_per_dim"]) * dim
+    target = f.f_opt + SUCCESS_ERROR
+    pop = get_method(algorithm).default_pop_size(dim)
+    seed = 1_000 * int(case["rep"]) + int(case["function"])  # the same for every library on a replicate
+    bounds = np.asarray(f.bounds, dtype=float)
+    load = load_average()
+    if library == "drake_mh":
+        f_time = [0.0]
+
+        def timed(X):
+            t0 = time.perf_counter()
+            F = f(X)
+            f_time[0] += time.perf_counter() - t0
+            return F
+
+        w0, c0 = time.perf_counter(), time.process_time()
+        res = minimize(timed, bounds, method=algorithm, budget=budget, seed=seed, target=target)
+        wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+        best, nfe, over, objective = float(res.f), int(res.nfe), False, f_time[0]
+    else:
+        counted = Counted(f, budget, target)
+        runner = _run_mealpy if library == "mealpy" else _run_niapy
+        w0, c0 = time.perf_counter(), time.process_time()
+        runner(algorithm, counted, bounds, pop, seed)
+        wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+        best, nfe, over, objective = counted.best, counted.nfe, counted.over_budget, counted.f_time
+    error = float(best - f.f_opt)
+    error = 0.0 if error <= SUCCESS_ERROR else error
+    return {"error": error, "success": error <= SUCCESS_ERROR, "time": wall, "cpu_time": cpu,
+            "objective_time": objective, "nfe": nfe, "budget": budget, "over_budget": over,
+            "pop_size": pop, "load": load}
+
+
+def _grid(quick: bool) -> list[dict]:
+    functions, reps, per_dim = ([5], 1, 100) if quick else ([1, 3, 4, 5], 10, 10_000)
+    cases = []
+    for rep in range(reps):
+        for k in functions:
+            for algorithm in ALGORITHMS:
+                libraries = [lib for lib in LIBRARIES if has(lib, algorithm)]
+                for library in (libraries if rep % 2 == 0 else libraries[::-1]):
+                    method = algorithm if library == "drake_mh" else f"{library}_{algorithm}"
+                    cases.append({"function": k, "dim": 10, "budget_per_dim": per_dim, "rep": rep,
+                                  "method": method, "algorithm": algorithm, "library": library})
+    return cases
+
+
+def summarize(records: list[dict]) -> str:
+    """Median error and time per cell; time ratios theirs / ours on the same cases."""
+    ok = [r for r in records if r.get("status") == "ok"]
+    if not ok:
+        return ""
+    loads = np.array([r["load"] for r in ok], dtype=float)
+    functions = sorted({r["function"] for r in ok})
+    lines = ["### drake_mh vs mealpy / NiaPy: CEC 2017, shifted, D = 10", "",
+             f"CPU: {cpu_model()} ({os.cpu_count()} logical CPUs); 1-minute load average during the run "
+             f"{np.nanmin(loads):.2f}-{np.nanmax(loads):.2f} (mean {np.nanmean(loads):.2f}). Budget "
+             f"{ok[0]['budget']} evaluations counted by our wrapper (a run stops at the budget or at error "
+             "<= 1e-8, reported as 0). Cells: median error f - f* / median wall time per run. `time vs ours` = "
+             "median over the cases of (their wall time / ours) on the same function and replicate (a run that "
+             "reaches the target early is shorter: `us / evaluation` = median wall time per counted evaluation, "
+             "objective included).", ""]
+    missing = [lib for lib in LIBRARIES if not installed(lib)]
+    if missing:
+        lines += [f"Not installed (`pip install -e '.[peers]'`): {', '.join(missing)}; their rows are missing.", ""]
+    over = sorted({r["method"] for r in ok if r.get("over_budget")})
+    if over:
+        lines += [f"Asked for more than the budget (cut by the wrapper): {', '.join(over)}.", ""]
+    lines += ["| algorithm | library | " + " | ".join(f"F{k}" for k in functions) + " | nfe (median) | "
+              "us / evaluation | CPU / wall | time vs ours |", "|---" * (len(functions) + 6) + "|"]
+    by_key = {(r["algorithm"], r["library"], r["function"], r["rep"]): r for r in ok}
+    for algorithm in ALGORITHMS:
+        for library in LIBRARIES:
+            rows = [r for r in ok if (r["algorithm"], r["library"]) == (algorithm, library)]
+            if not rows:
+                continue
+            cells = []
+            for k in functions:
+                cell = [r for r in rows if r["function"] == k]
+                cells.append(f"{np.median([r['error'] for r in cell]):.2e} / "
+                             f"{1e3 * np.median([r['time'] for r in cell]):.0f} ms" if cell else "-")
+            ratios = [r["time"] / by_key[(algorithm, "drake_mh", r["function"], r["rep"])]["time"]
+                      for r in rows if (algorithm, "drake_mh", r["function"], r["rep"]) in by_key]
+            ratio = f"{np.median(ratios):.0f}x" if library != "drake_mh" and ratios else "1"
+            cpu = np.sum([r["cpu_time"] for r in rows]) / np.sum([r["time"] for r in rows])
+            lines.append(f"| {algorithm} | {library} | " + " | ".join(cells) +
+                         f" | {np.median([r['nfe'] for r in rows]):.0f} | "
+                         f"{1e6 * np.median([r['time'] / max(r['nfe'], 1) for r in rows]):.1f} | {cpu:.2f} | {ratio} |")
+    text = "\n".join(lines)
+    print(text)
+    return text
+
+
+study = Study(
+    name="optimizer_peers",
+    run=run,
+    grid=_grid(quick=False),
+    quick_grid=_grid(quick=True),
+    seed=0,
+    fields=Fields(method="method", success="success", time="time", error="error", nfe="nfe", rank=False,
+                  instance=("function", "rep"), group_by=("function",), error_unit="",
+                  conditions="10 000 D evaluations counted by our wrapper, stop at error <= 1e-8"),
+    description=(
+        "drake_mh's PSO, DE, GA, WOA, ABC, GSA against the same-named algorithms of mealpy and NiaPy on "
+        "CEC 2017 F1, F3, F4, F5 (shifted, D = 10), evaluations counted and cut by our wrapper, libraries "
+        "interleaved per case, wall and CPU time and load average recorded."
+    ),
+    summarize=summarize,
+    max_workers=1,
+)
+
+if __name__ == "__main__":
+    study.main()
