@@ -9,22 +9,38 @@ the same Drake verification (:func:`drake_mh.ik.verify`: Drake's FK and the join
 What a Python caller pays is timed: for drake_mh, building the :class:`~drake_mh.ik.IKProblem`
 plus :func:`~drake_mh.ik.solve_ik` (whose time includes its own Drake verification); for
 robotics-toolbox-python, its ``ik_LM`` / ``ik_GN`` call (C++; random restarts, joint limits
-enforced by rejection, ``ilimit=30``, ``slimit=100``, no timeout), its Drake check untimed. Wall
+enforced by rejection, ``ilimit=30``, ``slimit=100``, no timeout); for TRAC-IK and ikpy, the
+quaternion conversion (TRAC-IK) and their call; the peers' Drake check untimed. Wall
 and process CPU time are both recorded (CPU time is what a dedicated core would need), with
 the 1-minute load average at each case; the summary names the CPU model and gives every
 method's mean time as a ratio to ``rtb_ik_LM``'s in the same run.
 
 Methods: ``hybrid``, ``pinv``, ``dls`` (drake_mh), ``rtb_ik_LM``, ``rtb_ik_GN``
-(robotics-toolbox-python, the optional extra ``peers``; left out, with a line in the summary,
-when it is not installed). rtb's tolerance is its residual ``E = ½ eᵀe`` (e = [Δp; ω]):
+(robotics-toolbox-python), ``trac_ik`` (TRAC-IK through the ``pytracik`` wheel), ``ikpy``; the
+peers come with the optional extra ``peers``, and one that is not installed, or whose parser
+or FK does not reproduce Drake's model of a robot (checked at grid time for TRAC-IK and ikpy),
+is left out with a line in the summary. rtb's tolerance is its residual ``E = ½ eᵀe`` (e = [Δp; ω]):
 ``E < 5e-11`` implies ``|Δp| <= 1e-5`` and ``θ <= 1e-5``; its URDF parser rejects ``<capsule>``,
 so collision and visual elements are stripped in memory, and links referred to but not
-declared (``world``) are declared.
+declared (``world``) are declared; TRAC-IK (KDL) gets the same text.
+
+TRAC-IK: ``Speed`` mode (KDL's Newton and an NLopt SQP in two threads: its CPU time exceeds
+its wall time), 5 ms timeout, seeded at mid-range; it bounds each of the six error
+components, so its ``eps`` is ``1e-5/sqrt(3)`` (a success then meets our norm and angle
+test); ``pytracik`` 0.0.3 reads URDF limits as 32-bit floats, so they are set from Drake's.
+It starts two new threads per call: on a loaded machine with few cores they can wait for a
+core (measured here: 0.35 ms median alone, 2-3 ms right after other busy work at load 1.5 on
+2 cores, CPU time unchanged), so compare its CPU mean as well as its wall time.
+ikpy: its chain from the root link to the end effector only (other branches removed in
+memory), Drake's limits as its bounds, one ``inverse_kinematics_frame`` call with
+``orientation_mode="all"`` from mid-range and its default SciPy least-squares settings (no
+restarts, no timeout); it reports no success flag, so Drake's check is the only verdict, as
+for every peer.
 
 Robots: the bundled ``panda`` and ``seed000_6dof`` and, when ``example-robot-data`` is
 installed (test extra), its UR5, xArm7 and Kinova j2s6s200 (loaded by path with
 :func:`drake_mh.load_robot`). 1000 targets per robot (10 per bundled robot and 5 per other
-arm with ``--quick``); the full run takes about a minute here.
+arm with ``--quick``).
 
 Run: ``drake-mh study ik_peers [--quick]`` or ``python studies/ik_peers.py [--quick]``.
 """
@@ -43,14 +59,18 @@ import drake_mh
 from drake_mh.ik import IKProblem, solve_ik, verify
 from drake_mh.example_arms import example_robot_data_root, load_example_arm
 from drake_mh.study import Case, Fields, Study
-from drake_mh.study.machine import cpu_model
+from drake_mh.errors import DrakeMhError, UnsupportedModel
+from drake_mh.study.machine import cpu_model, load_average
 
 TARGET_SEED = 20240605
 TOL = 1e-5  # [m] and [rad]
 TIMEOUT = 0.005  # [s]
 RTB_TOL = 0.5 * TOL**2  # E = ½(|Δp|² + θ²) < RTB_TOL  =>  |Δp|, θ <= TOL
 OURS = ("hybrid", "pinv", "dls")
-PEERS = ("rtb_ik_LM", "rtb_ik_GN")
+TRACIK_EPS = TOL / np.sqrt(3)  # TRAC-IK bounds each of the 6 components; |3 components| <= TOL
+PEERS = ("rtb_ik_LM", "rtb_ik_GN", "trac_ik", "ikpy")
+#: the module each peer needs (optional extra ``peers``)
+PEER_MODULE = {"rtb_ik_LM": "roboticstoolbox", "rtb_ik_GN": "roboticstoolbox", "trac_ik": "pytracik", "ikpy": "ikpy"}
 REFERENCE = "rtb_ik_LM"
 BUNDLED = ("panda", "seed000_6dof")
 #: arms of example-robot-data (drake_mh.example_arms) beside the bundled ones
@@ -58,14 +78,22 @@ ERD_ARMS = ("ur5", "xarm7", "kinova")
 
 _ROBOTS: dict = {}
 _RTB: dict = {}
+_TRACIK: dict = {}
+_IKPY: dict = {}
+_PROBLEMS: dict = {}
 _WARM: set = set()
+
+
+def peer_available(label: str) -> bool:
+    """Whether the library of peer ``label`` is installed (optional extra ``peers``; not imported here)."""
+    import importlib.util
+
+    return importlib.util.find_spec(PEER_MODULE[label]) is not None
 
 
 def rtb_available() -> bool:
     """Whether robotics-toolbox-python is installed (the optional extra ``peers``; not imported here)."""
-    import importlib.util
-
-    return importlib.util.find_spec("roboticstoolbox") is not None
+    return peer_available("rtb_ik_LM")
 
 
 def robots() -> list[str]:
@@ -82,17 +110,12 @@ def _robot(name: str):
     return _ROBOTS[name]
 
 
-def rtb_robot(robot):
-    """robotics-toolbox-python's model of ``robot`` (same URDF text, collision/visual stripped).
+def _stripped_urdf(robot) -> ET.Element:
+    """``robot``'s URDF as an element tree, collision/visual removed and every parent link declared.
 
-    Raises:
-        RuntimeError: its FK differs from Drake's by more than 1e-9 at a random configuration.
+    rtb's and KDL's parsers reject ``<capsule>``, and KDL needs ``<link name="world"/>`` declared
+    when a joint refers to it; neither needs the geometry for kinematics.
     """
-    if robot.name in _RTB:
-        return _RTB[robot.name]
-    import roboticstoolbox as rtb
-    from roboticstoolbox.models.URDF.URDFRobot import URDF_read
-
     root = ET.fromstring(robot.model_text)
     for link in root.findall("link"):
         for tag in ("collision", "visual"):
@@ -102,17 +125,135 @@ def rtb_robot(robot):
     referred = {j.find("parent").get("link") for j in root.findall("joint")}
     for name in sorted(referred - declared):  # e.g. <joint><parent link="world"/> with no <link name="world"/>
         root.insert(0, ET.Element("link", {"name": name}))
+    return root
+
+
+def _chain_joints(root: ET.Element, tip: str) -> list[ET.Element]:
+    """The joints from the URDF's root link to link ``tip``, root first."""
+    by_child = {j.find("child").get("link"): j for j in root.findall("joint")}
+    joints, link = [], tip
+    while link in by_child:
+        joints.append(by_child[link])
+        link = by_child[link].find("parent").get("link")
+    return joints[::-1]
+
+
+def _check_fk(robot, label: str, fk) -> None:
+    """Raises UnsupportedModel when the peer's FK differs from Drake's by > 1e-9 at a random configuration."""
+    q = robot.random_configurations(1, 0)[0]
+    gap = float(np.abs(np.asarray(fk(q)) - robot.fk(q)).max())
+    if not gap <= 1e-9:
+        raise UnsupportedModel(f"{label}'s FK of {robot.name} differs from Drake's by {gap:.2e}")
+
+
+def rtb_robot(robot):
+    """robotics-toolbox-python's model of ``robot`` (same URDF text, collision/visual stripped).
+
+    Raises:
+        UnsupportedModel: its FK differs from Drake's by more than 1e-9 at a random configuration.
+    """
+    if robot.name in _RTB:
+        return _RTB[robot.name]
+    import roboticstoolbox as rtb
+    from roboticstoolbox.models.URDF.URDFRobot import URDF_read
+
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "robot.urdf")
-        Path(path).write_text(ET.tostring(root, encoding="unicode"))
+        Path(path).write_text(ET.tostring(_stripped_urdf(robot), encoding="unicode"))
         links, name = URDF_read(path)[:2]
     model = rtb.Robot(links, name=name)
-    q = robot.random_configurations(1, 0)[0]
-    gap = float(np.abs(model.fkine(q, end=robot.ee_frame_name).A - robot.fk(q)).max())
-    if gap > 1e-9:
-        raise RuntimeError(f"robotics-toolbox's FK of {robot.name} differs from Drake's by {gap:.2e}")
+    _check_fk(robot, "robotics-toolbox", lambda q: model.fkine(q, end=robot.ee_frame_name).A)
     _RTB[robot.name] = model
     return model
+
+
+def tracik_solver(robot):
+    """A ``pytracik.TRAC_IK`` solver (Speed mode, 5 ms, eps ``TOL/sqrt(3)``) for ``robot``.
+
+    Its joint limits are set from Drake's (the wheel reads the URDF's as 32-bit floats, which can
+    lie outside Drake's by ~1e-8 rad and fail our check at a limit).
+
+    Raises:
+        UnsupportedModel: KDL did not find the chain, or its FK differs from Drake's.
+    """
+    if robot.name in _TRACIK:
+        return _TRACIK[robot.name]
+    import pytracik
+
+    root = _stripped_urdf(robot)
+    joints = _chain_joints(root, robot.ee_frame_name)
+    if not joints:
+        raise UnsupportedModel(f"TRAC-IK: no joint leads to {robot.ee_frame_name!r} in {robot.name}'s URDF")
+    base = joints[0].find("parent").get("link")
+    solver = pytracik.TRAC_IK(base, robot.ee_frame_name, ET.tostring(root, encoding="unicode"), TIMEOUT,
+                              TRACIK_EPS, pytracik.SolveType.Speed)
+    if pytracik.get_num_joints(solver) != robot.nq:
+        raise UnsupportedModel(f"TRAC-IK's chain of {robot.name} has {pytracik.get_num_joints(solver)} joints, "
+                               f"Drake's {robot.nq}")
+    pytracik.set_joint_limits(solver, [float(x) for x in robot.lower], [float(x) for x in robot.upper])
+    _check_fk(robot, "TRAC-IK", lambda q: pytracik.fk(solver, q))
+    _TRACIK[robot.name] = solver
+    return solver
+
+
+def ikpy_chain(robot):
+    """ikpy's chain of ``robot``: the URDF's joints from its root to the end effector only.
+
+    Fixed joints are inactive; the active joints' bounds are Drake's limits (ikpy leaves a
+    continuous joint unbounded).
+
+    Raises:
+        UnsupportedModel: its active joints are not Drake's, or its FK differs from Drake's.
+    """
+    if robot.name in _IKPY:
+        return _IKPY[robot.name]
+    import warnings
+
+    import ikpy.chain
+
+    root = _stripped_urdf(robot)
+    joints = _chain_joints(root, robot.ee_frame_name)
+    if not joints:
+        raise UnsupportedModel(f"ikpy: no joint leads to {robot.ee_frame_name!r} in {robot.name}'s URDF")
+    keep = {joints[0].find("parent").get("link")} | {j.find("child").get("link") for j in joints}
+    for element in list(root):
+        if (element.tag == "link" and element.get("name") not in keep) or (element.tag == "joint"
+                                                                           and element not in joints):
+            root.remove(element)
+    with tempfile.TemporaryDirectory() as folder, warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # "fixed link set as active" before the mask below is given
+        path = os.path.join(folder, "robot.urdf")
+        Path(path).write_text(ET.tostring(root, encoding="unicode"))
+        chain = ikpy.chain.Chain.from_urdf_file(path, base_elements=[joints[0].find("parent").get("link")],
+                                                symbolic=False)
+        mask = [False] + [link.joint_type != "fixed" for link in chain.links[1:]]
+        chain = ikpy.chain.Chain(chain.links, active_links_mask=mask, name=robot.name)
+    if sum(mask) != robot.nq:
+        raise UnsupportedModel(f"ikpy's chain of {robot.name} has {sum(mask)} active joints, Drake's {robot.nq}")
+    active = [link for link, on in zip(chain.links, mask) if on]
+    for link, lo, hi in zip(active, robot.lower, robot.upper):
+        link.bounds = (float(lo), float(hi))
+    _check_fk(robot, "ikpy", lambda q: chain.forward_kinematics(chain.active_to_full(q, np.zeros(len(mask)))))
+    _IKPY[robot.name] = chain
+    return chain
+
+
+def peer_problem(robot_name: str, label: str) -> str | None:
+    """Why peer ``label`` cannot run on robot ``robot_name`` (not installed, model rejected); ``None`` if it can.
+
+    TRAC-IK's and ikpy's models are built here (milliseconds; grid time) so that a peer that
+    cannot model a robot is left out of the grid and named in the summary; rtb's model is built
+    on its first case (importing it takes seconds).
+    """
+    if not peer_available(label):
+        return f"{PEER_MODULE[label]} is not installed"
+    if label not in ("trac_ik", "ikpy"):
+        return None
+    try:
+        (tracik_solver if label == "trac_ik" else ikpy_chain)(_robot(robot_name))
+    except Exception as exc:  # noqa: BLE001 - any failure of the peer's parser means: left out, said so
+        return f"{type(exc).__name__}: {str(exc)[:200]}"
+    return None
 
 
 def _target(robot_name: str, target: int) -> np.ndarray:
@@ -122,17 +263,38 @@ def _target(robot_name: str, target: int) -> np.ndarray:
     return robot.fk(robot.random_configurations(1, rng)[0])
 
 
+def _quaternion(R: np.ndarray) -> np.ndarray:
+    """``(w, x, y, z)`` of the rotation matrix ``R`` (Drake's conversion)."""
+    from pydrake.common.eigen_geometry import Quaternion
+    from pydrake.math import RotationMatrix
+
+    quat: Quaternion = RotationMatrix(R).ToQuaternion()
+    return np.array([quat.w(), quat.x(), quat.y(), quat.z()])
+
+
 def _solve(robot, label: str, X_WT: np.ndarray, seed: int):
-    """One timed solve: ``(q, our IKResult or None)``."""
+    """One timed solve: ``(q, our IKResult or None, the method's own success flag or None)``."""
     if label in OURS:
         problem = IKProblem(robot, X_WT, position_tolerance=TOL, orientation_tolerance=TOL)
         result = solve_ik(problem, label, seed=seed, timeout=TIMEOUT)
-        return result.q, result
+        return result.q, result, result.success
+    if label == "trac_ik":
+        import pytracik
+
+        w, x, y, z = _quaternion(X_WT[:3, :3])
+        p = X_WT[:3, 3]
+        out = pytracik.ik(tracik_solver(robot), robot.home, p[0], p[1], p[2], x, y, z, w)
+        return (out[1:] if out[0] >= 0 else robot.home.copy()), None, bool(out[0] >= 0)  # else out[1:] unset
+    if label == "ikpy":
+        chain = ikpy_chain(robot)
+        start = chain.active_to_full(robot.home, np.zeros(len(chain.links)))
+        full = chain.inverse_kinematics_frame(X_WT, initial_position=start, orientation_mode="all")
+        return np.asarray(chain.active_from_full(full), dtype=float), None, None  # ikpy has no flag
     model = rtb_robot(robot)
     np.random.seed(seed % 2**32)  # rtb's restarts
     solver = model.ik_LM if label == "rtb_ik_LM" else model.ik_GN
     solution = solver(X_WT, end=robot.ee_frame_name, tol=RTB_TOL, joint_limits=True)
-    return np.asarray(solution.q, dtype=float), None
+    return np.asarray(solution.q, dtype=float), None, bool(solution.success)
 
 
 def run(case: Case) -> dict:
@@ -144,22 +306,35 @@ def run(case: Case) -> dict:
         _WARM.add((robot.name, label))
         _solve(robot, label, X_WT, 0)
     start, cpu_start = time.perf_counter(), time.process_time()
-    q, result = _solve(robot, label, X_WT, case.seed)
+    q, result, reported = _solve(robot, label, X_WT, case.seed)
     elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu_start
     problem = IKProblem(robot, X_WT, position_tolerance=TOL, orientation_tolerance=TOL)
     checked = verify(problem, q, method=label, start=0.0, nfe=0)  # the same Drake check for all
     if result is not None and result.success != checked.success:  # pragma: no cover - a bug if it happens
-        raise RuntimeError(f"{label} reported success={result.success}, Drake's check says {checked.success}")
+        raise DrakeMhError(f"{label} reported success={result.success}, Drake's check says {checked.success}")
     return {"success": checked.success, "time": elapsed, "cpu_time": cpu,
             "error": max(checked.position_error, checked.orientation_error),
-            "nfe": result.nfe if result is not None else 0, "load": os.getloadavg()[0],
+            "nfe": result.nfe if result is not None else 0, "load": load_average(), "reported": reported,
             "message": checked.message}
 
 
+def peer_problems() -> dict[tuple[str, str], str]:
+    """``{(robot, peer): why it is left out}`` for this run (cached; see :func:`peer_problem`)."""
+    if not _PROBLEMS:
+        _PROBLEMS[None] = None
+        for robot in robots():
+            for label in PEERS:
+                why = peer_problem(robot, label)
+                if why is not None:
+                    _PROBLEMS[(robot, label)] = why
+    return {k: v for k, v in _PROBLEMS.items() if k is not None}
+
+
 def _grid(quick: bool) -> list[dict]:
-    methods = list(OURS) + (list(PEERS) if rtb_available() else [])
+    problems = peer_problems()
     cases = []
     for robot in robots():
+        methods = list(OURS) + [m for m in PEERS if (robot, m) not in problems]
         n = (10 if robot in BUNDLED else 5) if quick else 1000
         for t in range(n):
             order = methods if t % 2 == 0 else methods[::-1]
@@ -168,7 +343,11 @@ def _grid(quick: bool) -> list[dict]:
 
 
 def summarize(records: list[dict]) -> str:
-    """One table per robot: success, times, CPU time, ratio to rtb's ik_LM in the same run."""
+    """One table per robot: success, times, CPU time, ratio to rtb's ik_LM in the same run.
+
+    ``own flag wrong``: solves where the method's own success flag disagrees with Drake's check
+    (ikpy has none).
+    """
     ok = [r for r in records if r.get("status") == "ok"]
     if not ok:
         return ""
@@ -176,12 +355,16 @@ def summarize(records: list[dict]) -> str:
     lines = ["### IK vs peers: TRAC-IK protocol (6-D pose at 1e-5 m / 1e-5 rad, 5 ms timeout)", "",
              f"CPU: {cpu_model()} ({os.cpu_count()} logical CPUs); 1-minute load average during the run "
              f"{loads.min():.2f}-{loads.max():.2f} (mean {loads.mean():.2f}). Times include what a Python "
-             "caller pays (drake_mh: IKProblem + solve_ik with its Drake verification; rtb: its ik_* call). "
+             "caller pays (drake_mh: IKProblem + solve_ik with its Drake verification; peers: their call, "
+             "TRAC-IK's with the quaternion conversion). "
              f"`vs ik_LM` = mean time of {REFERENCE} / mean time of the method, same run, methods interleaved "
              "per target. Success re-checked by Drake for every method.", ""]
-    if not rtb_available():
-        lines += ["robotics-toolbox-python is not installed (`pip install -e '.[peers]'`): the peers' rows "
-                  "are missing.", ""]
+    missing = sorted({PEER_MODULE[m] for m in PEERS if not peer_available(m)})
+    if missing:
+        lines += [f"Not installed (`pip install -e '.[peers]'`): {', '.join(missing)}; their rows are missing.", ""]
+    for (robot, label), why in sorted(peer_problems().items()):
+        if peer_available(label):
+            lines += [f"{label} left out on {robot}: {why}", ""]
     for robot in dict.fromkeys(r["robot"] for r in ok):
         rows = [r for r in ok if r["robot"] == robot]
         groups: dict[str, list[dict]] = {}
@@ -191,15 +374,17 @@ def summarize(records: list[dict]) -> str:
         ref_mean = np.mean([r["time"] for r in ref]) if ref else np.nan
         n = max(len(g) for g in groups.values())
         lines += [f"**{robot}** ({n} targets)", "",
-                  "| method | success % | mean [ms] | median [ms] | p95 [ms] | CPU mean [ms] | vs ik_LM |",
-                  "|---|---|---|---|---|---|---|"]
+                  "| method | success % | mean [ms] | median [ms] | p95 [ms] | CPU mean [ms] | vs ik_LM "
+                  "| own flag wrong |", "|---|---|---|---|---|---|---|---|"]
         for method, group in groups.items():
             t = 1e3 * np.array([r["time"] for r in group])
             cpu = 1e3 * np.mean([r["cpu_time"] for r in group])
             rate = 100 * np.mean([bool(r["success"]) for r in group])
             ratio = ref_mean / (t.mean() / 1e3) if np.isfinite(ref_mean) else np.nan
+            flags = [r for r in group if r.get("reported") is not None]
+            wrong = f"{sum(r['reported'] != r['success'] for r in flags)}/{len(flags)}" if flags else "no flag"
             lines.append(f"| {method} | {rate:.2f} | {t.mean():.3f} | {np.median(t):.3f} | "
-                         f"{np.percentile(t, 95):.3f} | {cpu:.3f} | {ratio:.2f}x |")
+                         f"{np.percentile(t, 95):.3f} | {cpu:.3f} | {ratio:.2f}x | {wrong} |")
         lines.append("")
     return "\n".join(lines)
 
@@ -212,10 +397,11 @@ study = Study(
     seed=0,
     fields=Fields(method="method", success="success", time="time", error="error", nfe="nfe", rank=False,
                   group_by=("robot",), error_unit="m",
-                  conditions="6-D pose at 1e-5 m / 1e-5 rad, 5 ms timeout (drake_mh); rtb: E < 5e-11, 100 searches"),
+                  conditions=("6-D pose at 1e-5 m / 1e-5 rad, 5 ms timeout (drake_mh, TRAC-IK at eps 1e-5/sqrt(3)); "
+                              "rtb: E < 5e-11, 100 searches; ikpy: one least-squares run")),
     description=(
-        "IK against robotics-toolbox-python's ik_LM/ik_GN (C++) on the TRAC-IK protocol, methods interleaved "
-        "per target, every answer checked by Drake, wall and CPU time and load average recorded."
+        "IK against robotics-toolbox-python's ik_LM/ik_GN (C++), TRAC-IK and ikpy on the TRAC-IK protocol, "
+        "methods interleaved per target, every answer checked by Drake, wall and CPU time and load average recorded."
     ),
     summarize=summarize,
     max_workers=1,
