@@ -185,6 +185,13 @@ def tracik_solver(robot):
     if not joints:
         raise UnsupportedModel(f"TRAC-IK: no joint leads to {robot.ee_frame_name!r} in {robot.name}'s URDF")
     base = joints[0].find("parent").get("link")
+    if any(link.get("name") == base and link.find("inertial") is not None for link in root.findall("link")):
+        # KDL ignores a root link's inertia with a warning on stdout: give it a massless parent
+        root.insert(0, ET.Element("link", {"name": "ik_peers_root"}))
+        joint = ET.SubElement(root, "joint", {"name": "ik_peers_root_weld", "type": "fixed"})
+        ET.SubElement(joint, "parent", {"link": "ik_peers_root"})
+        ET.SubElement(joint, "child", {"link": base})
+        base = "ik_peers_root"
     solver = pytracik.TRAC_IK(base, robot.ee_frame_name, ET.tostring(root, encoding="unicode"), TIMEOUT,
                               TRACIK_EPS, pytracik.SolveType.Speed)
     if pytracik.get_num_joints(solver) != robot.nq:
