@@ -40,7 +40,7 @@ for every peer.
 Robots: the bundled ``panda`` and ``seed000_6dof`` and, when ``example-robot-data`` is
 installed (test extra), its UR5, xArm7 and Kinova j2s6s200 (loaded by path with
 :func:`drake_mh.load_robot`). 1000 targets per robot (10 per bundled robot and 5 per other
-arm with ``--quick``).
+arm with ``--quick``); the full run takes about 4 minutes here (ikpy's solves are most of it).
 
 Run: ``drake-mh study ik_peers [--quick]`` or ``python studies/ik_peers.py [--quick]``.
 """
