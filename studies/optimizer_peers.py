@@ -22,7 +22,8 @@ on every other replicate, so they share the machine's load. Wall time, process C
 time spent in the objective and the 1-minute load average are recorded per run; the summary
 gives per cell the median error and the median time per run and, per algorithm, the ratio of
 time theirs / ours from the same cases, with the CPU model. A peer that is not installed
-(``pip install -e '.[peers]'``) is left out with a line in the summary.
+is left out with a line in the summary. NiaPy comes with the extra ``peers``; mealpy 3.0.3 pins
+numpy <= 1.26 and is not in it: ``pip install --no-deps mealpy==3.0.3 pandas`` runs with numpy 2.
 
 Run: ``drake-mh study optimizer_peers [--quick]`` or ``python studies/optimizer_peers.py [--quick]``.
 """
@@ -200,7 +201,8 @@ def summarize(records: list[dict]) -> str:
              "objective included).", ""]
     missing = [lib for lib in LIBRARIES if not installed(lib)]
     if missing:
-        lines += [f"Not installed (`pip install -e '.[peers]'`): {', '.join(missing)}; their rows are missing.", ""]
+        lines += [f"Not installed: {', '.join(missing)}; their rows are missing (NiaPy: `pip install -e '.[peers]'`; "
+                  "mealpy 3.0.3 pins numpy <= 1.26: `pip install --no-deps mealpy==3.0.3 pandas` keeps numpy 2).", ""]
     over = sorted({r["method"] for r in ok if r.get("over_budget")})
     if over:
         lines += [f"Asked for more than the budget (cut by the wrapper): {', '.join(over)}.", ""]
