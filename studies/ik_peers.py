@@ -167,6 +167,19 @@ def rtb_robot(robot):
     return model
 
 
+def _peer_chain(robot, peer: str):
+    """The stripped URDF of ``robot`` and its joints from the root to the end effector.
+
+    Raises:
+        UnsupportedModel: no joint leads to the end effector.
+    """
+    root = _stripped_urdf(robot)
+    joints = _chain_joints(root, robot.ee_frame_name)
+    if not joints:
+        raise UnsupportedModel(f"{peer}: no joint leads to {robot.ee_frame_name!r} in {robot.name}'s URDF")
+    return root, joints
+
+
 def tracik_solver(robot):
     """A ``pytracik.TRAC_IK`` solver (Speed mode, 5 ms, eps ``TOL/sqrt(3)``) for ``robot``.
 
@@ -180,10 +193,7 @@ def tracik_solver(robot):
         return _TRACIK[robot.name]
     import pytracik
 
-    root = _stripped_urdf(robot)
-    joints = _chain_joints(root, robot.ee_frame_name)
-    if not joints:
-        raise UnsupportedModel(f"TRAC-IK: no joint leads to {robot.ee_frame_name!r} in {robot.name}'s URDF")
+    root, joints = _peer_chain(robot, "TRAC-IK")
     base = joints[0].find("parent").get("link")
     if any(link.get("name") == base and link.find("inertial") is not None for link in root.findall("link")):
         # KDL ignores a root link's inertia with a warning on stdout: give it a massless parent
@@ -218,10 +228,7 @@ def ikpy_chain(robot):
 
     import ikpy.chain
 
-    root = _stripped_urdf(robot)
-    joints = _chain_joints(root, robot.ee_frame_name)
-    if not joints:
-        raise UnsupportedModel(f"ikpy: no joint leads to {robot.ee_frame_name!r} in {robot.name}'s URDF")
+    root, joints = _peer_chain(robot, "ikpy")
     keep = {joints[0].find("parent").get("link")} | {j.find("child").get("link") for j in joints}
     for element in list(root):
         if (element.tag == "link" and element.get("name") not in keep) or (element.tag == "joint"
