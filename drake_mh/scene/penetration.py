@@ -15,7 +15,7 @@ than ``d``:
 
 * capsule / sphere links: ``v`` is the exact distance from the axis segment to a ball or capsule
   obstacle's core, or to a box / cylinder when the axis stays outside it (golden-section search
-  of :mod:`drake_mh.segment_distance`); when the axis enters a box, the separating-axis theorem
+  of :mod:`drake_mh.scene.segment_distance`); when the axis enters a box, the separating-axis theorem
   over the box's face normals and the axis x box-edge directions, which is complete for a
   segment and a box, gives minus the exact penetration depth.
 * polytope links (meshes, boxes, cylinder prisms, ellipsoid polytopes): a ball obstacle whose
@@ -38,7 +38,7 @@ import functools
 import numba
 import numpy as np
 
-from drake_mh.segment_distance import CAPSULE, SPHERE, primitive_code, segment_min_sdf
+from drake_mh.scene.segment_distance import CAPSULE, SPHERE, primitive_code, segment_min_sdf
 from drake_mh.shapes import Box, Capsule, Sphere
 
 _PRISM_SIDES = 16

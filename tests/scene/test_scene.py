@@ -275,7 +275,7 @@ def _rotation(rng):
 
 
 def test_segment_distance_matches_dense_sampling():
-    from drake_mh.segment_distance import capsule_distance
+    from drake_mh.scene.segment_distance import capsule_distance
     from drake_mh.shapes import Capsule
 
     rng = np.random.default_rng(4)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from drake_mh.penetration import polytope_lower_bound, segment_lower_bound
+from drake_mh.scene.penetration import polytope_lower_bound, segment_lower_bound
 from drake_mh.scene import Obstacle
 from drake_mh.shapes import Box, Capsule, Cylinder, Sphere
 from drake_mh.spheres import POLYTOPE, GeometryCore, _core

@@ -7,12 +7,12 @@ without rebuilding the diagram. Exact signed distances robot-link vs obstacle â€
 asked, robot self-distances (Drake already filters adjacent links) â€” come from
 ``QueryObject.ComputeSignedDistancePairwiseClosestPoints``; the pairs Drake solves with GJK
 (robot capsule vs box, cylinder or capsule obstacle) are refined by an exact segment search
-(:mod:`drake_mh.segment_distance`), because Drake 1.51 was measured up to 6.7 mm optimistic there.
+(:mod:`drake_mh.scene.segment_distance`), because Drake 1.51 was measured up to 6.7 mm optimistic there.
 
 For populations, :meth:`Scene.batch_min_distance` uses the robot's
 :class:`drake_mh.spheres.SphereModel` and the obstacles' closed-form signed distances. Its
 guarantee (``d`` the exact distance, ``m`` the model's): ``m <= d`` everywhere, penetration
-included (where a sphere reports penetration, :mod:`drake_mh.penetration` replaces the value by
+included (where a sphere reports penetration, :mod:`drake_mh.scene.penetration` replaces the value by
 a lower bound of the exact one), and ``d - bound <= m`` where ``d >= 0`` (exception in
 :mod:`drake_mh.spheres`).
 
@@ -221,7 +221,7 @@ class Scene:
         capsule link pairs (all filtered out of Drake's query), in closed form:
         ``[(distance, link geometry id, obstacle name or other link's geometry id, p_W_link,
         p_W_other, nhat_W)]``."""
-        from drake_mh.segment_distance import capsule_distance
+        from drake_mh.scene.segment_distance import capsule_distance
 
         out = []
         for name, obstacle in self._obstacles.items():
@@ -332,9 +332,9 @@ class Scene:
 
     def _refine(self, query, robot_id, obstacle: Obstacle):
         """Exact capsule-vs-box/cylinder/capsule distance where Drake uses GJK (see
-        :mod:`drake_mh.segment_distance`: Drake 1.51 was measured up to 6.7 mm optimistic), for
+        :mod:`drake_mh.scene.segment_distance`: Drake 1.51 was measured up to 6.7 mm optimistic), for
         a capsule link or a capsule obstacle."""
-        from drake_mh.segment_distance import capsule_distance
+        from drake_mh.scene.segment_distance import capsule_distance
         from drake_mh.shapes import Capsule, Sphere, from_drake
 
         from drake_mh.shapes import Box, Cylinder
@@ -411,7 +411,7 @@ class Scene:
 
     @functools.cached_property
     def _compiled_cores(self):
-        from drake_mh.penetration import core_points
+        from drake_mh.scene.penetration import core_points
 
         return self.robot.batch.compile_points(*core_points(self.sphere_model))
 
@@ -428,7 +428,7 @@ class Scene:
         Raises:
             SceneError: the robot has no collision geometry.
         """
-        from drake_mh.penetration import corrected_min
+        from drake_mh.scene.penetration import corrected_min
 
         model = self.sphere_model
         centres_W = self.sphere_centres(Q)

@@ -1,0 +1,13 @@
+"""The collision layer: obstacles around a robot and every query against them.
+
+* :mod:`drake_mh.scene.scene` — :class:`Scene`: obstacles (pose, velocity), exact distances
+  (Drake, refined where Drake is optimistic) and the sphere model's batched clearance.
+* :mod:`drake_mh.scene.penetration` — lower bounds of the exact distance where a sphere of the
+  model penetrates an obstacle.
+* :mod:`drake_mh.scene.segment_distance` — exact capsule vs box/cylinder/capsule distances (the
+  pairs where Drake's GJK is optimistic).
+"""
+
+from drake_mh.scene.scene import Box, Capsule, Cylinder, DistancePair, Obstacle, Scene, Sphere
+
+__all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule"]
