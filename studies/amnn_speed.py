@@ -1,11 +1,11 @@
 """Benchmark: control steps per second of AMNN, compiled layer loop vs Python ask/tell loop.
 
 The ESM paper runs AMNN with L = 1000 layers x P = 128 agents per control step at 30 Hz on an
-RTX 4090. Here both implementations of :class:`drake_mh.reactive.AMNN` run the closed loop
+RTX 4090. Here both implementations of :class:`drake_mh.reactive.esm.AMNN` run the closed loop
 of scenario 1 (``self_motion``, h1 = 10, 161 steps of Δt = 0.028 s, the sphere constrains the
 arm from t ≈ 1.3 s) on one CPU core, in the same process and back to back:
 
-* ``compiled``: all layers of a step in one numba call (:mod:`drake_mh.reactive.amnn_compiled`);
+* ``compiled``: all layers of a step in one numba call (:mod:`drake_mh.reactive.esm.amnn_compiled`);
 * ``python``: ARO-amnn through the ask/tell loop of :func:`drake_mh.optim.base.run`.
 
 A control step is what ``run_esm`` times: Drake's distance query at ``θ_prev``, building the

@@ -25,7 +25,7 @@ Part ``"framework"``: the framework paper's regenerating follower (§3.4, Algori
 its Table 3 scenario (seed000_6dof, 50-point path, a sphere moved from (0.2, 0.2, 0.6) to
 (0.1, 0.15, 0.4) while the arm runs), scenario ``table3``, and ``table3_cut`` where the
 obstacle is also moved onto the path (§3.4.2 re-planning of the 3·nC points); any IK method
-(:func:`drake_mh.reactive.framework_scenario.run_framework_scenario`), and
+(:func:`drake_mh.reactive.follower.scenario.run_framework_scenario`), and
 ``table3_cut_spread``: the same with the continuity repair ``FollowerConfig(spread_step=0.3)``
 (neighbours of a branch switch solved again; not in the paper). Metrics: points
 regenerated (and re-solved by the repair), regeneration time per event, largest joint step
@@ -89,7 +89,7 @@ def run(case: Case) -> dict:
 
 def run_framework(case: Case) -> dict:
     """The framework paper's scenario with one IK method (part "framework")."""
-    from drake_mh.reactive.framework_scenario import PATH_EVENT, run_framework_scenario
+    from drake_mh.reactive.follower.scenario import PATH_EVENT, run_framework_scenario
 
     from drake_mh.reactive.follower import FollowerConfig
 
@@ -109,7 +109,7 @@ def run_esm_case(case: Case) -> dict:
     """One ESM closed-loop run (part "esm")."""
     import drake_mh
     from drake_mh.reactive import ESMConfig, QPBaseline, get_scenario, run_esm
-    from drake_mh.reactive.esm_plots import figure_png
+    from drake_mh.reactive.esm.plots import figure_png
 
     robot = drake_mh.load_robot("panda")
     durations = QUICK_DURATION if case.quick else DURATION

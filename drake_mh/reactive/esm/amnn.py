@@ -17,10 +17,10 @@ the P agents) and adds the ESM specifics here:
 * **Eq. (21).** The output is the best agent of the last layer (the paper writes arg max of
   F; the minimum is meant, F being minimized).
 * **Recurrence.** The last layer of step k is the first layer of step k + 1 (warm start,
-  :func:`drake_mh.reactive.esm_solvers.warm_start_rows`).
+  :func:`drake_mh.reactive.esm.solvers.warm_start_rows`).
 
 Two implementations of the same step: ``compiled=True`` runs all layers in one numba call
-(:mod:`drake_mh.reactive.amnn_compiled`); ``compiled=False`` runs ARO-amnn through the Python
+(:mod:`drake_mh.reactive.esm.amnn_compiled`); ``compiled=False`` runs ARO-amnn through the Python
 ask/tell loop. Both draw the same random numbers and return bit-identical steps.
 
 The paper runs L = 1000, P = 128 on a GPU at 30 Hz; ``docs/esm.md`` gives the rates
@@ -32,9 +32,9 @@ from __future__ import annotations
 import time
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.reactive import amnn_compiled
-from drake_mh.reactive.esm_problem import ESMObjective, ESMStep
-from drake_mh.reactive.esm_solvers import MetaheuristicSolver, StepSolution, _answer
+from drake_mh.reactive.esm import amnn_compiled
+from drake_mh.reactive.esm.problem import ESMObjective, ESMStep
+from drake_mh.reactive.esm.solvers import MetaheuristicSolver, StepSolution, _answer
 
 PAPER_LAYERS = 1000
 PAPER_AGENTS = 128
@@ -50,7 +50,7 @@ class AMNN(MetaheuristicSolver):
         warm_start: the previous step's last layer seeds this step's first layer.
         immigrants: fraction of that layer re-drawn uniformly in the box (0: the paper's
             recurrence, the last layer passed on unchanged).
-        compiled: run the layers in one compiled call (:mod:`drake_mh.reactive.amnn_compiled`)
+        compiled: run the layers in one compiled call (:mod:`drake_mh.reactive.esm.amnn_compiled`)
             instead of the Python ask/tell loop; same result.
 
     Raises:

@@ -12,7 +12,7 @@ import numpy as np
 
 
 def plot_runs(runs, mu_opt=None, title: str = ""):
-    """A 3-panel figure (Fig. 4 layout) of one or more :class:`drake_mh.reactive.ESMRun` s.
+    """A 3-panel figure (Fig. 4 layout) of one or more :class:`drake_mh.reactive.esm.ESMRun` s.
 
     Args:
         runs: an ``ESMRun`` or a sequence of them (one line per run, labelled by solver).

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from drake_mh.errors import InvalidArgument, UnknownMethod
-from drake_mh.reactive.framework_scenario import PATH_EVENT, run_framework_scenario
+from drake_mh.reactive.follower.scenario import PATH_EVENT, run_framework_scenario
 
 
 def _check_record(rec, n_events):

@@ -80,7 +80,7 @@ def run_framework_scenario(method: str = "e3gsa", seed: int = 0, *, budget: int 
         obstacle_radius: [m] of the spherical obstacle.
         move_at: point at which the obstacle moves from (0.2, 0.2, 0.6) to (0.1, 0.15, 0.4).
         path_event: ``(at, target)``: also move the obstacle onto the path (§3.4.2), or ``None``.
-        config: a :class:`~drake_mh.reactive.follower.FollowerConfig` (its method and budget
+        config: a :class:`~drake_mh.reactive.follower.follower.FollowerConfig` (its method and budget
             are replaced by ``method`` and ``budget``).
         substeps: interior samples per joint-space segment in the swept-motion check.
 
@@ -104,7 +104,7 @@ def run_framework_scenario(method: str = "e3gsa", seed: int = 0, *, budget: int 
 
     import drake_mh
     from drake_mh.paths import joint_steps, trapezoidal_path
-    from drake_mh.reactive.follower import FollowerConfig, RegeneratingFollower, largest_joint_step
+    from drake_mh.reactive.follower.follower import FollowerConfig, RegeneratingFollower, largest_joint_step
     from drake_mh.scene import Scene, Sphere
 
     base = config if config is not None else FollowerConfig()

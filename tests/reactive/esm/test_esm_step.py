@@ -19,7 +19,7 @@ from drake_mh.reactive import (
     drake_point_jacobian,
     point_jacobian,
 )
-from drake_mh.reactive.esm_scenarios import THETA0, TARGET
+from drake_mh.reactive.esm.scenarios import THETA0, TARGET
 from drake_mh.scene import Box, Scene, Sphere
 
 

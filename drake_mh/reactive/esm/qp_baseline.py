@@ -8,13 +8,13 @@ Variables: the joint increment ``Δ = θ - θ_prev`` (``= θ̇ Δt``). Per step:
 
 * Tracking: the linearized position error with a large weight ``w`` (1e6). The squared
   norm is the QP counterpart of ESM's ``h1 ||e||``; with ``w`` large it pins the end
-  effector as ESM does for ``h1 >= 3 h2`` (see :class:`drake_mh.reactive.ESMConfig`), the
+  effector as ESM does for ``h1 >= 3 h2`` (see :class:`drake_mh.reactive.esm.ESMConfig`), the
   residual bias being ``h2 ||∇_r(1/μ*)|| / (2 w)`` (about 1e-6 m at the paper's target).
 * Manipulability: ``1/μ`` enters by its gradient (a linear term, central differences of the
   batched manipulability, step 1e-6 rad); the proximal term ``(ρ/2)||Δ||²`` makes the
   null-space motion a gradient step of length ``h2/ρ`` (trust-region-like), ``ρ = 40``.
 * Constraints: the box of eq. (11) and the obstacle rows built by
-  :func:`drake_mh.reactive.esm_problem.build_step`, identical to the metaheuristics'.
+  :func:`drake_mh.reactive.esm.problem.build_step`, identical to the metaheuristics'.
 
 The program is built once and updated in place (``UpdateCoefficients``, ``set_bounds``);
 it is rebuilt only when a step has more obstacle rows than allocated. OSQP's answer
@@ -29,8 +29,8 @@ import time
 
 import numpy as np
 
-from drake_mh.reactive.esm_problem import ESMObjective, ESMStep
-from drake_mh.reactive.esm_solvers import StepSolution, StepSolver
+from drake_mh.reactive.esm.problem import ESMObjective, ESMStep
+from drake_mh.reactive.esm.solvers import StepSolution, StepSolver
 
 
 def inverse_manipulability_gradient(robot, theta, h: float = 1e-6) -> np.ndarray:

@@ -19,7 +19,7 @@ from drake_mh.errors import InvalidArgument
 
 CONSTRAINT_HANDLINGS = ("reject", "repair")
 """How a population member violating the obstacle inequality is treated (see
-:mod:`drake_mh.reactive.esm_problem`)."""
+:mod:`drake_mh.reactive.esm.problem`)."""
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ link (``(M - N)/||M - N||`` when apart, still defined in penetration).
 
 Jacobian of M (eq. (8)): column j = ``ζ_j × (M - o_j)`` for the revolute joints j between the
 world and M's link, with axes ``ζ_j`` and origins ``o_j`` from ``Robot.batch.moving_frames``
-(compiled from the plant); :mod:`drake_mh.reactive.esm_verify` checks it against Drake.
+(compiled from the plant); :mod:`drake_mh.reactive.esm.verify` checks it against Drake.
 
 Constraint handling (how a member violating the inequality is treated):
 
@@ -27,7 +27,7 @@ Constraint handling (how a member violating the inequality is treated):
   With a greedy algorithm (AMNN/ARO) this is exactly eq. (19)-(20): the agent keeps
   ``θ_i(l)``. Infeasible points are never returned.
 * ``"repair"``: the candidate is evaluated at ``repair(x)``, its projection by cyclic
-  projections onto the half-spaces and the box (:func:`drake_mh.reactive.esm_kernels.repair`);
+  projections onto the half-spaces and the box (:func:`drake_mh.reactive.esm.kernels.repair`);
   the optimizer keeps ``x`` (Baldwinian repair) and the step returns ``repair(best x)``.
   A candidate that cannot be repaired (empty feasible set) gets ``+inf``.
 """
@@ -39,8 +39,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drake_mh.errors import InvalidArgument, InvalidConfiguration
-from drake_mh.reactive import esm_kernels
-from drake_mh.reactive.esm_config import CONSTRAINT_HANDLINGS, ESMConfig
+from drake_mh.reactive.esm import kernels
+from drake_mh.reactive.esm.config import CONSTRAINT_HANDLINGS, ESMConfig
 
 
 @dataclass(frozen=True)
@@ -112,7 +112,7 @@ class ESMStep:
         """``(P,)`` bool: rows of ``X (P, nq)`` inside the box and satisfying eq. (9)."""
         X = np.ascontiguousarray(X, dtype=float).reshape(-1, self.lower.size)
         out = np.empty(len(X), dtype=np.bool_)
-        esm_kernels.feasible(X, self.A, self.c, self.lower, self.upper, self.config.feasibility_tol, out)
+        kernels.feasible(X, self.A, self.c, self.lower, self.upper, self.config.feasibility_tol, out)
         return out
 
     def violation(self, X) -> np.ndarray:
@@ -127,7 +127,7 @@ class ESMStep:
         Xr = np.array(X, dtype=float, ndmin=2, copy=True, order="C")
         ok = np.empty(len(Xr), dtype=np.bool_)
         cfg = self.config
-        esm_kernels.repair(Xr, self.A, self.c, self.lower, self.upper, cfg.repair_sweeps,
+        kernels.repair(Xr, self.A, self.c, self.lower, self.upper, cfg.repair_sweeps,
                            cfg.feasibility_tol, ok)
         return Xr, ok
 
@@ -263,7 +263,7 @@ class ESMObjective:
         n = len(T)
         F, e, mu = np.empty(n), np.empty(n), np.empty(n)
         cfg = self.step.config
-        esm_kernels.esm_values(T, J, self.step.r_d, float(cfg.h1), float(cfg.h2), F, e, mu)
+        kernels.esm_values(T, J, self.step.r_d, float(cfg.h1), float(cfg.h2), F, e, mu)
         return F, e, mu
 
     def __call__(self, X: np.ndarray) -> np.ndarray:

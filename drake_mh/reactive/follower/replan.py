@@ -15,7 +15,7 @@ Our reading, stated here and in ``docs/follower.md``:
   clearance 0.015 m + the sphere model's pessimism 0.008 m (the IK objective sees obstacles
   through it) + 0.012 m. With 0.05 m the metaheuristic IK of the new points missed them by
   7 mm: its conservative sphere model saw a collision where Drake saw none. The arm's configurations are always judged
-  by Drake's exact signed distance (:mod:`drake_mh.reactive.follower`).
+  by Drake's exact signed distance (:mod:`drake_mh.reactive.follower.follower`).
 * **"3·nC points around".** Colliding points are grouped into *runs* of consecutive indices.
   A run of ``n`` points ``[a, b]`` takes the ``n`` points before it and the ``n`` points after
   it: the window ``[a - n, b + n]`` (``3n`` points, the paper's ``3·nC`` for one run; ``nC``

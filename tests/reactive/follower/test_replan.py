@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from drake_mh.errors import InvalidArgument, UnknownMethod
-from drake_mh.reactive.replan import (ReplanConfig, collision_runs, colliding_path_points, path_point_clearance,
-                                      replan_points, replan_windows)
+from drake_mh.reactive.follower.replan import (ReplanConfig, collision_runs, colliding_path_points,
+                                               path_point_clearance, replan_points, replan_windows)
 
 
 def test_collision_runs_groups_consecutive_indices():

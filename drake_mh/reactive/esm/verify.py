@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drake_mh.reactive.esm_problem import ESMStep
+from drake_mh.reactive.esm.problem import ESMStep
 
 #: default tolerances of :meth:`StepCheck.ok`: [rad], [rad/s], [m/s], [m/rad]
 TOLERANCES = {"joint": 1e-9, "velocity": 1e-7, "inequality": 1e-6, "jacobian": 1e-9}

@@ -1,4 +1,4 @@
-"""Compiled AMNN step (drake_mh.reactive.amnn_compiled): the same steps as the Python ask/tell
+"""Compiled AMNN step (drake_mh.reactive.esm.amnn_compiled): the same steps as the Python ask/tell
 path, one layer equal to a numpy transcription of eqs. (12)-(20), the feasible set respected,
 scenario 1 safe and converged."""
 
@@ -10,8 +10,8 @@ import pytest
 from drake_mh.errors import InvalidArgument
 from drake_mh.optim import ARO
 from drake_mh.reactive import AMNN, ESMConfig, ESMObjective, build_step, check_step, get_scenario, run_esm
-from drake_mh.reactive import amnn_compiled
-from drake_mh.reactive.esm_scenarios import TARGET, THETA0
+from drake_mh.reactive.esm import amnn_compiled
+from drake_mh.reactive.esm.scenarios import TARGET, THETA0
 from drake_mh.scene import Box, Scene, Sphere
 
 MU_STAR = 0.16089694     # multi-start SLSQP, flange pinned at the paper's target (docs/esm.md)

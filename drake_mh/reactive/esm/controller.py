@@ -2,8 +2,8 @@
 
 Timeline of step k (k = 1 .. N, ``t_k = k Δt``): the obstacles are at their ``t_{k-1}``
 state; Drake's exact closest points at ``θ_{k-1}`` give the rows of eq. (9)
-(:func:`drake_mh.reactive.esm_problem.build_step`); the solver returns ``θ_k`` for the target
-``r_d(t_k)``; the step is checked with Drake (:func:`drake_mh.reactive.esm_verify.check_step`);
+(:func:`drake_mh.reactive.esm.problem.build_step`); the solver returns ``θ_k`` for the target
+``r_d(t_k)``; the step is checked with Drake (:func:`drake_mh.reactive.esm.verify.check_step`);
 the obstacles move to ``t_k``; the exact clearance, tracking error (Drake FK) and
 manipulability (Drake Jacobian) at ``(θ_k, t_k)`` are recorded.
 
@@ -18,9 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drake_mh.reactive.esm_problem import build_step
-from drake_mh.reactive.esm_scenarios import ESMScenario
-from drake_mh.reactive.esm_verify import check_step
+from drake_mh.reactive.esm.problem import build_step
+from drake_mh.reactive.esm.scenarios import ESMScenario
+from drake_mh.reactive.esm.verify import check_step
 
 
 @dataclass(frozen=True)
@@ -42,7 +42,7 @@ class ESMRun:
         nfe: ``(N,)`` evaluations per step.
         solver_feasible: ``(N,)`` the solver's own feasibility claim.
         joint_violation, velocity_violation, inequality_violation, jacobian_error: ``(N,)``
-            Drake checks of every accepted step (:class:`drake_mh.reactive.esm_verify.StepCheck`).
+            Drake checks of every accepted step (:class:`drake_mh.reactive.esm.verify.StepCheck`).
         active_rows: ``(N,)`` obstacle inequalities with less than 1e-3 m/s of slack at the answer.
         relaxed_rows: ``(N,)`` rows nothing in the box satisfied (relaxed, see ``ESMStep``).
     """
@@ -102,8 +102,8 @@ def run_esm(robot, scenario: ESMScenario, solver, seed=0, steps: int | None = No
 
     Args:
         robot: the Panda (``load_robot("panda")``), or any arm the scenario fits.
-        scenario: an :class:`drake_mh.reactive.esm_scenarios.ESMScenario`.
-        solver: a step solver (:class:`drake_mh.reactive.AMNN`, :class:`MetaheuristicSolver`,
+        scenario: an :class:`drake_mh.reactive.esm.scenarios.ESMScenario`.
+        solver: a step solver (:class:`drake_mh.reactive.esm.AMNN`, :class:`MetaheuristicSolver`,
             :class:`QPBaseline`).
         seed: seed of the run (the solver draws one seed per step from it).
         steps: number of steps (default: the scenario's duration / Δt).

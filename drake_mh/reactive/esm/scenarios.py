@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drake_mh.errors import UnknownMethod
-from drake_mh.reactive.esm_config import ESMConfig
+from drake_mh.reactive.esm.config import ESMConfig
 from drake_mh.shapes import Box, Sphere
 
 THETA0 = (0.481, 0.703, 0.093, -0.800, -0.364, 0.992, 0.026)

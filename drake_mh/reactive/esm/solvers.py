@@ -1,9 +1,9 @@
 """Step solvers of the ESM scheme: any ``drake_mh.optim`` method, warm-started step to step.
 
-A *step solver* turns an :class:`drake_mh.reactive.esm_problem.ESMStep` into the next joint
+A *step solver* turns an :class:`drake_mh.reactive.esm.problem.ESMStep` into the next joint
 angles. It keeps its state (the last population) between the steps of one run; ``reset``
-starts a run with a seed. The QP baseline (:mod:`drake_mh.reactive.qp_baseline`) and AMNN
-(:mod:`drake_mh.reactive.amnn`) implement the same two methods.
+starts a run with a seed. The QP baseline (:mod:`drake_mh.reactive.esm.qp_baseline`) and AMNN
+(:mod:`drake_mh.reactive.esm.amnn`) implement the same two methods.
 
 Warm start (every metaheuristic): the first layer of a step is the previous step's final
 population, clipped into the new box of eq. (11) and repaired onto the new obstacle
@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.reactive.esm_config import CONSTRAINT_HANDLINGS
-from drake_mh.reactive.esm_problem import ESMObjective, ESMStep
+from drake_mh.reactive.esm.config import CONSTRAINT_HANDLINGS
+from drake_mh.reactive.esm.problem import ESMObjective, ESMStep
 
 
 @dataclass(frozen=True)
@@ -103,7 +103,7 @@ class MetaheuristicSolver(StepSolver):
         budget: objective evaluations per control step.
         pop_size: population size (``None``: the method's default).
         handling: ``"repair"`` (default for methods that are not greedy per agent) or
-            ``"reject"`` (see :mod:`drake_mh.reactive.esm_problem`).
+            ``"reject"`` (see :mod:`drake_mh.reactive.esm.problem`).
         warm_start: start each step from the previous population (module docstring);
             ``False`` starts from ``θ_prev`` plus a uniform population in the box.
         immigrants: fraction of the warm-start population replaced by uniform samples

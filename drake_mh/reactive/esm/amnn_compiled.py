@@ -2,7 +2,7 @@
 
 AMNN (ESM paper, Xie et al., eqs. (12)-(21)) is ARO (Wang et al., "Artificial rabbits
 optimization", Eng. Appl. Artif. Intell. 114:105082, 2022) arranged as L layers of P agent
-neurons. The Python path (:class:`drake_mh.reactive.amnn.AMNN` with ``compiled=False``)
+neurons. The Python path (:class:`drake_mh.reactive.esm.amnn.AMNN` with ``compiled=False``)
 runs it through the ask/tell loop of :func:`drake_mh.optim.base.run`, which pays per layer
 ~20-25 us of Python (ask/tell bookkeeping, argument checks, one call per kernel), more than
 the layer's compiled work at P = 32 (~13-15 us; ``studies/amnn_speed.py``). Here one
@@ -15,13 +15,13 @@ compiled function runs layer 0 and, for ``l = 1 .. L``:
   ``ARO._ask`` draws);
 * the obstacle rows of eq. (9): ``"reject"``: a candidate violating ``A θ <= c`` (within
   ``feasibility_tol``) or the box gets ``F = +inf``
-  (:func:`~drake_mh.reactive.esm_kernels.feasible_columns`, the verdicts of ``feasible``);
+  (:func:`~drake_mh.reactive.esm.kernels.feasible_columns`, the verdicts of ``feasible``);
   ``"repair"``: it is evaluated at its projection
-  (:func:`~drake_mh.reactive.esm_kernels.repair`), the agent keeps the unrepaired point, and
+  (:func:`~drake_mh.reactive.esm.kernels.repair`), the agent keeps the unrepaired point, and
   an unrepairable candidate gets ``+inf``;
 * the objective of eq. (10) of the other candidates: :func:`drake_mh._kernels.fk_jacobian`
   on the transposed layer (the layout ``BatchKinematics`` uses), then
-  :func:`drake_mh.reactive.esm_kernels.esm_values`. A rejected candidate skips the
+  :func:`drake_mh.reactive.esm.kernels.esm_values`. A rejected candidate skips the
   kinematics (11-22 % of them in the study's scenarios, 30-44 % while an obstacle row is
   active) but still counts as an evaluation: a step reports ``(L + 1) P``, as the Python path;
 * the greedy selection of eq. (20) (strict improvement, as ``ARO._tell``: a rejected
@@ -31,7 +31,7 @@ compiled function runs layer 0 and, for ``l = 1 .. L``:
 Layer 0 (the warm-start population) and the optimizer's seed come from the same
 ``ARO`` object the Python path builds, so both paths draw identical random numbers and, the
 objective being the same kernels on the same arrays, return bit-identical steps
-(``tests/reactive/test_amnn_compiled.py``).
+(``tests/reactive/esm/test_amnn_compiled.py``).
 
 Numba's on-disk cache keys a function by its own file only: a cached kernel that calls
 kernels of other files would silently keep their old code after they change. The step
@@ -53,10 +53,10 @@ from drake_mh.errors import InvalidArgument
 from drake_mh._kernels import fk_jacobian as _fk_jacobian
 from drake_mh.optim import aro
 from drake_mh.optim.aro import _move
-from drake_mh.reactive import esm_kernels
-from drake_mh.reactive.esm_kernels import esm_values as _esm_values
-from drake_mh.reactive.esm_kernels import feasible_columns as _feasible_columns
-from drake_mh.reactive.esm_kernels import repair as _repair
+from drake_mh.reactive.esm import kernels as esm_kernels
+from drake_mh.reactive.esm.kernels import esm_values as _esm_values
+from drake_mh.reactive.esm.kernels import feasible_columns as _feasible_columns
+from drake_mh.reactive.esm.kernels import repair as _repair
 
 _DEPENDENCIES = (_kernels, esm_kernels, aro)   # the files of the kernels above
 
@@ -171,7 +171,7 @@ def run_layers(robot, step, opt, handling: str):
 
     Args:
         robot: the robot (its end-effector frame is the tracked point).
-        step: the :class:`drake_mh.reactive.esm_problem.ESMStep`.
+        step: the :class:`drake_mh.reactive.esm.problem.ESMStep`.
         opt: a fresh ``ARO(step.bounds, budget=(L + 1) P, pop_size=P, variant="amnn", ...)``.
         handling: ``"reject"`` or ``"repair"``.
 

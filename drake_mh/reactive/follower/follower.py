@@ -8,7 +8,7 @@ arm has not reached) now collide and repairs the plan:
 1. **Obstacle in the path (§3.4.2, Algorithm 2).** If remaining path points come closer than
    ``replan.tool_clearance`` to an obstacle, the ``3·nC`` points around each run of ``nC``
    colliding points are replaced by the nearest obstacle-free points found by the
-   metaheuristic (:mod:`drake_mh.reactive.replan`), and IK is solved again for all of them.
+   metaheuristic (:mod:`drake_mh.reactive.follower.replan`), and IK is solved again for all of them.
 2. **Obstacle on the arm (§3.4.1).** Every remaining configuration whose *exact* signed
    distance (Drake, ``Scene.min_distance``) is below ``clearance`` gets a new IK solution for
    the *same* target point; the path is unchanged. A batched sphere-model pre-screen
@@ -53,8 +53,8 @@ import numpy as np
 from drake_mh.errors import InvalidArgument, UnknownMethod
 from drake_mh.paths.continuity import LocalIKProblem, revolute_mask, solve_near, wrap_toward
 from drake_mh.paths.ik_path import joint_steps
-from drake_mh.reactive.replan import (ReplanConfig, ReplanResult, collision_runs, colliding_path_points,
-                                      replan_points, replan_windows)
+from drake_mh.reactive.follower.replan import (ReplanConfig, ReplanResult, collision_runs, colliding_path_points,
+                                               replan_points, replan_windows)
 
 logger = logging.getLogger(__name__)
 
@@ -102,7 +102,7 @@ class FollowerConfig:
             the far side, ``ceil(step / spread_step) - 1`` of them, so the switch is spread
             over several points. Those points change although they do not collide; each is
             kept only if Drake verifies it (``RegenerationEvent.spread``).
-        replan: :class:`~drake_mh.reactive.replan.ReplanConfig` of Algorithm 2.
+        replan: :class:`~drake_mh.reactive.follower.replan.ReplanConfig` of Algorithm 2.
         params: optimizer options for the metaheuristic IK, as ``((name, value), ...)``.
     """
 
@@ -149,7 +149,7 @@ class FollowerConfig:
                                                  and np.isfinite(self.spread_step) and self.spread_step > 0):
             raise InvalidArgument(f"spread_step must be a positive joint step [rad] or None, got {self.spread_step!r}")
         if not isinstance(self.replan, ReplanConfig):
-            raise InvalidArgument("replan must be a drake_mh.reactive.replan.ReplanConfig")
+            raise InvalidArgument("replan must be a drake_mh.reactive.follower.ReplanConfig")
         object.__setattr__(self, "params", tuple(dict(self.params).items()))
 
 
@@ -164,7 +164,7 @@ class RegenerationEvent:
         colliding: configuration indices predicted to collide (Drake-confirmed) before repair.
         screened: configurations the pre-screen passed to Drake (all remaining without it).
         path_colliding: path indices closer than the tool clearance to an obstacle.
-        replans: the :class:`~drake_mh.reactive.replan.ReplanResult` of each window.
+        replans: the :class:`~drake_mh.reactive.follower.replan.ReplanResult` of each window.
         regenerated: indices whose IK was solved again (windows ∪ colliding).
         failed: regenerated indices whose configuration Drake did not verify.
         spread: indices solved again by the continuity repair (``FollowerConfig.spread_step``;
@@ -253,7 +253,7 @@ class RegeneratingFollower:
         self.robot, self.scene = robot, scene
         self.config = config if config is not None else FollowerConfig()
         if not isinstance(self.config, FollowerConfig):
-            raise InvalidArgument("config must be a drake_mh.reactive.FollowerConfig")
+            raise InvalidArgument("config must be a drake_mh.reactive.follower.FollowerConfig")
         self.seed = int(seed)
         self.points, self.Q = P, Q.copy()
         self.index = int(index)
