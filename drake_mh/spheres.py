@@ -25,7 +25,7 @@ against Drake ``m <= d`` holds a fortiori and the pessimism can read up to Drake
 Why penetration needs care: the per-sphere signed distance is the obstacle's depth inside *one*
 sphere, while the obstacle can be deeper inside the covered geometry than inside any single
 sphere (a ball obstacle centred on a capsule's axis between two sphere centres: up to 7.8 mm
-shallower on the Panda). Where a sphere reports penetration, :mod:`drake_mh.penetration`
+shallower on the Panda). Where a sphere reports penetration, :mod:`drake_mh.scene.penetration`
 replaces the value by a lower bound of the exact one computed from each geometry's *core* (its
 axis segment or its bounding polytope).
 
@@ -182,7 +182,7 @@ class SphereModel:
     @functools.cached_property
     def core_arrays(self) -> tuple:
         """``(starts (G,), kind (G,), half_length (G,), radius (G,))``: the first sphere of each
-        geometry and the geometries' core data as arrays (for :mod:`drake_mh.penetration`)."""
+        geometry and the geometries' core data as arrays (for :mod:`drake_mh.scene.penetration`)."""
         starts = np.flatnonzero(np.r_[True, np.diff(self.geometry) != 0])
         cores = self.geometries
         return (starts, np.array([c.kind for c in cores]), np.array([c.half_length for c in cores]),

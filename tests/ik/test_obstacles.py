@@ -69,7 +69,7 @@ def test_drake_ik_context_sees_the_obstacles(panda, cluttered):
         pairs = query.ComputeSignedDistancePairwiseClosestPoints()
         drake_min, scene_min = min(p.distance for p in pairs), cluttered.min_distance(q)
         # Scene refines the capsule-box/cylinder pairs where Drake's GJK is optimistic (up to
-        # 6.7 mm measured, drake_mh.segment_distance): equal, or Drake slightly above
+        # 6.7 mm measured, drake_mh.scene.segment_distance): equal, or Drake slightly above
         assert scene_min - 1e-9 <= drake_min <= scene_min + 0.01
 
 
