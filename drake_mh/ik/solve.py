@@ -3,7 +3,7 @@
 Methods (:func:`available_ik_methods`):
 
 * every optimizer of :func:`drake_mh.optim.available_methods` (``pso``, ``bat``, ``gsa``,
-  ``e3gsa``, ``woa``, ``ao``, ``ga``, ``abc``, ``aro``, ``cmaes``, ``de``, ``random``):
+  ``e3gsa``, ``woa``, ``woa_greedy``, ``ao``, ``ga``, ``abc``, ``aro``, ``cmaes``, ``de``, ``random``):
   metaheuristic IK (framework paper, Algorithm 1), :mod:`drake_mh.ik.metaheuristic`;
 * ``hybrid``: global population search + batched Levenberg–Marquardt, :mod:`drake_mh.ik.hybrid`;
 * ``pinv``, ``dls``: Jacobian baselines with random restarts, :mod:`drake_mh.ik.jacobian`;

@@ -33,7 +33,7 @@ from drake_mh.optim.ga import GA
 from drake_mh.optim.gsa import GSA
 from drake_mh.optim.pso import PSO
 from drake_mh.optim.random_search import RandomSearch
-from drake_mh.optim.woa import WOA
+from drake_mh.optim.woa import WOA, WOAGreedy
 
 __all__ = [
     "METHODS",
@@ -44,12 +44,12 @@ __all__ = [
     "available_methods",
     "get_method",
     "minimize",
-    "ABC", "AO", "ARO", "BAT", "CMAES", "DE", "E3GSA", "GA", "GSA", "PSO", "RandomSearch", "WOA",
+    "ABC", "AO", "ARO", "BAT", "CMAES", "DE", "E3GSA", "GA", "GSA", "PSO", "RandomSearch", "WOA", "WOAGreedy",
 ]
 
 #: method name -> ask/tell class; metaheuristics first, then the reference baselines
 METHODS: dict[str, type[Optimizer]] = {
-    cls.name: cls for cls in (PSO, BAT, GSA, E3GSA, WOA, AO, GA, ABC, ARO, CMAES, DE, RandomSearch)
+    cls.name: cls for cls in (PSO, BAT, GSA, E3GSA, WOA, WOAGreedy, AO, GA, ABC, ARO, CMAES, DE, RandomSearch)
 }
 
 

@@ -142,6 +142,39 @@ def test_woa_move(a):
     np.testing.assert_allclose(woa._move(X, g, R, a, 1.0, LOWER, UPPER), Xr, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("a", [1.8, 0.4])
+def test_woa_greedy_move(a):
+    """mealpy 3.0.3's OriginalWOA move: one r for A and C, a uniform box point for |A| >= 1."""
+    rng, X, _, g, _ = state(4)
+    R = rng.random((P, 3 + D))
+    r = R[:, 0:1]
+    A, C = 2.0 * a * r - a, 2.0 * r
+    l = 2.0 * R[:, 2:3] - 1.0
+    box = LOWER + R[:, 3:] * WIDTH
+    ref = np.where(np.abs(A) < 1.0, g, box)
+    enc = ref - A * np.abs(C * ref - X)
+    spiral = g + np.exp(l) * np.cos(2.0 * np.pi * l) * np.abs(g - X)
+    explore = (R[:, 1] < 0.5) & (np.abs(A[:, 0]) >= 1.0)
+    assert explore.any() == (a > 1.0) and (R[:, 1] >= 0.5).any()
+    Xr = np.clip(np.where((R[:, 1] < 0.5)[:, None], enc, spiral), LOWER, UPPER)
+    np.testing.assert_allclose(woa._move_greedy(X, g, R, a, 1.0, LOWER, UPPER), Xr, rtol=0, atol=1e-12)
+
+
+def test_woa_greedy_keeps_a_whale_unless_strictly_better():
+    opt = woa.WOAGreedy((LOWER, UPPER), budget=20 * P, seed=3, pop_size=P)
+    sphere = lambda Z: np.round(np.sum((Z - 0.5) ** 2, axis=1))    # rounded: ties happen
+    X = opt.ask()
+    opt.tell(X, sphere(X))
+    while not opt.done:
+        X0, F0 = opt.X.copy(), opt.F.copy()
+        Xn = opt.ask()
+        Fn = sphere(Xn)
+        opt.tell(Xn, Fn)
+        moved = Fn < F0
+        assert np.array_equal(opt.X, np.where(moved[:, None], Xn, X0))
+        assert np.array_equal(opt.F, np.where(moved, Fn, F0))
+
+
 @pytest.mark.parametrize("t, early", [(3, True), (25, False)])
 def test_ao_move(t, early):
     rng, X, _, g, _ = state(5)

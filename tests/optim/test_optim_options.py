@@ -24,6 +24,7 @@ F = make("rastrigin", 4, seed=11)
     ("pso", {"w_start": 0.7, "w_end": 0.7, "c1": 1.5, "c2": 1.5}, 10.0),
     ("e3gsa", {"p_explore": 0.0}, 30.0),
     ("cmaes", {"restarts": False}, 30.0),
+    ("de", {"F": 1.0}, 0.1),                          # NiaPy's default weight (docs/optimizers.md)
 ])
 def test_options_run_and_converge(method, params, tol):
     budget = 8000 if method != "cmaes" else 3000

@@ -43,7 +43,7 @@ class Recorder:
 
 
 def test_available_methods_lists_all_required_names():
-    required = {"pso", "bat", "gsa", "e3gsa", "woa", "ao", "ga", "abc", "aro", "cmaes", "de", "random"}
+    required = {"pso", "bat", "gsa", "e3gsa", "woa", "woa_greedy", "ao", "ga", "abc", "aro", "cmaes", "de", "random"}
     assert required == set(ALL)
     assert all(m == m.lower() for m in ALL)
 
