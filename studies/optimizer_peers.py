@@ -2,13 +2,16 @@
 
 Grid (full): CEC 2017 F1, F3, F4, F5 (as ``studies/optimizer_benchmark.py``, the
 same shift/rotation data), D = 10, shifted, 10 replicates, budget 10 000 D, box [-100, 100]^D.
-Algorithms: PSO, DE, GA, WOA, ABC, GSA of drake_mh (default parameters) and the same-named ones
-of mealpy 3.0.3 (``OriginalPSO``, ``OriginalDE``, ``BaseGA``, ``OriginalWOA``,
-``OriginalABC``; mealpy has no GSA) and NiaPy 2.7.1 (``ParticleSwarmAlgorithm``,
-``DifferentialEvolution``, ``GeneticAlgorithm``, ``ArtificialBeeColonyAlgorithm``,
-``GravitationalSearchAlgorithm``; NiaPy has no WOA), each at its library's default parameters
-but drake_mh's population size (ABC: 20 food sources everywhere). Quick (``--quick``): F5,
-D = 10, 1 replicate, budget 100 D.
+Algorithms: PSO, DE, GA, WOA, ABC, GSA of drake_mh (default parameters), two of its
+documented variants (``woa_greedy``: mealpy's WOA; ``de_F1``: ``de`` with ``F = 1.0``, NiaPy's
+default weight), and the same-named ones of mealpy 3.0.3 (``OriginalPSO``, ``OriginalDE``,
+``BaseGA``, ``OriginalWOA``, ``OriginalABC``; mealpy has no GSA) and NiaPy 2.7.1
+(``ParticleSwarmAlgorithm``, ``DifferentialEvolution``, ``GeneticAlgorithm``,
+``ArtificialBeeColonyAlgorithm``, ``GravitationalSearchAlgorithm``; NiaPy has no WOA), each at
+its library's default parameters but drake_mh's population size (ABC: 20 food sources
+everywhere) and with mealpy's ``epoch`` (its run length, which its WOA's
+``a = 2 - 2 epoch / max_epoch`` reads) set to the generations the budget allows. Quick
+(``--quick``): F5, D = 10, 1 replicate, budget 100 D.
 
 Evaluations are counted by *our* wrapper around the objective, not by the libraries: the
 wrapper stops a run (it raises, caught here) on the evaluation after the budget, so no library
@@ -20,10 +23,14 @@ as ``optimizer_benchmark`` does for ours (CEC 2017 protocol), as soon as the err
 Per (function, replicate, algorithm) the three libraries run back to back, the order reversed
 on every other replicate, so they share the machine's load. Wall time, process CPU time, the
 time spent in the objective and the 1-minute load average are recorded per run; the summary
-gives per cell the median error and the median time per run and, per algorithm, the ratio of
-time theirs / ours from the same cases, with the CPU model. A peer that is not installed
-is left out with a line in the summary. NiaPy comes with the extra ``peers``; mealpy 3.0.3 pins
-numpy <= 1.26 and is not in it: ``pip install --no-deps mealpy==3.0.3 pandas`` runs with numpy 2.
+gives per cell the median error and the median time per run and, per algorithm, the ratios of
+wall and of CPU time theirs / ours from the same cases, with the CPU model; then, per function,
+a Wilcoxon rank-sum test (two-sided) of each of our entries against each peer of its algorithm
+on the final error, with Holm's correction over all the tests of the table (the runs are
+independent samples: the libraries share a seed number, not a random stream, so nothing pairs
+them). A peer that is not installed is left out with a line in the summary. NiaPy comes with
+the extra ``peers``; mealpy 3.0.3 pins numpy <= 1.26 and is not in it:
+``pip install --no-deps mealpy==3.0.3 pandas`` runs with numpy 2.
 
 Run: ``drake-mh study optimizer_peers [--quick]`` or ``python studies/optimizer_peers.py [--quick]``.
 """
@@ -31,6 +38,7 @@ Run: ``drake-mh study optimizer_peers [--quick]`` or ``python studies/optimizer_
 from __future__ import annotations
 
 import importlib.util
+import math
 import os
 import time
 
@@ -45,6 +53,12 @@ SUCCESS_ERROR = 1e-8          # CEC 2017: errors at or below 1e-8 are reported a
 
 ALGORITHMS = ("pso", "de", "ga", "woa", "abc", "gsa")
 LIBRARIES = ("drake_mh", "mealpy", "niapy")
+#: drake_mh's entries, label -> (algorithm, method, hyper-parameters): the defaults and the
+#: documented variants that match a peer's (docs/optimizers.md)
+OURS = {"pso": ("pso", "pso", {}), "de": ("de", "de", {}), "de_F1": ("de", "de", {"F": 1.0}),
+        "ga": ("ga", "ga", {}), "woa": ("woa", "woa", {}), "woa_greedy": ("woa", "woa_greedy", {}),
+        "abc": ("abc", "abc", {}), "gsa": ("gsa", "gsa", {})}
+SIGNIFICANCE = 0.05          # family-wise level of the Holm-corrected rank-sum tests
 #: the peers' classes per algorithm (None: the library has no such algorithm)
 MEALPY = {"pso": ("swarm_based.PSO", "OriginalPSO"), "de": ("evolutionary_based.DE", "OriginalDE"),
           "ga": ("evolutionary_based.GA", "BaseGA"), "woa": ("swarm_based.WOA", "OriginalWOA"),
@@ -102,14 +116,22 @@ def _run_mealpy(algorithm: str, counted: Counted, bounds: np.ndarray, pop: int, 
 
     module, name = MEALPY[algorithm]
     cls = getattr(importlib.import_module(f"mealpy.{module}"), name)
-    size = pop // 2 if algorithm == "abc" else pop  # mealpy's ABC: pop_size = food sources
-    model = cls(epoch=100_000, pop_size=max(size, 5))
+    size = max(pop // 2 if algorithm == "abc" else pop, 5)  # mealpy's ABC: pop_size = food sources
+    model = cls(epoch=mealpy_epochs(counted.budget, size), pop_size=size)
     spec = {"bounds": FloatVar(lb=bounds[:, 0], ub=bounds[:, 1]), "minmax": "min", "obj_func": counted,
             "log_to": None}
     try:
         model.solve(spec, termination={"max_fe": counted.budget}, seed=seed)
     except _Stop:
         pass
+
+
+def mealpy_epochs(budget: int, size: int) -> int:
+    """mealpy's ``epoch`` (run length) for a budget: the generations of ``size`` evaluations
+    after the initial population. Its WOA reads it (``a = 2 - 2 epoch / max_epoch``); with a
+    larger value ``a`` would stay near 2 for the whole budget. The other classes used here do
+    not read it, and the wrapper cuts every run at the budget anyway."""
+    return int(min(max(math.ceil((budget - size) / size), 1), 100_000))
 
 
 def _run_niapy(algorithm: str, counted: Counted, bounds: np.ndarray, pop: int, seed: int) -> None:
@@ -139,7 +161,7 @@ def run(case: Case) -> dict:
     algorithm, library = case["algorithm"], case["library"]
     budget = int(case["budget_per_dim"]) * dim
     target = f.f_opt + SUCCESS_ERROR
-    pop = get_method(algorithm).default_pop_size(dim)
+    pop = get_method(algorithm).default_pop_size(dim)   # the same for a variant and the peers
     seed = 1_000 * int(case["rep"]) + int(case["function"])  # the same for every library on a replicate
     bounds = np.asarray(f.bounds, dtype=float)
     load = load_average()
@@ -153,7 +175,9 @@ def run(case: Case) -> dict:
             return F
 
         w0, c0 = time.perf_counter(), time.process_time()
-        res = minimize(timed, bounds, method=algorithm, budget=budget, seed=seed, target=target)
+        _, method, params = OURS[case["method"]]
+        res = minimize(timed, bounds, method=method, budget=budget, seed=seed, target=target, pop_size=pop,
+                       **params)
         wall, cpu = time.perf_counter() - w0, time.process_time() - c0
         best, nfe, over, objective = float(res.f), int(res.nfe), False, f_time[0]
     else:
@@ -170,35 +194,107 @@ def run(case: Case) -> dict:
             "pop_size": pop, "load": load}
 
 
+def _entries(algorithm: str) -> list[tuple[str, str]]:
+    """``(library, method label)`` of one algorithm: our default and variants, then the peers."""
+    ours = [("drake_mh", label) for label, (alg, _, _) in OURS.items() if alg == algorithm]
+    return ours + [(lib, f"{lib}_{algorithm}") for lib in LIBRARIES[1:] if has(lib, algorithm)]
+
+
 def _grid(quick: bool) -> list[dict]:
     functions, reps, per_dim = ([5], 1, 100) if quick else ([1, 3, 4, 5], 10, 10_000)
     cases = []
     for rep in range(reps):
         for k in functions:
             for algorithm in ALGORITHMS:
-                libraries = [lib for lib in LIBRARIES if has(lib, algorithm)]
-                for library in (libraries if rep % 2 == 0 else libraries[::-1]):
-                    method = algorithm if library == "drake_mh" else f"{library}_{algorithm}"
+                entries = _entries(algorithm)
+                for library, method in (entries if rep % 2 == 0 else entries[::-1]):
                     cases.append({"function": k, "dim": 10, "budget_per_dim": per_dim, "rep": rep,
                                   "method": method, "algorithm": algorithm, "library": library})
     return cases
 
 
+def _label(record: dict) -> str:
+    """A row's name: the library, with our variant's method label where it is not the default."""
+    if record["library"] != "drake_mh" or record["method"] == record["algorithm"]:
+        return record["library"]
+    return f"drake_mh `{record['method']}`"
+
+
+def rank_sum(ours, theirs) -> tuple[float, float]:
+    """Wilcoxon rank-sum (Mann-Whitney U) test of two samples of final errors.
+
+    Returns:
+        ``(p, A)``: the two-sided p-value (1 when all values are equal, NaN with an empty
+        sample) and Vargha and Delaney's ``A = P(ours < theirs) + P(ours = theirs) / 2``
+        (> 0.5: ours tends to lower errors).
+    """
+    from scipy import stats
+
+    a, b = np.asarray(ours, dtype=float), np.asarray(theirs, dtype=float)
+    if a.size == 0 or b.size == 0:
+        return math.nan, math.nan
+    less = np.sum(a[:, None] < b[None, :]) + 0.5 * np.sum(a[:, None] == b[None, :])
+    effect = float(less / (a.size * b.size))
+    if np.all(np.concatenate([a, b]) == a[0]):
+        return 1.0, effect
+    return float(stats.mannwhitneyu(a, b, alternative="two-sided").pvalue), effect
+
+
+def significance(ok: list[dict]) -> list[dict]:
+    """Per function and D, each of our entries against each peer of its algorithm.
+
+    Returns:
+        One dict per test: ``algorithm, ours, peer, function, dim, n_ours, n_peer, p, A``
+        and ``p_holm`` (Holm's step-down correction over all the returned tests).
+    """
+    from drake_mh.study.report.stats import holm
+
+    tests = []
+    for algorithm in ALGORITHMS:
+        mine = [r for r in ok if r["algorithm"] == algorithm]
+        ours = sorted({r["method"] for r in mine if r["library"] == "drake_mh"}, key=list(OURS).index)
+        peers = [lib for lib in LIBRARIES[1:] if any(r["library"] == lib for r in mine)]
+        for label in ours:
+            for peer in peers:
+                for dim, k in sorted({(r["dim"], r["function"]) for r in mine}):
+                    a = [r["error"] for r in mine if (r["method"], r["dim"], r["function"]) == (label, dim, k)]
+                    b = [r["error"] for r in mine if (r["library"], r["dim"], r["function"]) == (peer, dim, k)]
+                    p, effect = rank_sum(a, b)
+                    tests.append({"algorithm": algorithm, "ours": label, "peer": peer, "function": k, "dim": dim,
+                                  "n_ours": len(a), "n_peer": len(b), "p": p, "A": effect})
+    adjusted = holm(np.array([t["p"] for t in tests], dtype=float)) if tests else []
+    for t, q in zip(tests, adjusted):
+        t["p_holm"] = float(q)
+    return tests
+
+
+def _verdict(test: dict) -> str:
+    if not math.isfinite(test["p_holm"]):
+        return "-"
+    if test["p_holm"] > SIGNIFICANCE:
+        return f"n.s. ({test['p_holm']:.2g})"
+    return f"{'**better**' if test['A'] > 0.5 else 'worse'} ({test['p_holm']:.1e})"
+
+
 def summarize(records: list[dict]) -> str:
-    """Median error and time per cell; time ratios theirs / ours on the same cases."""
+    """Median error and time per cell, wall and CPU time ratios theirs / ours on the same cases,
+    and rank-sum tests (Holm) of our entries against the peers per function."""
     ok = [r for r in records if r.get("status") == "ok"]
     if not ok:
         return ""
     loads = np.array([r["load"] for r in ok], dtype=float)
     functions = sorted({r["function"] for r in ok})
-    lines = ["### drake_mh vs mealpy / NiaPy: CEC 2017, shifted, D = 10", "",
+    dims = sorted({r["dim"] for r in ok})
+    reps = len({r["rep"] for r in ok})
+    lines = [f"### drake_mh vs mealpy / NiaPy: CEC 2017, shifted, D = {', '.join(map(str, dims))}, "
+             f"{reps} replicate(s)", "",
              f"CPU: {cpu_model()} ({os.cpu_count()} logical CPUs); 1-minute load average during the run "
              f"{np.nanmin(loads):.2f}-{np.nanmax(loads):.2f} (mean {np.nanmean(loads):.2f}). Budget "
              f"{ok[0]['budget']} evaluations counted by our wrapper (a run stops at the budget or at error "
-             "<= 1e-8, reported as 0). Cells: median error f - f* / median wall time per run. `time vs ours` = "
-             "median over the cases of (their wall time / ours) on the same function and replicate (a run that "
-             "reaches the target early is shorter: `us / evaluation` = median wall time per counted evaluation, "
-             "objective included).", ""]
+             "<= 1e-8, reported as 0). Cells: median error f - f* / median wall time per run. `wall vs ours`, "
+             "`CPU vs ours` = median over the cases of (its wall / CPU time / that of our default entry of the "
+             "algorithm) on the same function and replicate (a run that reaches the target early is shorter: "
+             "`us / evaluation` = median wall time per counted evaluation, objective included).", ""]
     missing = [lib for lib in LIBRARIES if not installed(lib)]
     if missing:
         lines += [f"Not installed: {', '.join(missing)}; their rows are missing (NiaPy: `pip install -e '.[peers]'`; "
@@ -207,11 +303,12 @@ def summarize(records: list[dict]) -> str:
     if over:
         lines += [f"Asked for more than the budget (cut by the wrapper): {', '.join(over)}.", ""]
     lines += ["| algorithm | library | " + " | ".join(f"F{k}" for k in functions) + " | nfe (median) | "
-              "us / evaluation | CPU / wall | time vs ours |", "|---" * (len(functions) + 6) + "|"]
-    by_key = {(r["algorithm"], r["library"], r["function"], r["rep"]): r for r in ok}
+              "us / evaluation | CPU / wall | wall vs ours | CPU vs ours |", "|---" * (len(functions) + 7) + "|"]
+    default = {(r["algorithm"], r["dim"], r["function"], r["rep"]): r for r in ok
+               if r["library"] == "drake_mh" and r["method"] == r["algorithm"]}
     for algorithm in ALGORITHMS:
-        for library in LIBRARIES:
-            rows = [r for r in ok if (r["algorithm"], r["library"]) == (algorithm, library)]
+        for library, method in _entries(algorithm):
+            rows = [r for r in ok if (r["algorithm"], r["library"], r["method"]) == (algorithm, library, method)]
             if not rows:
                 continue
             cells = []
@@ -219,13 +316,37 @@ def summarize(records: list[dict]) -> str:
                 cell = [r for r in rows if r["function"] == k]
                 cells.append(f"{np.median([r['error'] for r in cell]):.2e} / "
                              f"{1e3 * np.median([r['time'] for r in cell]):.0f} ms" if cell else "-")
-            ratios = [r["time"] / by_key[(algorithm, "drake_mh", r["function"], r["rep"])]["time"]
-                      for r in rows if (algorithm, "drake_mh", r["function"], r["rep"]) in by_key]
-            ratio = f"{np.median(ratios):.0f}x" if library != "drake_mh" and ratios else "1"
+            pairs = [(r, default[key]) for r in rows
+                     if (key := (algorithm, r["dim"], r["function"], r["rep"])) in default]
+            ratios = []
+            for field in ("time", "cpu_time"):
+                values = [r[field] / base[field] for r, base in pairs if base[field] > 0]
+                ratios.append("1" if method == algorithm and library == "drake_mh" else
+                              f"{np.median(values):.{0 if np.median(values) >= 10 else 2}f}x" if values else "-")
             cpu = np.sum([r["cpu_time"] for r in rows]) / np.sum([r["time"] for r in rows])
-            lines.append(f"| {algorithm} | {library} | " + " | ".join(cells) +
+            lines.append(f"| {algorithm} | {_label(rows[0])} | " + " | ".join(cells) +
                          f" | {np.median([r['nfe'] for r in rows]):.0f} | "
-                         f"{1e6 * np.median([r['time'] / max(r['nfe'], 1) for r in rows]):.1f} | {cpu:.2f} | {ratio} |")
+                         f"{1e6 * np.median([r['time'] / max(r['nfe'], 1) for r in rows]):.1f} | {cpu:.2f} | "
+                         f"{ratios[0]} | {ratios[1]} |")
+    tests = significance(ok)
+    if tests:
+        n_better = sum(t["p_holm"] <= SIGNIFICANCE and t["A"] > 0.5 for t in tests)
+        n_worse = sum(t["p_holm"] <= SIGNIFICANCE and t["A"] < 0.5 for t in tests)
+        lines += ["", f"Final error, ours against each peer of the algorithm, per function: Wilcoxon rank-sum test "
+                  f"(two-sided; runs are independent, nothing pairs them), Holm-corrected over all {len(tests)} tests "
+                  f"of this table, level {SIGNIFICANCE}. Cell: **better** / worse (ours has the lower / higher "
+                  "errors; Holm p) or n.s. (Holm p). "
+                  f"Ours significantly better in {n_better}, worse in {n_worse} of {len(tests)}.", "",
+                  "| ours | peer | " + " | ".join(f"F{k}" for k in functions) + " |",
+                  "|---" * (len(functions) + 2) + "|"]
+        for algorithm in ALGORITHMS:
+            for ours, peer in dict.fromkeys((t["ours"], t["peer"]) for t in tests if t["algorithm"] == algorithm):
+                for dim in dims:
+                    cell = {t["function"]: t for t in tests
+                            if (t["ours"], t["peer"], t["dim"]) == (ours, peer, dim)}
+                    suffix = f" (D = {dim})" if len(dims) > 1 else ""
+                    lines.append(f"| `{ours}`{suffix} | {peer} | " +
+                                 " | ".join(_verdict(cell[k]) if k in cell else "-" for k in functions) + " |")
     text = "\n".join(lines)
     print(text)
     return text
