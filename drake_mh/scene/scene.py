@@ -118,6 +118,8 @@ class Scene:
         self._obstacles: dict[str, Obstacle] = {}
         self._ids: dict[str, object] = {}
         self._robot_shapes: dict = {}
+        self._self_link_pairs: list = []  # link pairs Drake's filter keeps (self_collision only)
+        self._obstacle_arrays = None  # the obstacles as the compiled kernels read them (batch.py)
         self._self_capsule_pairs: list = []
         inspector = robot.scene_graph.model_inspector()
         self._robot_ids = [g for g in inspector.GetAllGeometryIds(Role.kProximity)
@@ -132,11 +134,23 @@ class Scene:
             # capsule-capsule self pairs: closed form (Drake's value was up to 1.1e-5 m optimistic, and
             # its capsule-capsule query can hang on collinear axes), so they leave Drake's query
             query_inspector = robot.scene_graph.get_query_output_port().Eval(self._sg_context).inspector()
+            self._self_link_pairs = self._unfiltered_link_pairs(query_inspector)
             capsules = sorted(self._capsule_links, key=lambda g: g.get_value())
             self._self_capsule_pairs = [(a, b) for i, a in enumerate(capsules) for b in capsules[i + 1:]
                                         if not query_inspector.CollisionFiltered(a, b)]
             for a, b in self._self_capsule_pairs:
                 manager.Apply(CollisionFilterDeclaration().ExcludeBetween(GeometrySet([a]), GeometrySet([b])))
+
+    def _unfiltered_link_pairs(self, inspector) -> list:
+        """``[(link_a, link_b)]`` with a geometry pair that Drake's collision filter keeps."""
+        plant = self.robot.plant
+        link = {g: plant.GetBodyFromFrameId(inspector.GetFrameId(g)).name() for g in self._robot_ids}
+        pairs = set()
+        for i, a in enumerate(self._robot_ids):
+            for b in self._robot_ids[i + 1:]:
+                if link[a] != link[b] and not inspector.CollisionFiltered(a, b):
+                    pairs.add(tuple(sorted((link[a], link[b]))))
+        return sorted(pairs)
 
     def _link_geometries(self, link: str) -> list:
         from drake_mh.errors import FrameNotFound
@@ -181,6 +195,7 @@ class Scene:
         self._ids[name] = self._register(name, shape, X_WO)
         obstacle = Obstacle(name, shape, X_WO, velocity_W)
         self._obstacles[name] = obstacle
+        self._obstacle_arrays = None
         return obstacle
 
     def _register(self, name: str, shape, X_WO: np.ndarray):
@@ -262,6 +277,7 @@ class Scene:
         self._ids[name] = self._register(name, old.shape, X_WO)
         new = Obstacle(name, old.shape, X_WO, vel)
         self._obstacles[name] = new
+        self._obstacle_arrays = None
         return new
 
     def remove(self, name: str) -> None:
@@ -270,6 +286,7 @@ class Scene:
         self.robot.scene_graph.RemoveGeometry(self._sg_context, self.robot.obstacle_source_id, self._ids[name])
         del self._obstacles[name]
         del self._ids[name]
+        self._obstacle_arrays = None
 
     def step(self, dt: float) -> None:
         """Advance every moving obstacle by ``velocity · dt`` [s]."""
@@ -424,32 +441,99 @@ class Scene:
 
         Never more than the exact distance (penetration included); at most
         ``sphere_model.bound`` less where the exact distance is >= 0 (module docstring).
+        Compiled (:mod:`drake_mh.scene._collision_kernels`): each link's bounding sphere first,
+        its spheres only where they can hold the minimum.
 
         Raises:
             SceneError: the robot has no collision geometry.
         """
         from drake_mh.scene.penetration import corrected_min
 
-        model = self.sphere_model
-        centres_W = self.sphere_centres(Q)
-        radii = model.radii
-        out = np.empty((centres_W.shape[0], len(self._obstacles)))
-        deep = []
-        for k, obstacle in enumerate(self._obstacles.values()):
-            R, p = obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3]
-            centres_O = (centres_W - p) @ R
-            per_sphere = obstacle.shape.signed_distance(centres_O) - radii
-            out[:, k] = per_sphere.min(axis=1)
-            rows = np.flatnonzero(out[:, k] < 0)
-            if len(rows):  # a sphere penetrates: the union's value may be too shallow there
-                deep.append((k, obstacle, rows, per_sphere[rows]))
-        if deep:
-            Q = self.robot.check_Q(Q)
-            rows_all = np.unique(np.concatenate([rows for _, _, rows, _ in deep]))
-            points_W = self.robot.batch.points(Q[rows_all], *self._compiled_cores)
-            for k, obstacle, rows, per_sphere in deep:
-                out[rows, k] = corrected_min(model, per_sphere, points_W[np.searchsorted(rows_all, rows)], obstacle)
+        QT = self.robot.batch._transposed(Q)
+        out = self.collision_model.clearances(QT, self.obstacle_arrays, per_obstacle=True)
+        deep_rows = np.flatnonzero((out < 0).any(axis=1)) if out.size else np.zeros(0, int)
+        if len(deep_rows):  # a sphere penetrates: the union's value may be too shallow there
+            model = self.sphere_model
+            Q_deep = np.ascontiguousarray(QT[:, deep_rows].T)
+            centres_W = self.sphere_centres(Q_deep)
+            points_W = self.robot.batch.points(Q_deep, *self._compiled_cores)
+            for k, obstacle in enumerate(self._obstacles.values()):
+                rows = np.flatnonzero(out[deep_rows, k] < 0)
+                if not len(rows):
+                    continue
+                R, p = obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3]
+                per_sphere = obstacle.shape.signed_distance((centres_W[rows] - p) @ R) - model.radii
+                out[deep_rows[rows], k] = corrected_min(model, per_sphere, points_W[rows], obstacle)
         return out
+
+    # --- batched boolean queries and certified segments (sphere model, compiled) ---------------
+
+    @functools.cached_property
+    def collision_model(self):
+        """The sphere model grouped per link for the compiled kernels
+        (:class:`drake_mh.scene.batch.CollisionModel`), with this scene's self-collision pairs."""
+        from drake_mh.scene.batch import CollisionModel
+
+        return CollisionModel(self.robot, self.sphere_model, self._self_link_pairs)
+
+    @property
+    def obstacle_arrays(self) -> tuple:
+        """The obstacles as the compiled kernels read them (rebuilt after add/move/remove)."""
+        from drake_mh.scene.batch import obstacle_arrays
+
+        if self._obstacle_arrays is None:
+            self._obstacle_arrays = obstacle_arrays(self._obstacles.values())
+        return self._obstacle_arrays
+
+    def collision_free(self, Q, clearance: float = 0.0, self_clearance: float = 0.0):
+        """Whether each configuration is certified free: every sphere of the model at least
+        ``clearance`` [m] from every obstacle and, with ``self_collision``, every checked link
+        pair at least ``self_clearance`` apart.
+
+        Conservative: ``True`` implies the exact geometry is at least as clear; a configuration
+        up to ``sphere_model.bound`` clearer than asked may read ``False``. Compiled, SIMD across
+        configurations, exits a block of configurations as soon as all of them collide.
+
+        Args:
+            Q: ``(N, nq)`` configurations, or one ``(nq,)``.
+            clearance, self_clearance: required clearances [m], >= 0.
+
+        Returns:
+            ``(N,)`` bool, or one bool for one ``(nq,)`` configuration.
+
+        Raises:
+            SceneError: the robot has no collision geometry, or a bad clearance.
+        """
+        from drake_mh.scene.segments import check_clearance
+
+        self._require_geometry()
+        clearance = check_clearance(clearance, "clearance")
+        self_clearance = check_clearance(self_clearance, "self_clearance")
+        one = np.ndim(Q) == 1
+        QT = self.robot.batch._transposed(Q)
+        free = self.collision_model.free(QT, self.obstacle_arrays, clearance, self_clearance)
+        return bool(free[0]) if one else free
+
+    def segment_free(self, q_a, q_b, clearance: float = 0.0, self_clearance: float = 0.0) -> bool:
+        """Whether the straight joint-space motion ``q_a -> q_b`` is certified free *for every
+        configuration on it* (:func:`drake_mh.scene.segments.certify_segments`)."""
+        from drake_mh.scene.segments import certify_segments
+
+        return bool(certify_segments(self, q_a, q_b, clearance, self_clearance).certified[0])
+
+    def certify_segments(self, QA, QB, clearance: float = 0.0, self_clearance: float = 0.0, **options):
+        """Certify many straight segments ``QA[i] -> QB[i]``: see
+        :func:`drake_mh.scene.segments.certify_segments`."""
+        from drake_mh.scene.segments import certify_segments
+
+        return certify_segments(self, QA, QB, clearance, self_clearance, **options)
+
+    def certify_path(self, Q, clearance: float = 0.0, self_clearance: float = 0.0, **options):
+        """Certify the piecewise-linear joint-space motion through the rows of ``Q (M, nq)``:
+        see :func:`drake_mh.scene.segments.certify_path`."""
+        from drake_mh.scene.segments import certify_path
+
+        return certify_path(self, Q, clearance, self_clearance, **options)
 
     def batch_min_distance(self, Q) -> np.ndarray:
         """Conservative minimum clearance ``(N,)`` to the obstacles [m] (``inf`` if there is none).

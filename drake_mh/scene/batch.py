@@ -1,0 +1,186 @@
+"""Batched collision queries on the sphere model: the arrays the compiled kernels read.
+
+:class:`CollisionModel` flattens what :mod:`drake_mh.scene._collision_kernels` needs from a
+:class:`drake_mh.scene.Scene`:
+
+* the robot's kinematic chain (from :class:`drake_mh.kinematics.BatchKinematics`);
+* its :class:`drake_mh.spheres.SphereModel`, grouped per link, each link with a *bounding
+  sphere* that contains all of the link's spheres (centre: the middle of the centres' bounding
+  box; radius: the farthest sphere surface from it);
+* the obstacles as arrays (kind, ``R_WO``, ``p_WO``, half sizes);
+* the link pairs checked for self-collision: every pair of links with collision geometry that
+  Drake's collision filter of the scene does not exclude (Drake filters links connected by a
+  joint and links welded together; ``Scene(ignore_link_pairs=...)`` adds more).
+
+and, per sphere and per link pair, how far it can move when the configuration moves
+(:meth:`CollisionModel.reach`), which the segment certificate needs.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from drake_mh.scene import _collision_kernels as K
+from drake_mh.shapes import Box, Capsule, Cylinder, Sphere
+
+
+def obstacle_arrays(obstacles) -> tuple:
+    """``(kinds (K,), R_WO (K, 3, 3), p_WO (K, 3), v_WO (K, 3), dims (K, 3))`` of the obstacles
+    (``v_WO`` zero: the kernels' per-lane displacement, set by segment checks)."""
+    obstacles = list(obstacles)
+    n = len(obstacles)
+    kinds = np.empty(n, np.int64)
+    R_WO, p_WO, dims = np.empty((n, 3, 3)), np.empty((n, 3)), np.zeros((n, 3))
+    for k, obstacle in enumerate(obstacles):
+        shape = obstacle.shape
+        R_WO[k], p_WO[k] = obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3]
+        if isinstance(shape, Sphere):
+            kinds[k], dims[k, 0] = K.SPHERE, shape.radius
+        elif isinstance(shape, Box):
+            kinds[k], dims[k] = K.BOX, 0.5 * np.asarray(shape.size)
+        elif isinstance(shape, Cylinder):
+            kinds[k], dims[k, :2] = K.CYLINDER, (shape.radius, 0.5 * shape.length)
+        elif isinstance(shape, Capsule):
+            kinds[k], dims[k, :2] = K.CAPSULE, (shape.radius, 0.5 * shape.length)
+        else:  # Scene.add accepts only these four
+            raise TypeError(f"no batched distance for obstacle shape {type(shape).__name__}")
+    return kinds, R_WO, p_WO, np.zeros((n, 3)), dims
+
+
+def bounding_radii(obstacles: tuple) -> np.ndarray:
+    """``(K,)`` radius of the smallest origin-centred sphere containing each obstacle [m]."""
+    kinds, _, _, _, dims = obstacles
+    radii = np.where(kinds == K.BOX, np.linalg.norm(dims, axis=1), dims[:, 0])
+    radii = np.where(kinds == K.CYLINDER, np.hypot(dims[:, 0], dims[:, 1]), radii)
+    return np.ascontiguousarray(np.where(kinds == K.CAPSULE, dims[:, 0] + dims[:, 1], radii))
+
+
+class CollisionModel:
+    """The sphere model of a scene's robot, grouped per link for the compiled kernels.
+
+    Args:
+        robot: the :class:`drake_mh.robot.Robot`.
+        model: its :class:`drake_mh.spheres.SphereModel`.
+        self_pairs: ``[(link_a, link_b)]`` link pairs to check for self-collision.
+    """
+
+    def __init__(self, robot, model, self_pairs=()):
+        batch = robot.batch
+        self.robot = robot
+        self.sphere_model = model
+        links = np.asarray(model.links)
+        self.link_names = tuple(dict.fromkeys(model.links))  # order of first appearance
+        order = np.concatenate([np.flatnonzero(links == name) for name in self.link_names])
+        self.sphere_order = order  # kernel sphere i is model sphere order[i]
+        anchors, offsets = batch.compile_points(list(links[order]), model.centres_B[order])
+        radii = np.ascontiguousarray(model.radii[order])
+        counts = [int(np.sum(links == name)) for name in self.link_names]
+        start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        G = len(self.link_names)
+        g_anchor, g_offset, g_radius = np.empty(G, np.int64), np.empty((G, 3)), np.empty(G)
+        for g in range(G):
+            s0, s1 = start[g], start[g + 1]
+            c = offsets[s0:s1]
+            g_anchor[g] = anchors[s0]
+            g_offset[g] = 0.5 * (c.min(axis=0) + c.max(axis=0))
+            g_radius[g] = np.max(np.linalg.norm(c - g_offset[g], axis=1) + radii[s0:s1])
+        self.sphere_anchor = anchors
+        self.model_arrays = (g_anchor, g_offset, g_radius, start, offsets, radii)
+        self.chain_arrays = batch._args
+        index = {name: g for g, name in enumerate(self.link_names)}
+        pairs = sorted({tuple(sorted((index[a], index[b]))) for a, b in self_pairs
+                        if a in index and b in index and a != b})
+        self.self_pairs = tuple((self.link_names[a], self.link_names[b]) for a, b in pairs)
+        self.pair_arrays = (np.array([a for a, _ in pairs], np.int64), np.array([b for _, b in pairs], np.int64))
+
+    @property
+    def num_links(self) -> int:
+        return len(self.link_names)
+
+    @property
+    def num_pairs(self) -> int:
+        return len(self.self_pairs)
+
+    def _kernel_args(self) -> tuple:
+        return self.chain_arrays + self.model_arrays
+
+    def free(self, QT: np.ndarray, obstacles: tuple, clearance: float, self_clearance: float) -> np.ndarray:
+        """``(N,)`` bool: :func:`._collision_kernels.collision_free` of ``QT (nq, N)``."""
+        out = np.empty(QT.shape[1], bool)
+        kinds, R_WO, p_WO, _, dims = obstacles
+        # squared tests need a positive clearance: 1e-12 m stands for "touching is a collision"
+        K.collision_free(QT, max(float(clearance), 1e-12), max(float(self_clearance), 1e-12),
+                         *self._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(obstacles),
+                         *self.pair_arrays, out)
+        return out
+
+    def clearances(self, QT: np.ndarray, obstacles: tuple, per_obstacle: bool, fine_below: float = np.inf,
+                   tau=None) -> np.ndarray:
+        """:func:`._collision_kernels.link_clearances` of ``QT (nq, N)``: ``(N, K)`` per obstacle,
+        or ``(N, G + P)`` per link and link pair."""
+        N = QT.shape[1]
+        width = len(obstacles[0]) if per_obstacle else self.num_links + self.num_pairs
+        out = np.empty((N, width))
+        tau = np.zeros(N) if tau is None else np.ascontiguousarray(tau, dtype=float)
+        pairs = self.pair_arrays if not per_obstacle else (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        K.link_clearances(QT, tau, float(fine_below), bool(per_obstacle), *self._kernel_args(), *obstacles,
+                          *pairs, out)
+        return out
+
+    @functools.cached_property
+    def reach(self) -> np.ndarray:
+        """``(G + P, nq)``: how far [m] the geometry behind each constraint value can move per
+        unit of joint j's motion (the Lipschitz constants of :mod:`._segment_kernel`).
+
+        Rows ``0..G-1`` (links): the elementwise largest row of the link's spheres. A sphere's
+        row: a bound on the distance of its centre from joint j's axis over every configuration
+        (revolute: the centre moves at most ``reach · |Δq_j|``), 1 for a prismatic joint on its
+        path, 0 for joints not on its path. The bound is the length of the chain from the
+        joint's origin to the centre: the sum of the constant offsets between them plus the
+        largest travel of the prismatic joints between them. The link's value (smallest sphere
+        clearance) then changes no faster than its fastest sphere moves.
+
+        Rows ``G..G+P-1`` (link pairs): the elementwise largest sphere row of each link, summed,
+        over the joints that move one link relative to the other (a joint that carries both
+        links rotates or translates their difference vector rigidly: its length, and so the
+        pair's distance, does not change).
+        """
+        chain = self.robot.batch.chain
+        parent, Kp = chain.parent, chain.K[:, :3, 3]
+        lower, upper = self.robot.lower, self.robot.upper
+        travel = np.maximum(np.abs(lower), np.abs(upper))
+        nq = self.robot.nq
+
+        def row(anchor: int, offset: np.ndarray) -> np.ndarray:
+            out = np.zeros(nq)
+            length = float(np.linalg.norm(offset))  # from the anchor's origin to the point
+            k = anchor
+            while k >= 0:
+                j = chain.qidx[k]
+                if chain.kind[k] == 0:
+                    out[j] += length
+                else:
+                    out[j] += 1.0
+                    length += travel[j]
+                length += float(np.linalg.norm(Kp[k]))  # from the parent's origin to k's
+                k = parent[k]
+            return out
+
+        g_anchor, g_offset, _, start, s_offset, _ = self.model_arrays
+        sphere_rows = [row(a, o) for a, o in zip(self.sphere_anchor, s_offset)]
+        group_rows = [np.max(sphere_rows[start[g]:start[g + 1]], axis=0) for g in range(len(g_anchor))]
+        rows = list(group_rows)
+        ancestors = chain.ancestors
+        pair_a, pair_b = self.pair_arrays
+        for ga, gb in zip(pair_a, pair_b):
+            shared = np.zeros(nq, bool)
+            aa, ab = g_anchor[ga], g_anchor[gb]
+            if aa >= 0 and ab >= 0:
+                common = ancestors[aa] & ancestors[ab]
+                shared[chain.qidx[np.flatnonzero(common)]] = True
+            r = group_rows[ga] + group_rows[gb]
+            r[shared] = 0.0
+            rows.append(r)
+        return np.asarray(rows).reshape(-1, nq)

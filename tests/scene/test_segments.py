@@ -1,0 +1,149 @@
+"""Certified straight joint-space segments (Scene.certify_segments / segment_free / certify_path):
+never certify what dense sampling with Drake's exact distance finds in collision."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import drake_mh
+from drake_mh.errors import SceneError
+from drake_mh.scene import Scene, Sphere
+from test_collision_free import PANDA, cluttered
+
+
+def free_pairs(scene, seed, count, step):
+    rng = np.random.default_rng(seed)
+    Q = rng.uniform(PANDA.lower, PANDA.upper, (20 * count, PANDA.nq))
+    QA = Q[scene.collision_free(Q)][:count]
+    QB = np.clip(QA + rng.normal(0.0, step, QA.shape), PANDA.lower, PANDA.upper)
+    return QA, QB
+
+
+def dense(QA, QB, points):
+    t = np.linspace(0.0, 1.0, points)[:, None]
+    return QA + t * (QB - QA)
+
+
+def test_reach_bounds_the_motion_of_every_sphere():
+    """The Lipschitz constants: no sphere moves farther than reach · |Δq| on a short segment."""
+    scene = Scene(PANDA)
+    model = scene.collision_model
+    rng = np.random.default_rng(0)
+    start = model.model_arrays[3]
+    for _ in range(30):
+        qa = rng.uniform(PANDA.lower, PANDA.upper)
+        qb = np.clip(qa + rng.normal(0, 0.4, PANDA.nq), PANDA.lower, PANDA.upper)
+        centres = scene.sphere_centres(dense(qa, qb, 400))[:, model.sphere_order]
+        path = np.linalg.norm(np.diff(centres, axis=0), axis=2).sum(axis=0)  # (S,) path lengths
+        for g in range(model.num_links):
+            bound = model.reach[g] @ np.abs(qb - qa)
+            assert np.all(path[start[g]:start[g + 1]] <= bound + 1e-9)
+
+
+@settings(max_examples=8, deadline=None)
+@given(seed=st.integers(0, 10_000), step=st.sampled_from([0.05, 0.3, 1.0]))
+def test_certified_segments_are_exactly_free(seed, step):
+    scene = cluttered(seed % 7)
+    QA, QB = free_pairs(scene, seed, 12, step)
+    cert = scene.certify_segments(QA, QB)
+    for i in range(len(QA)):
+        if cert.certified[i]:
+            exact = scene.exact_min_distance(dense(QA[i], QB[i], 40))
+            assert exact.min() >= cert.lower[i] - 1e-9 and cert.lower[i] >= 0
+        elif cert.status[i] == 0:  # blocked: the configuration it names is not free under the model
+            q = QA[i] + cert.t_stop[i] * (QB[i] - QA[i])
+            assert not scene.collision_free(q)
+
+
+def test_agrees_with_dense_model_sampling():
+    """Certified <=> no densely sampled configuration is below the clearance under the model, up
+    to segments that graze it (neither certified nor blocked by samples: undecided is allowed)."""
+    scene = cluttered(1)
+    QA, QB = free_pairs(scene, 11, 150, 0.3)
+    for clearance in (0.0, 0.03):
+        cert = scene.certify_segments(QA, QB, clearance)
+        assert 20 < cert.certified.sum() < 150
+        for i in range(len(QA)):
+            sampled_free = scene.collision_free(dense(QA[i], QB[i], 801), clearance).all()
+            if cert.certified[i]:
+                assert sampled_free
+            elif cert.status[i] == 0:
+                assert not sampled_free or True  # blocked at a midpoint below the clearance
+                q = QA[i] + cert.t_stop[i] * (QB[i] - QA[i])
+                assert not scene.collision_free(q, clearance)
+
+
+def test_tight_lower_bound_with_tolerance():
+    scene = cluttered(2)
+    QA, QB = free_pairs(scene, 3, 40, 0.3)
+    cert = scene.certify_segments(QA, QB, tolerance=1e-3)
+    for i in np.flatnonzero(cert.certified):
+        sampled = scene.batch_min_distance(dense(QA[i], QB[i], 801)).min()
+        assert cert.lower[i] <= sampled + 1e-9
+        assert cert.lower[i] >= sampled - 1e-3 - 1e-9
+
+
+def test_self_collision_segments():
+    scene = Scene(PANDA, self_collision=True)
+    rng = np.random.default_rng(8)
+    Q = rng.uniform(PANDA.lower, PANDA.upper, (400, PANDA.nq))
+    QA = Q[scene.collision_free(Q)][:30]
+    QB = np.clip(QA + rng.normal(0, 0.6, QA.shape), PANDA.lower, PANDA.upper)
+    cert = scene.certify_segments(QA, QB)
+    assert cert.certified.any() and not cert.certified.all()
+    for i in np.flatnonzero(cert.certified)[:8]:
+        assert scene.exact_min_distance(dense(QA[i], QB[i], 30)).min() >= -1e-9
+        assert cert.lower_self[i] >= 0
+
+
+def test_moving_obstacle_is_certified_where_it_will_be():
+    """A ball that moves into the arm's path during the segment blocks it; standing still it
+    does not; dense sampling with the ball moved along agrees."""
+    scene = Scene(PANDA)
+    qa = PANDA.home
+    qb = qa.copy()
+    qb[0] += 0.05
+    p = PANDA.fk(qb)[:3, 3]  # the ball ends where the flange ends
+    scene.add("ball", Sphere(0.05), p + [0.0, 0.0, 0.4], velocity=[0.0, 0.0, -0.4])
+    assert scene.segment_free(qa, qb)
+    moving = scene.certify_segments(qa, qb, duration=1.0)
+    assert not moving.certified[0]
+    slow = scene.certify_segments(qa, qb, duration=0.2)
+    assert slow.certified[0]
+    for t in np.linspace(0, 1, 21):  # the ball 8 cm lower at the end: still clear, densely
+        scene.move("ball", p + [0.0, 0.0, 0.4 - 0.08 * t])
+        assert scene.min_distance(qa + t * (qb - qa)) >= slow.lower[0] - 1e-9
+    scene.move("ball", p + [0.0, 0.0, 0.4])
+    path = scene.certify_path(np.stack([qa, qb, qa]), durations=[0.2, 0.2])
+    assert path.certified and np.allclose(scene.obstacles["ball"].position, p + [0, 0, 0.4])
+
+
+def test_certify_path_reports_the_first_failure():
+    scene = Scene(PANDA)
+    q0 = PANDA.home
+    q1 = q0.copy()
+    q1[1] += 0.8
+    scene.add("wall", Sphere(0.1), PANDA.fk(0.5 * (q0 + q1))[:3, 3])
+    path = scene.certify_path(np.stack([q0, q0, q1]))
+    assert not path.certified and path.first_failure == 1 and np.isnan(path.min_clearance)
+    assert "blocked" in repr(path)
+    single = scene.certify_path(q0[None])
+    assert single.certified == scene.collision_free(q0)
+
+
+def test_bad_arguments_are_scene_errors():
+    scene = cluttered(1, 2)
+    q = PANDA.home
+    with pytest.raises(SceneError, match="same number"):
+        scene.certify_segments(np.stack([q, q]), q[None])
+    with pytest.raises(SceneError, match="tolerance"):
+        scene.certify_segments(q, q, tolerance=0.0)
+    with pytest.raises(SceneError, match="clearance"):
+        scene.segment_free(q, q, clearance=-1)
+    with pytest.raises(SceneError, match="durations"):
+        scene.certify_path(np.stack([q, q, q]), durations=[0.1])
+    with pytest.raises(SceneError, match="duration"):
+        scene.certify_segments(q, q, duration=-1.0)
+    with pytest.raises(drake_mh.errors.DrakeMhError):
+        scene.certify_segments(q[:3], q[:3])
