@@ -106,15 +106,25 @@ class CollisionModel:
     def _kernel_args(self) -> tuple:
         return self.chain_arrays + self.model_arrays
 
+    def free_function(self, obstacles: tuple):
+        """``f(QT (nq, N), clearance, self_clearance) -> (N,) bool`` against ``obstacles``: the
+        kernel :func:`._collision_kernels.collision_free` with every array bound once (a call
+        from Python then costs the kernel plus about a microsecond)."""
+        kinds, R_WO, p_WO, _, dims = obstacles
+        static = self._kernel_args() + (kinds, R_WO, p_WO, dims, bounding_radii(obstacles)) + self.pair_arrays
+        kernel, empty = K.collision_free, np.empty
+
+        def free(QT, clearance, self_clearance):
+            out = empty(QT.shape[1], np.bool_)
+            # squared tests need a positive clearance: 1e-12 m stands for "touching is a collision"
+            kernel(QT, max(clearance, 1e-12), max(self_clearance, 1e-12), *static, out)
+            return out
+
+        return free
+
     def free(self, QT: np.ndarray, obstacles: tuple, clearance: float, self_clearance: float) -> np.ndarray:
         """``(N,)`` bool: :func:`._collision_kernels.collision_free` of ``QT (nq, N)``."""
-        out = np.empty(QT.shape[1], bool)
-        kinds, R_WO, p_WO, _, dims = obstacles
-        # squared tests need a positive clearance: 1e-12 m stands for "touching is a collision"
-        K.collision_free(QT, max(float(clearance), 1e-12), max(float(self_clearance), 1e-12),
-                         *self._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(obstacles),
-                         *self.pair_arrays, out)
-        return out
+        return self.free_function(obstacles)(QT, float(clearance), float(self_clearance))
 
     def clearances(self, QT: np.ndarray, obstacles: tuple, per_obstacle: bool, fine_below: float = np.inf,
                    tau=None) -> np.ndarray:

@@ -23,6 +23,7 @@ A robot without collision geometry has no clearance: every query that needs one 
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -120,6 +121,8 @@ class Scene:
         self._robot_shapes: dict = {}
         self._self_link_pairs: list = []  # link pairs Drake's filter keeps (self_collision only)
         self._obstacle_arrays = None  # the obstacles as the compiled kernels read them (batch.py)
+        self._free_function = None
+        self._q_shape = (robot.nq,)
         self._self_capsule_pairs: list = []
         inspector = robot.scene_graph.model_inspector()
         self._robot_ids = [g for g in inspector.GetAllGeometryIds(Role.kProximity)
@@ -483,7 +486,15 @@ class Scene:
 
         if self._obstacle_arrays is None:
             self._obstacle_arrays = obstacle_arrays(self._obstacles.values())
+            self._free_function = None
         return self._obstacle_arrays
+
+    def _free(self):
+        """The compiled boolean query bound to the current obstacles (rebuilt when they change)."""
+        arrays = self.obstacle_arrays
+        if self._free_function is None:
+            self._free_function = self.collision_model.free_function(arrays)
+        return self._free_function
 
     def collision_free(self, Q, clearance: float = 0.0, self_clearance: float = 0.0):
         """Whether each configuration is certified free: every sphere of the model at least
@@ -506,13 +517,19 @@ class Scene:
         """
         from drake_mh.scene.segments import check_clearance
 
-        self._require_geometry()
-        clearance = check_clearance(clearance, "clearance")
-        self_clearance = check_clearance(self_clearance, "self_clearance")
+        if not self._robot_ids:
+            self._require_geometry()
+        if clearance != 0.0 or self_clearance != 0.0 or type(clearance) is not float:
+            clearance = check_clearance(clearance, "clearance")
+            self_clearance = check_clearance(self_clearance, "self_clearance")
+        free = self._free()
+        if type(Q) is np.ndarray and Q.dtype == np.float64 and Q.shape == self._q_shape \
+                and math.isfinite(Q.dot(Q)):  # one valid configuration: no copy, no checks
+            return bool(free(Q.reshape(-1, 1), clearance, self_clearance)[0])
         one = np.ndim(Q) == 1
         QT = self.robot.batch._transposed(Q)
-        free = self.collision_model.free(QT, self.obstacle_arrays, clearance, self_clearance)
-        return bool(free[0]) if one else free
+        out = free(QT, clearance, self_clearance)
+        return bool(out[0]) if one else out
 
     def segment_free(self, q_a, q_b, clearance: float = 0.0, self_clearance: float = 0.0) -> bool:
         """Whether the straight joint-space motion ``q_a -> q_b`` is certified free *for every
