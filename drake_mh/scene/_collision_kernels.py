@@ -170,14 +170,15 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
     """``out (N,)``: every sphere at least ``clearance`` from every obstacle and every checked
     link pair at least ``self_clearance`` apart (both > 0: the tests compare squares)."""
     F, G, N, K = parent.shape[0], g_anchor.shape[0], QT.shape[1], kinds.shape[0]
-    R, p = np.empty((F, 3, 3, LANES)), np.empty((F, 3, LANES))
-    sn, cs = np.empty(LANES), np.empty(LANES)
-    Gx, Gy, Gz = np.empty((G, LANES)), np.empty((G, LANES)), np.empty((G, LANES))
-    cx, cy, cz = np.empty(LANES), np.empty(LANES), np.empty(LANES)
-    alive, near, ok = np.empty(LANES, np.bool_), np.empty(LANES, np.bool_), np.empty(LANES, np.bool_)
-    idx = np.empty(LANES, np.int64)
-    pc, Rc = np.empty((3, LANES)), np.empty((3, 3, LANES))
-    ccx, ccy, ccz = np.empty(LANES), np.empty(LANES), np.empty(LANES)
+    L = min(LANES, N)  # one configuration allocates one lane
+    R, p = np.empty((F, 3, 3, L)), np.empty((F, 3, L))
+    sn, cs = np.empty(L), np.empty(L)
+    Gx, Gy, Gz = np.empty((G, L)), np.empty((G, L)), np.empty((G, L))
+    cx, cy, cz = np.empty(L), np.empty(L), np.empty(L)
+    alive, near, ok = np.empty(L, np.bool_), np.empty(L, np.bool_), np.empty(L, np.bool_)
+    idx = np.empty(L, np.int64)
+    pc, Rc = np.empty((3, L)), np.empty((3, 3, L))
+    ccx, ccy, ccz = np.empty(L), np.empty(L), np.empty(L)
     for n0 in range(0, N, LANES):
         m = used = min(LANES, N - n0)
         _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
@@ -394,3 +395,76 @@ def link_clearances(QT, tau, fine_below, per_obstacle, parent, KR, Kp, perm, kin
                     v = _pair_min(b, g_anchor[ga], g_anchor[gb], g_start[ga], g_start[ga + 1], g_start[gb],
                                   g_start[gb + 1], s_offset, s_radius, R, p)
                 out[n0 + b, G + i] = v
+
+
+@numba.njit(cache=True, inline="always")
+def _unpack(ints, floats):
+    """Views of the arrays :func:`pack` laid out in two buffers (no copies)."""
+    F, G, S, K, P = ints[0], ints[1], ints[2], ints[3], ints[4]
+    i = 5
+    parent = ints[i:i + F]
+    i += F
+    perm = ints[i:i + 3 * F].reshape((F, 3))
+    i += 3 * F
+    kind = ints[i:i + F]
+    i += F
+    qidx = ints[i:i + F]
+    i += F
+    g_anchor = ints[i:i + G]
+    i += G
+    g_start = ints[i:i + G + 1]
+    i += G + 1
+    kinds = ints[i:i + K]
+    i += K
+    pair_a = ints[i:i + P]
+    i += P
+    pair_b = ints[i:i + P]
+    f = 0
+    KR = floats[f:f + 9 * F].reshape((F, 3, 3))
+    f += 9 * F
+    Kp = floats[f:f + 3 * F].reshape((F, 3))
+    f += 3 * F
+    g_offset = floats[f:f + 3 * G].reshape((G, 3))
+    f += 3 * G
+    g_radius = floats[f:f + G]
+    f += G
+    s_offset = floats[f:f + 3 * S].reshape((S, 3))
+    f += 3 * S
+    s_radius = floats[f:f + S]
+    f += S
+    R_WO = floats[f:f + 9 * K].reshape((K, 3, 3))
+    f += 9 * K
+    p_WO = floats[f:f + 3 * K].reshape((K, 3))
+    f += 3 * K
+    dims = floats[f:f + 3 * K].reshape((K, 3))
+    f += 3 * K
+    o_radius = floats[f:f + K]
+    return (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
+            kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b)
+
+
+def pack(parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
+         kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b):
+    """``(ints, floats)``: the arrays of :func:`collision_free` in two buffers, so that a call
+    from Python passes 6 arguments instead of 23 (numba's dispatch costs per argument)."""
+    sizes = [len(parent), len(g_anchor), len(s_radius), len(kinds), len(pair_a)]
+    ints = np.concatenate([np.asarray(sizes), parent, np.ravel(perm), kind, qidx, g_anchor, g_start, kinds,
+                           pair_a, pair_b]).astype(np.int64)
+    floats = np.concatenate([np.ravel(a) for a in (KR, Kp, g_offset, g_radius, s_offset, s_radius, R_WO, p_WO,
+                                                     dims, o_radius)]).astype(np.float64)
+    return np.ascontiguousarray(ints), np.ascontiguousarray(floats)
+
+
+@numba.njit(cache=True)
+def collision_free_packed(QT, clearance, self_clearance, ints, floats, out):
+    """:func:`collision_free` on the buffers of :func:`pack`; ``False`` (nothing computed) if
+    ``QT`` holds a NaN or an infinity (checked here, without fast-math)."""
+    for j in range(QT.shape[0]):
+        for n in range(QT.shape[1]):
+            if not math.isfinite(QT[j, n]):
+                return False
+    (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
+     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b) = _unpack(ints, floats)
+    collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius,
+                   g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, out)
+    return True

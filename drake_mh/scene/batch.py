@@ -107,24 +107,29 @@ class CollisionModel:
         return self.chain_arrays + self.model_arrays
 
     def free_function(self, obstacles: tuple):
-        """``f(QT (nq, N), clearance, self_clearance) -> (N,) bool`` against ``obstacles``: the
-        kernel :func:`._collision_kernels.collision_free` with every array bound once (a call
-        from Python then costs the kernel plus about a microsecond)."""
+        """``f(QT (nq, N), clearance, self_clearance) -> (N,) bool`` against ``obstacles`` (None if
+        ``QT`` is not finite): :func:`._collision_kernels.collision_free` with every array packed
+        and bound once (a call from Python then costs the kernel plus about a microsecond)."""
         kinds, R_WO, p_WO, _, dims = obstacles
-        static = self._kernel_args() + (kinds, R_WO, p_WO, dims, bounding_radii(obstacles)) + self.pair_arrays
-        kernel, empty = K.collision_free, np.empty
+        ints, floats = K.pack(*self._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(obstacles),
+                              *self.pair_arrays)
+        kernel, empty, boolean = K.collision_free_packed, np.empty, np.bool_
 
         def free(QT, clearance, self_clearance):
-            out = empty(QT.shape[1], np.bool_)
+            out = empty(QT.shape[1], boolean)
             # squared tests need a positive clearance: 1e-12 m stands for "touching is a collision"
-            kernel(QT, max(clearance, 1e-12), max(self_clearance, 1e-12), *static, out)
+            if not kernel(QT, max(clearance, 1e-12), max(self_clearance, 1e-12), ints, floats, out):
+                return None  # a NaN or an infinity in QT
             return out
 
         return free
 
     def free(self, QT: np.ndarray, obstacles: tuple, clearance: float, self_clearance: float) -> np.ndarray:
         """``(N,)`` bool: :func:`._collision_kernels.collision_free` of ``QT (nq, N)``."""
-        return self.free_function(obstacles)(QT, float(clearance), float(self_clearance))
+        out = self.free_function(obstacles)(QT, float(clearance), float(self_clearance))
+        if out is None:
+            raise ValueError("configurations must be finite")  # Scene checks them first
+        return out
 
     def clearances(self, QT: np.ndarray, obstacles: tuple, per_obstacle: bool, fine_below: float = np.inf,
                    tau=None) -> np.ndarray:
