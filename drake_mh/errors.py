@@ -380,3 +380,8 @@ class InfeasibleComponent(DrakeMhError, ValueError):
         self.component = component
         self.reason = reason
         super().__init__(f"component {component!r}: no feasible constant k: {reason}")
+
+
+class InvalidMotionProblem(DrakeMhError, ValueError):
+    """A point-to-point motion problem is ill-posed (start or goal shape, limits, collisions,
+    clearance, scene of another robot). The message names the argument and how to fix it."""

@@ -1,0 +1,70 @@
+"""``MotionResult``: one answer of :func:`drake_mh.planning.solve_motion`, verified."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class MotionResult:
+    """A planned motion and its verdict, the same for every method.
+
+    The motion is the piecewise-linear joint-space path through ``path``'s rows; ``trajectory``
+    is that path retimed under the robot's limits (toppra through the waypoints where its
+    spline is certified clear too, otherwise ruckig, which stops at every waypoint and follows
+    the straight segments exactly).
+
+    Attributes:
+        method: the planner's name.
+        success: verified (:mod:`drake_mh.planning.verify`): limits, start, goal, the whole
+            motion certified collision-free, a certified trajectory. Never a solver's flag.
+        path: ``(M, nq)`` waypoints [rad], or ``None`` when the method found nothing.
+        message: why it failed, or a summary.
+        planning_time: wall-clock seconds of planning (neither goal IK nor verification).
+        cpu_time: CPU seconds of planning.
+        verify_time: wall-clock seconds of the verification and retiming.
+        min_clearance: certified lower bound of the obstacle clearance along the executed
+            motion [m] (NaN when not certified).
+        path_length: ``Σ ||q_{i+1} - q_i||`` [rad].
+        trajectory: the retimed :class:`drake_mh.trajectories.Trajectory` (``None`` if none).
+        duration: its duration [s] (NaN if none).
+        max_jerk: largest joint jerk along it [rad/s³] (sampled; NaN if none).
+        goal_index: which goal configuration the path reaches (pose goals: of the IK answers).
+        goal_time: seconds spent on the goal configurations of a pose goal (0 when cached
+            from an earlier method on the same problem, or for configuration goals).
+        seed: the seed the method ran with.
+        info: method-specific data (tree sizes, evaluations, ...).
+    """
+
+    method: str
+    success: bool = False
+    path: np.ndarray | None = None
+    message: str = ""
+    planning_time: float = float("nan")
+    cpu_time: float = float("nan")
+    verify_time: float = float("nan")
+    min_clearance: float = float("nan")
+    path_length: float = float("nan")
+    trajectory: object = None
+    duration: float = float("nan")
+    max_jerk: float = float("nan")
+    goal_index: int | None = None
+    goal_time: float = 0.0
+    seed: object = None
+    info: dict = field(default_factory=dict)
+
+    def record(self) -> dict:
+        """The scalar fields, for studies."""
+        return {"method": self.method, "success": bool(self.success), "planning_time": self.planning_time,
+                "cpu_time": self.cpu_time, "verify_time": self.verify_time, "min_clearance": self.min_clearance,
+                "path_length": self.path_length, "duration": self.duration, "max_jerk": self.max_jerk,
+                "waypoints": 0 if self.path is None else int(len(self.path)), "message": self.message}
+
+    def __repr__(self) -> str:
+        if not self.success:
+            return f"MotionResult({self.method}: failed after {self.planning_time * 1e3:.2f} ms: {self.message})"
+        return (f"MotionResult({self.method}: {len(self.path)} waypoints, planned in {self.planning_time * 1e3:.2f} ms, "
+                f"path {self.path_length:.3f} rad, {self.duration:.2f} s retimed, certified clearance "
+                f"{self.min_clearance * 1e3:.1f} mm)")

@@ -1,0 +1,143 @@
+"""``solve_motion``: one entry point for every motion planner, one verification for all.
+
+Methods register themselves with :func:`register` (one folder each under
+:mod:`drake_mh.planning`); :func:`available_motion_methods` lists them. A method is a function
+``plan(problem, goals (G, nq), rng, deadline, budget, **options) -> (path (M, nq) | None, info)``
+that plans from ``problem.q_start`` to any row of ``goals``; it may use ``problem.is_free`` and
+``problem.scene.certify_segments`` as it likes, but its answer is verified by
+:func:`drake_mh.planning.verify.verify_motion`, never by its own flags.
+
+A pose goal is turned into goal configurations here, once per problem (collision-free IK, the
+same answers for every method; their time is reported apart, as ``goal_time``).
+"""
+
+from __future__ import annotations
+
+import numbers
+import time
+
+import numpy as np
+
+from drake_mh.errors import InvalidArgument, InvalidMotionProblem, UnknownMethod
+from drake_mh.planning.problem import MotionProblem
+from drake_mh.planning.result import MotionResult
+from drake_mh.planning.verify import verify_motion
+
+_METHODS: dict = {}
+_LOADED = False
+
+#: submodules of drake_mh.planning that are not planners; every other one registers its methods
+#: when imported (an optional peer that cannot be imported registers nothing)
+_CORE = frozenset({"problem", "result", "verify", "solve", "problems"})
+
+
+def register(name: str, description: str):
+    """Decorator: register a planner under ``name`` (see the module docstring)."""
+
+    def wrap(function):
+        _METHODS[name] = (function, description)
+        return function
+
+    return wrap
+
+
+def _load() -> None:
+    global _LOADED
+    if not _LOADED:
+        import importlib
+        import pkgutil
+
+        import drake_mh.planning as package
+
+        for module in pkgutil.iter_modules(package.__path__):
+            if module.name not in _CORE and not module.name.startswith("_"):
+                importlib.import_module(f"drake_mh.planning.{module.name}")
+        _LOADED = True
+
+
+def available_motion_methods() -> dict:
+    """``{name: one-line description}`` of the registered planners."""
+    _load()
+    return {name: description for name, (_, description) in _METHODS.items()}
+
+
+def goal_configurations(problem: MotionProblem, count: int = 4, timeout: float | None = 5.0) -> np.ndarray:
+    """The problem's goal configurations; for a pose goal, up to ``count`` collision-free IK
+    answers (hybrid IK with the scene, seeds 0, 1, ..., each verified with Drake, then
+    certified free under the sphere model with the problem's clearances), computed once per
+    problem and shared by every method (their time is :attr:`MotionResult.goal_time`, not
+    planning time).
+
+    Raises:
+        InvalidMotionProblem: no collision-free IK answer for the pose.
+    """
+    if problem.goal_pose is None:
+        return problem.goal_configurations
+    cached = problem.__dict__.get("_goal_cache")
+    if cached is not None:
+        return cached
+    from drake_mh.ik import IKProblem, solve_ik
+
+    ik = IKProblem(problem.robot, problem.goal_pose, scene=problem.scene, clearance=problem.clearance,
+                   frame=problem.frame)
+    found = []
+    for seed in range(3 * count):
+        answer = solve_ik(ik, "hybrid", seed=seed, timeout=timeout)
+        if answer.success and problem.is_free(answer.q):
+            if not found or min(np.max(np.abs(answer.q - q)) for q in found) > 1e-3:
+                found.append(answer.q)
+        if len(found) >= count:
+            break
+    if not found:
+        raise InvalidMotionProblem("no collision-free IK answer for the goal pose: it may be out of reach or "
+                                   "inside an obstacle; check it with drake_mh.solve_ik")
+    goals = np.asarray(found)
+    object.__setattr__(problem, "_goal_cache", goals)
+    return goals
+
+
+def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, timeout: float | None = 10.0,
+                 budget: int | None = None, retime: bool = True, **options) -> MotionResult:
+    """Plan a motion with any registered method; the answer is verified the same way for all.
+
+    Args:
+        problem: the :class:`MotionProblem`.
+        method: a name of :func:`available_motion_methods`.
+        seed: seed of the method's randomness (same seed, same path when the run ends by
+            success or budget rather than by the timeout).
+        timeout: [s] wall-clock limit of planning (``None``: none).
+        budget: the method's own unit (tree nodes, evaluations, solver iterations).
+        retime: also retime and certify a trajectory (toppra, else ruckig).
+        **options: the method's options.
+
+    Returns:
+        A verified :class:`MotionResult` (``success`` recomputed, never the method's flag).
+
+    Raises:
+        UnknownMethod, InvalidArgument, InvalidMotionProblem.
+    """
+    _load()
+    if not isinstance(problem, MotionProblem):
+        raise InvalidArgument(f"problem must be a drake_mh.planning.MotionProblem, got {type(problem).__name__}")
+    if not isinstance(method, str) or method not in _METHODS:
+        raise UnknownMethod(method, list(_METHODS), what="motion planning method")
+    if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, numbers.Real)
+                                or not np.isfinite(timeout) or timeout <= 0):
+        raise InvalidArgument(f"timeout must be a number of seconds > 0 or None, got {timeout!r}")
+    if budget is not None and (isinstance(budget, bool) or not isinstance(budget, numbers.Integral) or budget < 1):
+        raise InvalidArgument(f"budget must be an integer >= 1 or None, got {budget!r}")
+    function, _ = _METHODS[method]
+    rng = np.random.default_rng(seed)
+    goal_start = time.perf_counter()
+    goals = goal_configurations(problem)
+    goal_time = time.perf_counter() - goal_start
+    wall, cpu = time.perf_counter(), time.process_time()
+    deadline = None if timeout is None else wall + float(timeout)
+    path, info = function(problem, goals, rng, deadline, budget, **options)
+    result = MotionResult(method, seed=seed, info=dict(info or {}), goal_time=goal_time)
+    result.planning_time = time.perf_counter() - wall
+    result.cpu_time = time.process_time() - cpu
+    if path is None:
+        result.message = result.info.pop("message", "no path found")
+        return result
+    return verify_motion(problem, path, method, result, retime=retime)

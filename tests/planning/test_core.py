@@ -1,0 +1,100 @@
+"""MotionProblem, solve_motion's registry and the one verification every planner gets."""
+
+import numpy as np
+import pytest
+
+import drake_mh
+from drake_mh.errors import InvalidArgument, InvalidMotionProblem, UnknownMethod
+from drake_mh.planning import MotionProblem, available_motion_methods, solve_motion, verify_motion
+from drake_mh.planning.verify import chord_deviation
+from drake_mh.scene import Scene, Sphere
+
+PANDA = drake_mh.load_robot("panda")
+
+
+def ball_scene():
+    scene = Scene(PANDA)
+    scene.add("ball", Sphere(0.1), [0.5, 0.0, 0.5])
+    return scene
+
+
+def test_straight_line_is_verified_and_retimed():
+    q_goal = PANDA.home.copy()
+    q_goal[0] += 1.0
+    result = solve_motion(MotionProblem(PANDA, ball_scene(), PANDA.home, q_goal), "straight")
+    assert result.success and result.path.shape == (2, PANDA.nq)
+    assert result.trajectory is not None and result.duration > 0 and result.min_clearance > 0
+    t = np.linspace(0, result.duration, 50)
+    exact = ball_scene().exact_min_distance(result.trajectory.position(t))
+    assert exact.min() >= result.min_clearance - 1e-9
+    assert "straight" in available_motion_methods()
+
+
+def test_straight_line_through_an_obstacle_fails_honestly():
+    scene = Scene(PANDA)
+    q_goal = PANDA.home.copy()
+    q_goal[0] += 1.5
+    middle = PANDA.home.copy()
+    middle[0] += 0.75
+    scene.add("wall", Sphere(0.08), PANDA.fk(middle)[:3, 3])
+    result = solve_motion(MotionProblem(PANDA, scene, PANDA.home, q_goal), "straight")
+    assert not result.success and "not certified" in result.message and np.isnan(result.min_clearance)
+
+
+def test_pose_goal_uses_collision_free_ik_once():
+    q_goal = PANDA.home.copy()
+    q_goal[0] += 0.6
+    problem = MotionProblem(PANDA, ball_scene(), PANDA.home, PANDA.fk(q_goal))
+    first = solve_motion(problem, "straight")
+    second = solve_motion(problem, "straight", seed=3)
+    assert second.goal_time < first.goal_time or first.goal_time == 0
+    if first.success:
+        X = PANDA.fk_drake(first.path[-1])
+        assert np.linalg.norm(X[:3, 3] - PANDA.fk(q_goal)[:3, 3]) <= 1e-3
+
+
+def test_verification_rejects_bad_paths():
+    q_goal = PANDA.home.copy()
+    q_goal[0] -= 0.8
+    problem = MotionProblem(PANDA, ball_scene(), PANDA.home, q_goal)
+    assert not verify_motion(problem, np.stack([PANDA.home + 0.01, q_goal]), "x").success  # wrong start
+    assert not verify_motion(problem, np.stack([PANDA.home, q_goal + 0.01]), "x").success  # wrong goal
+    outside = np.stack([PANDA.home, PANDA.upper + 0.1, q_goal])
+    assert "limits" in verify_motion(problem, outside, "x").message
+    assert not verify_motion(problem, np.full((2, 3), 0.0), "x").success
+    assert verify_motion(problem, None, "x").message == "no path found"
+
+
+def test_problem_errors():
+    scene = ball_scene()
+    with pytest.raises(InvalidMotionProblem, match="q_start"):
+        MotionProblem(PANDA, scene, PANDA.upper + 1.0, PANDA.home)
+    with pytest.raises(InvalidMotionProblem, match="collision"):
+        blocked = Scene(PANDA)
+        blocked.add("on_flange", Sphere(0.1), PANDA.fk(PANDA.home)[:3, 3])
+        MotionProblem(PANDA, blocked, PANDA.home, PANDA.home)
+    with pytest.raises(InvalidMotionProblem, match="scene"):
+        MotionProblem(PANDA, Scene(drake_mh.load_robot("panda")), PANDA.home, PANDA.home)
+    with pytest.raises(InvalidMotionProblem, match="clearance"):
+        MotionProblem(PANDA, scene, PANDA.home, PANDA.home, clearance=-1)
+    with pytest.raises(InvalidMotionProblem, match="goal"):
+        MotionProblem(PANDA, scene, PANDA.home, np.zeros(3))
+    problem = MotionProblem(PANDA, scene, PANDA.home, PANDA.home)
+    with pytest.raises(UnknownMethod):
+        solve_motion(problem, "nope")
+    with pytest.raises(InvalidArgument):
+        solve_motion(problem, "straight", timeout=-1)
+
+
+def test_chord_deviation_bounds_the_spline():
+    from scipy.interpolate import CubicSpline
+
+    rng = np.random.default_rng(0)
+    W = rng.normal(size=(6, 3))
+    s = np.r_[0, np.cumsum(np.linalg.norm(np.diff(W, axis=0), axis=1))]
+    spline = CubicSpline(s, W)
+    bound = chord_deviation(spline)
+    for i in range(len(s) - 1):
+        u = np.linspace(s[i], s[i + 1], 400)
+        chord = W[i] + (u - s[i])[:, None] / (s[i + 1] - s[i]) * (W[i + 1] - W[i])
+        assert np.all(np.max(np.abs(spline(u) - chord), axis=0) <= bound[i] + 1e-12)
