@@ -312,15 +312,16 @@ def link_clearances(QT, tau, fine_below, per_obstacle, parent, KR, Kp, perm, kin
     ``fine_below``).
     """
     F, G, N, K, P = parent.shape[0], g_anchor.shape[0], QT.shape[1], kinds.shape[0], pair_a.shape[0]
-    R, p = np.empty((F, 3, 3, LANES)), np.empty((F, 3, LANES))
-    sn, cs = np.empty(LANES), np.empty(LANES)
-    Gx, Gy, Gz = np.empty((G, LANES)), np.empty((G, LANES)), np.empty((G, LANES))
-    cx, cy, cz, sd, tb = np.empty(LANES), np.empty(LANES), np.empty(LANES), np.empty(LANES), np.empty(LANES)
-    lb = np.empty((G, K, LANES))
-    best = np.empty((max(K, G), LANES))
-    idx = np.empty(LANES, np.int64)
-    pc, Rc = np.empty((3, LANES)), np.empty((3, 3, LANES))
-    ccx, ccy, ccz, tc, sc = np.empty(LANES), np.empty(LANES), np.empty(LANES), np.empty(LANES), np.empty(LANES)
+    L = max(1, min(LANES, N))  # a short batch (segment bisection) allocates its lanes only
+    R, p = np.empty((F, 3, 3, L)), np.empty((F, 3, L))
+    sn, cs = np.empty(L), np.empty(L)
+    Gx, Gy, Gz = np.empty((G, L)), np.empty((G, L)), np.empty((G, L))
+    cx, cy, cz, sd, tb = np.empty(L), np.empty(L), np.empty(L), np.empty(L), np.empty(L)
+    lb = np.empty((G, K, L))
+    best = np.empty((max(K, G), L))
+    idx = np.empty(L, np.int64)
+    pc, Rc = np.empty((3, L)), np.empty((3, 3, L))
+    ccx, ccy, ccz, tc, sc = np.empty(L), np.empty(L), np.empty(L), np.empty(L), np.empty(L)
     for n0 in range(0, N, LANES):
         m = used = min(LANES, N - n0)  # a short batch (segment bisection) computes its lanes only
         for b in range(m):
