@@ -244,8 +244,9 @@ def significance(ok: list[dict]) -> list[dict]:
     """Per function and D, each of our entries against each peer of its algorithm.
 
     Returns:
-        One dict per test: ``algorithm, ours, peer, function, dim, n_ours, n_peer, p, A``
-        and ``p_holm`` (Holm's step-down correction over all the returned tests).
+        One dict per test: ``algorithm, ours, peer, function, dim, n_ours, n_peer, p, A``,
+        ``p_holm`` (Holm's step-down correction over the tests of the same function and D, the
+        family of one column of the table) and ``p_holm_all`` (over all the returned tests).
     """
     from drake_mh.study.report.stats import holm
 
@@ -264,7 +265,11 @@ def significance(ok: list[dict]) -> list[dict]:
                                   "n_ours": len(a), "n_peer": len(b), "p": p, "A": effect})
     adjusted = holm(np.array([t["p"] for t in tests], dtype=float)) if tests else []
     for t, q in zip(tests, adjusted):
-        t["p_holm"] = float(q)
+        t["p_holm_all"] = float(q)
+    for cell in {(t["function"], t["dim"]) for t in tests}:
+        family = [t for t in tests if (t["function"], t["dim"]) == cell]
+        for t, q in zip(family, holm(np.array([t["p"] for t in family], dtype=float))):
+            t["p_holm"] = float(q)
     return tests
 
 
@@ -282,6 +287,12 @@ def summarize(records: list[dict]) -> str:
     ok = [r for r in records if r.get("status") == "ok"]
     if not ok:
         return ""
+    cells = {(r["function"], r["dim"], r["method"]) for r in ok}
+    per_rep = {rep: {(r["function"], r["dim"], r["method"]) for r in ok if r["rep"] == rep}
+               for rep in {r["rep"] for r in ok}}
+    partial = sorted(rep for rep, seen in per_rep.items() if seen != cells)
+    if len(partial) < len(per_rep):      # a stopped run (--first-by rep): only complete replicates
+        ok = [r for r in ok if r["rep"] not in partial]
     loads = np.array([r["load"] for r in ok], dtype=float)
     functions = sorted({r["function"] for r in ok})
     dims = sorted({r["dim"] for r in ok})
@@ -295,6 +306,8 @@ def summarize(records: list[dict]) -> str:
              "`CPU vs ours` = median over the cases of (its wall / CPU time / that of our default entry of the "
              "algorithm) on the same function and replicate (a run that reaches the target early is shorter: "
              "`us / evaluation` = median wall time per counted evaluation, objective included).", ""]
+    if partial and reps < len(per_rep):
+        lines += [f"Left out: replicate(s) {', '.join(map(str, partial))}, not complete (the run was stopped).", ""]
     missing = [lib for lib in LIBRARIES if not installed(lib)]
     if missing:
         lines += [f"Not installed: {', '.join(missing)}; their rows are missing (NiaPy: `pip install -e '.[peers]'`; "
@@ -330,13 +343,18 @@ def summarize(records: list[dict]) -> str:
                          f"{ratios[0]} | {ratios[1]} |")
     tests = significance(ok)
     if tests:
-        n_better = sum(t["p_holm"] <= SIGNIFICANCE and t["A"] > 0.5 for t in tests)
-        n_worse = sum(t["p_holm"] <= SIGNIFICANCE and t["A"] < 0.5 for t in tests)
-        lines += ["", f"Final error, ours against each peer of the algorithm, per function: Wilcoxon rank-sum test "
-                  f"(two-sided; runs are independent, nothing pairs them), Holm-corrected over all {len(tests)} tests "
-                  f"of this table, level {SIGNIFICANCE}. Cell: **better** / worse (ours has the lower / higher "
-                  "errors; Holm p) or n.s. (Holm p). "
-                  f"Ours significantly better in {n_better}, worse in {n_worse} of {len(tests)}.", "",
+        def count(key, better):
+            return sum(t[key] <= SIGNIFICANCE and (t["A"] > 0.5) == better for t in tests)
+
+        n_min = min(min(t["n_ours"], t["n_peer"]) for t in tests)
+        lines += ["", "Final error, ours against each peer of the algorithm, per function and D: Wilcoxon rank-sum "
+                  "test (two-sided; runs are independent, nothing pairs them), Holm-corrected over the "
+                  f"{len(tests) // max(len(functions) * len(dims), 1)} tests of the same function and D (one column), "
+                  f"level {SIGNIFICANCE}. Cell: **better** / worse (ours has the lower / higher errors; Holm p) or "
+                  f"n.s. (Holm p). Ours significantly better in {count('p_holm', True)}, worse in "
+                  f"{count('p_holm', False)} of {len(tests)} (Holm over all {len(tests)} tests at once: "
+                  f"{count('p_holm_all', True)} / {count('p_holm_all', False)}). With {n_min} runs a side the "
+                  f"smallest possible two-sided p is {2 / math.comb(2 * n_min, n_min):.1e}.", "",
                   "| ours | peer | " + " | ".join(f"F{k}" for k in functions) + " |",
                   "|---" * (len(functions) + 2) + "|"]
         for algorithm in ALGORITHMS:

@@ -1,4 +1,4 @@
-"""optimizer_peers' statistics: rank-sum tests per cell, Holm over the table, mealpy's run length."""
+"""optimizer_peers' statistics: rank-sum tests per cell, Holm per function and D, mealpy's run length."""
 
 from __future__ import annotations
 
@@ -47,7 +47,10 @@ def test_significance_pairs_each_of_our_entries_with_each_peer_and_holm_corrects
     assert [(t["ours"], t["peer"], t["function"]) for t in tests] == [
         ("woa", "mealpy", 1), ("woa", "mealpy", 3), ("woa_greedy", "mealpy", 1), ("woa_greedy", "mealpy", 3)]
     assert all(t["n_ours"] == t["n_peer"] == 10 for t in tests)
-    np.testing.assert_allclose([t["p_holm"] for t in tests], holm(np.array([t["p"] for t in tests])))
+    np.testing.assert_allclose([t["p_holm_all"] for t in tests], holm(np.array([t["p"] for t in tests])))
+    for function in (1, 3):                                  # one family per function and D
+        family = [t for t in tests if t["function"] == function]
+        np.testing.assert_allclose([t["p_holm"] for t in family], holm(np.array([t["p"] for t in family])))
     verdicts = [peers._verdict(t).split()[0] for t in tests]
     assert verdicts == ["worse", "worse", "**better**", "**better**"]
 
@@ -62,3 +65,16 @@ def test_variants_run_with_the_peers_population(peers):
     assert peers.OURS["woa_greedy"] == ("woa", "woa_greedy", {})
     assert peers.OURS["de_F1"] == ("de", "de", {"F": 1.0})
     assert [m for _, m in peers._entries("woa")][:2] == ["woa", "woa_greedy"]
+
+
+def test_summary_keeps_complete_replicates_only(peers):
+    records = []
+    for rep in range(3):
+        for library, method in (("drake_mh", "woa"), ("mealpy", "mealpy_woa")):
+            if rep == 2 and library == "mealpy":
+                continue                                     # the run was stopped in replicate 2
+            records.append({"status": "ok", "algorithm": "woa", "library": library, "method": method, "dim": 10,
+                            "function": 5, "rep": rep, "error": 1.0 + rep, "time": 1.0, "cpu_time": 1.0,
+                            "nfe": 10, "budget": 10, "load": 1.0})
+    text = peers.summarize(records)
+    assert "2 replicate(s)" in text and "Left out: replicate(s) 2" in text
