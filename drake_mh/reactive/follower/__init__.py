@@ -11,10 +11,13 @@ Files:
 * :mod:`.follower` — :class:`RegeneratingFollower`, :class:`FollowerConfig`,
   :class:`RegenerationEvent` (§3.4.1, and §3.4.2 through :mod:`.replan`);
 * :mod:`.replan` — Algorithm 2: colliding path points, their windows, nearest free points;
+* :mod:`.motion`, :mod:`.detour` — not in the paper: the motion between two points certified
+  collision-free, a detour through via configurations where the straight line is not;
 * :mod:`.scenario` — the paper's dynamic-obstacle scenario (§4, Tables 2-3) as one function,
   :func:`run_framework_scenario`.
 """
 
+from drake_mh.reactive.follower.detour import ChainCertificate, Detour, DetourConfig, certify_chains, find_detour
 from drake_mh.reactive.follower.follower import (
     FollowerConfig,
     LocalIKProblem,
@@ -24,6 +27,7 @@ from drake_mh.reactive.follower.follower import (
     revolute_mask,
     wrap_toward,
 )
+from drake_mh.reactive.follower.motion import DetourRecord
 from drake_mh.reactive.follower.replan import (
     ReplanConfig,
     ReplanResult,
@@ -49,5 +53,6 @@ __all__ = [
     "revolute_mask", "wrap_toward",
     "ReplanConfig", "ReplanResult", "colliding_path_points", "collision_runs", "nearest_free_point",
     "obstacle_circumradius", "path_point_clearance", "replan_points", "replan_windows",
+    "Detour", "DetourConfig", "DetourRecord", "ChainCertificate", "certify_chains", "find_detour",
     "MOVE_AT", "OBSTACLE_MOVED", "OBSTACLE_RADIUS", "OBSTACLE_START", "PATH_EVENT", "run_framework_scenario",
 ]

@@ -37,6 +37,15 @@ previous value keeps the tool on its target and the arm clear; the 6-DOF arm's l
 are reset, and the configuration is verified with Drake again. The best configuration is
 kept and a point that no attempt solved is reported in ``failed``.
 
+Not in the paper: the motion *between* two points is certified too
+(:mod:`drake_mh.reactive.follower.motion`). After the plan and after every regeneration each
+remaining straight joint-space segment is certified collision-free for every configuration on
+it (``Scene.certify_segments``); one that is not (a branch switch around the obstacle) is replaced
+by a detour through at most two via configurations whose pieces are certified
+(:mod:`drake_mh.reactive.follower.detour`), and :meth:`RegeneratingFollower.advance` certifies the
+motion it is about to execute against the scene as it is then: without a certified motion the
+arm does not move (``halted``).
+
 Any method of :func:`drake_mh.ik.available_ik_methods` solves the IK (optimizers, hybrid,
 Jacobian and Drake baselines); Algorithm 2 runs an optimizer (the IK method when it is one).
 Same seed, same plan (budget-limited runs; a ``timeout`` makes results machine-dependent).
@@ -53,6 +62,8 @@ import numpy as np
 from drake_mh.errors import InvalidArgument, UnknownMethod
 from drake_mh.paths.continuity import LocalIKProblem, revolute_mask, solve_near, wrap_toward
 from drake_mh.paths.ik_path import joint_steps
+from drake_mh.reactive.follower.detour import DetourConfig
+from drake_mh.reactive.follower.motion import CertifiedMotion
 from drake_mh.reactive.follower.replan import (ReplanConfig, ReplanResult, collision_runs, colliding_path_points,
                                                replan_points, replan_windows)
 
@@ -104,6 +115,14 @@ class FollowerConfig:
             kept only if Drake verifies it (``RegenerationEvent.spread``).
         replan: :class:`~drake_mh.reactive.follower.replan.ReplanConfig` of Algorithm 2.
         params: optimizer options for the metaheuristic IK, as ``((name, value), ...)``.
+        motion_clearance: [m] clearance certified along every executed motion between points
+            (the conservative sphere model, every configuration on it; default 0: collision-free
+            — the points themselves keep ``clearance`` by Drake's exact distance).
+        motion_tolerance: [m] the reported certified clearance of an executed motion is within
+            this of the smallest value seen on it (default 1 mm; ``inf``: a bare certificate).
+        detour: :class:`~drake_mh.reactive.follower.detour.DetourConfig` of the search for a
+            certified connection where the straight line is not; ``None``: no search (such a
+            motion blocks the arm).
     """
 
     method: str = "e3gsa"
@@ -119,6 +138,9 @@ class FollowerConfig:
     spread_step: float | None = None
     replan: ReplanConfig = field(default_factory=ReplanConfig)
     params: tuple = ()
+    motion_clearance: float = 0.0
+    motion_tolerance: float = 1e-3
+    detour: DetourConfig | None = field(default_factory=DetourConfig)
 
     def __post_init__(self):
         from drake_mh.ik import available_ik_methods
@@ -150,6 +172,14 @@ class FollowerConfig:
             raise InvalidArgument(f"spread_step must be a positive joint step [rad] or None, got {self.spread_step!r}")
         if not isinstance(self.replan, ReplanConfig):
             raise InvalidArgument("replan must be a drake_mh.reactive.follower.ReplanConfig")
+        if not (isinstance(self.motion_clearance, (int, float)) and np.isfinite(self.motion_clearance)
+                and self.motion_clearance >= 0):
+            raise InvalidArgument(f"motion_clearance must be a length >= 0 [m], got {self.motion_clearance!r}")
+        if not (isinstance(self.motion_tolerance, (int, float)) and self.motion_tolerance > 0):
+            raise InvalidArgument(f"motion_tolerance must be > 0 [m] (inf: no tight bound), got "
+                                  f"{self.motion_tolerance!r}")
+        if self.detour is not None and not isinstance(self.detour, DetourConfig):
+            raise InvalidArgument("detour must be a drake_mh.reactive.follower.DetourConfig or None")
         object.__setattr__(self, "params", tuple(dict(self.params).items()))
 
 
@@ -174,6 +204,13 @@ class RegenerationEvent:
             (from the current configuration to the end) before and after.
         min_distance_after: smallest exact distance [m] of the remaining configurations after.
         nfe: IK evaluations spent.
+        detours: the :class:`~drake_mh.reactive.follower.motion.DetourRecord` of each remaining
+            motion between points that was not certified after the repair.
+        blocked: segments k (point k -> k + 1) left without a certified motion.
+        motion_certified: the remaining motion (from the current configuration to the end,
+            detours included) is certified against the obstacles as they are now.
+        motion_min_clearance: its certified lower bound of the clearance [m] (NaN if not
+            certified).
     """
 
     number: int
@@ -192,6 +229,10 @@ class RegenerationEvent:
     min_distance_after: float
     nfe: int
     spread: np.ndarray = field(default_factory=lambda: _EMPTY)
+    detours: tuple = ()
+    blocked: np.ndarray = field(default_factory=lambda: _EMPTY)
+    motion_certified: bool = True
+    motion_min_clearance: float = float("nan")
 
     @property
     def replanned(self) -> np.ndarray:
@@ -205,7 +246,7 @@ class RegenerationEvent:
 
     def summary(self) -> str:
         """One line for logs and the app's status."""
-        if not self.changed:
+        if not self.changed and not self.detours:
             return f"no collision predicted ({self.screened} checked with Drake, {1e3 * self.time:.1f} ms)"
         parts = [f"{self.regenerated.size} points regenerated in {self.time:.2f} s"]
         if self.replans:
@@ -214,31 +255,45 @@ class RegenerationEvent:
             parts.append(f"{self.spread.size} neighbours re-solved to spread a branch switch")
         if self.failed.size:
             parts.append(f"FAILED at {self.failed.tolist()}")
+        found = [d.segment for d in self.detours if d.found]
+        if found:
+            parts.append(f"detour around the obstacle on segments {found}")
+        if self.blocked.size:
+            parts.append(f"NO certified motion on segments {self.blocked.tolist()}")
         parts.append(f"max step {self.max_step_after:.3f} rad")
         return "; ".join(parts)
 
 
-class RegeneratingFollower:
+class RegeneratingFollower(CertifiedMotion):
     """Follows a path with a joint solution per point and repairs it when obstacles move.
 
     Args:
         robot: the :class:`~drake_mh.robot.Robot`.
         scene: the :class:`~drake_mh.scene.Scene` whose obstacles move (``scene.move``).
-        points: ``(N, 3)`` tool positions [m] (or a ``CartesianPath``).
+        points: ``(N, 3)`` tool positions [m] (or a ``CartesianPath``, whose ``times`` are then used).
         Q: ``(N, nq)`` a joint solution per point [rad].
         config: :class:`FollowerConfig`.
         seed: base seed of every regeneration.
         index: the point the arm is at.
+        times: ``(N,)`` [s] when the arm is at each point: obstacles with a velocity then move
+            during the certified motions. ``None`` (and no ``points.times``): the motions are
+            certified against the obstacles where they are.
 
     Attributes:
         points, Q: the current plan (updated by :meth:`react`).
         index: current point; ``executed`` ``(N, nq)``: the configuration each point had when
             the arm reached it (NaN ahead of the arm); ``regenerated_mask`` ``(N,)``: points
             ever regenerated; ``events``: every :class:`RegenerationEvent`.
+        vias: ``{k: (m, nq)}`` via configurations of the motion from point k to k + 1 (detours);
+            ``executed_vias``: those the arm executed; ``segment_lower`` ``(N - 1,)``: certified
+            clearance [m] of each executed motion (NaN ahead); ``detours``: every search
+            (:class:`~drake_mh.reactive.follower.motion.DetourRecord`); ``blocked``: ``{k: why}``
+            motions ahead without a certificate; ``halted``: why the last :meth:`advance` did not
+            move (``None`` if it did), ``halts``: every such ``(k, why)``.
     """
 
     def __init__(self, robot, scene, points, Q, config: FollowerConfig | None = None, seed: int = 0,
-                 index: int = 0):
+                 index: int = 0, times=None):
         P = np.array(getattr(points, "points", points), dtype=float)
         if P.ndim != 2 or P.shape[1] != 3 or len(P) < 2 or not np.all(np.isfinite(P)):
             raise InvalidArgument(f"points must be a finite (N >= 2, 3) array [m], got shape {P.shape}")
@@ -262,6 +317,12 @@ class RegeneratingFollower:
         self.regenerated_mask = np.zeros(len(P), dtype=bool)
         self.events: list[RegenerationEvent] = []
         self.plan_failed = _EMPTY
+        times = getattr(points, "times", None) if times is None else times
+        if times is not None:
+            times = np.asarray(times, dtype=float)
+            if times.shape != (len(P),) or not np.all(np.isfinite(times)) or np.any(np.diff(times) < 0):
+                raise InvalidArgument(f"times must be {len(P)} finite non-decreasing seconds, one per point")
+        self._init_motion(times)
 
     # --- construction from a path ---------------------------------------------------------
 
@@ -273,10 +334,12 @@ class RegeneratingFollower:
         Runs :func:`drake_mh.paths.ik_along_path` (each point solved near the previous
         solution: widening search boxes, displacement penalty, tidying) with the config's
         method, budget, tolerance, ``ik_clearance``, ``ref_weight`` and ``search_radii``.
-        Check ``follower.plan_failed``.
+        Check ``follower.plan_failed``. The motion between consecutive points is then certified
+        and detoured where needed (module docstring); check ``follower.blocked``.
 
         Args:
-            robot, scene, points, config, seed: as for the constructor.
+            robot, scene, points, config, seed: as for the constructor (``points.times``, if any,
+                are the times).
             q_start: configuration near which to solve the first point (``None``: free search).
             progress: ``progress(k, N)`` called after each point (the app's status line).
         """
@@ -291,9 +354,10 @@ class RegeneratingFollower:
                            position_tolerance=config.position_tolerance, scene=scene,
                            clearance=config.ik_clearance, search_radii=config.search_radii, progress=progress,
                            **dict(config.params))
-        follower = cls(robot, scene, P, jp.q, config, seed)
+        follower = cls(robot, scene, P, jp.q, config, seed, times=getattr(points, "times", None))
         failed = np.flatnonzero(~jp.success)
         follower.plan_failed = failed.astype(int)
+        follower._secure_motion(0, "plan")
         return follower
 
     # --- state ------------------------------------------------------------------------------
@@ -314,19 +378,38 @@ class RegeneratingFollower:
         return self.index >= self.n_points - 1
 
     def advance(self, steps: int = 1) -> np.ndarray:
-        """Moves the arm ``steps`` points along the plan; returns the new configuration."""
+        """Moves the arm ``steps`` points along the plan; returns the new configuration.
+
+        Each motion is certified against the scene as it is now before it is executed (module
+        docstring); where it is not and no detour is found the arm stays where it is and
+        :attr:`halted` says why.
+        """
         for _ in range(int(steps)):
             if self.done:
+                break
+            if not self._gate():
+                logger.warning("%s", self.halted)
                 break
             self.index += 1
             self.executed[self.index] = self.Q[self.index]
         return self.q
+
+    def next_motion(self) -> np.ndarray | None:
+        """The certified motion ``(m + 2, nq)`` from the current point to the next (its chain, a
+        detour if needed), checked against the scene as it is now; ``None`` if there is none
+        (:attr:`halted` says why) or the arm is at the end. :meth:`advance` checks it again."""
+        if self.done:
+            return None
+        return self.chain(self.index) if self._gate() else None
 
     def restart(self, index: int = 0) -> None:
         """Puts the arm back at ``index`` (a closed path run again); the plan is kept."""
         self.index = int(index)
         self.executed[:] = np.nan
         self.executed[: self.index + 1] = self.Q[: self.index + 1]
+        self.executed_vias.clear()
+        self.segment_lower[:] = np.nan
+        self.halted = None
 
     # --- prediction -------------------------------------------------------------------------
 
@@ -409,6 +492,9 @@ class RegeneratingFollower:
             nfe += used
         self.regenerated_mask[todo] = True
         self.regenerated_mask[spread] = True
+        self._forget_vias_around(np.union1d(todo, spread))
+        detours = self._secure_motion(self.index, number)
+        motion = self.certify_remaining()
         remaining = self.Q[lo:]
         min_after = (float(self.scene.exact_min_distance(remaining).min())
                      if remaining.size and self.scene.obstacles else np.inf)
@@ -418,7 +504,10 @@ class RegeneratingFollower:
             colliding=colliding, screened=screened, path_colliding=path_hits, replans=tuple(replans),
             regenerated=todo, failed=np.array(failed, dtype=int), detect_time=detect_time,
             time=time.perf_counter() - start, max_step_before=step_before,
-            max_step_after=self.remaining_max_step(), min_distance_after=min_after, nfe=nfe, spread=spread)
+            max_step_after=self.remaining_max_step(), min_distance_after=min_after, nfe=nfe, spread=spread,
+            detours=tuple(detours), blocked=np.array(sorted(self.blocked), dtype=int),
+            motion_certified=True if motion is None else motion.all_certified,
+            motion_min_clearance=np.inf if motion is None else motion.min_clearance)
         self.events.append(event)
         logger.info("event %d at point %d: %s", number, self.index, event.summary())
         return event

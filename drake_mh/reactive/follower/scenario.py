@@ -30,10 +30,19 @@ Choices the paper leaves open (also in ``docs/follower.md``):
   come from), so the path point lies 3 cm outside the sphere, inside the tool clearance, and
   Algorithm 2 re-plans the points around it.
 
-Every executed configuration is checked with Drake's exact signed distance against the
-obstacle pose of that moment, and the joint-space segments between consecutive points are
-checked at ``substeps`` interior samples (against the obstacle where it was at the
-segment's start: it jumps on arrival at a point).
+The follower certifies each motion between two points before it executes it, against the
+obstacle where it is during that motion (:mod:`drake_mh.reactive.follower.motion`): at the
+announcement the follower sees the new position and regenerates for it, the motion to the next
+point is then executed with the obstacle still at the old one, and it jumps on arrival. Where
+a straight joint-space line is not certified the follower detours through via configurations,
+or halts (the run then fails and says where and why).
+
+Independent checks afterwards: every executed configuration with Drake's exact signed
+distance against the obstacle pose of that moment; every executed motion (detours included)
+certified again with :meth:`drake_mh.scene.Scene.certify_path` against the obstacle where it
+was during it (``motion_certified``, ``motion_min_clearance``: a certified lower bound of the
+clearance of the whole motion, tolerance 1 mm); and, for comparison, Drake's exact distance
+at ``substeps`` interior samples of each straight piece (``min_distance_swept``).
 """
 
 from __future__ import annotations
@@ -85,7 +94,12 @@ def run_framework_scenario(method: str = "e3gsa", seed: int = 0, *, budget: int 
         substeps: interior samples per joint-space segment in the swept-motion check.
 
     Returns:
-        A flat dict: scalars (``success``, ``time`` = total regeneration time [s],
+        A flat dict: scalars (``success``: every point reached, executed motion certified
+        collision-free, points clear by Drake and on the path, nothing failed;
+        ``time`` = total regeneration time [s], ``motion_certified``, ``motion_min_clearance`` [m],
+        ``motion_first_failure`` (segment, -1 if none) and ``motion_failure_reason``, ``halted``,
+        ``halted_at``, ``halt_reason``, the detour counts and costs of
+        :meth:`~drake_mh.reactive.follower.motion.CertifiedMotion.detour_summary`,
         ``points_regenerated``, ``event1_*`` per event, ``max_step_plan`` / ``max_step_executed``
         [rad], ``min_distance_executed`` / ``min_distance_swept`` / ``min_distance_unregenerated``
         / ``clearance_at_move`` (the configuration occupied when the move is seen, against the
@@ -94,7 +108,10 @@ def run_framework_scenario(method: str = "e3gsa", seed: int = 0, *, budget: int 
         (executed, Fig. 13(b)), ``plan_q (N, 6)`` (initial plan, Fig. 13(a)), ``final_q``,
         ``path_initial (N, 3)``, ``path_final (N, 3)``, ``obstacle_p (N, 3)``, ``regenerated (N,)``,
         ``event_index (E,)``, ``event_time (E,)``, ``event_points (E,)``, ``joint_steps (N-1,)``,
-        ``clearance (N,)`` [m] (each executed configuration against the obstacle of its moment).
+        ``clearance (N,)`` [m] (each executed configuration against the obstacle of its moment),
+        ``motion_lower (N-1,)`` [m] (certified clearance of each executed motion), ``traj_vias
+        (N-1,)`` (detour vias per motion), ``motion_q (M, 6)`` (the executed polyline, vias
+        included). After a halt the arrays hold NaN for the points not reached.
 
     Raises:
         UnknownMethod: ``method`` is not an IK method.
@@ -120,7 +137,7 @@ def run_framework_scenario(method: str = "e3gsa", seed: int = 0, *, budget: int 
     scene = Scene(robot)
     scene.add("obstacle", Sphere(obstacle_radius), OBSTACLE_START)
     start = time.perf_counter()
-    follower = RegeneratingFollower.plan(robot, scene, path.points, config, seed=seed)
+    follower = RegeneratingFollower.plan(robot, scene, path, config, seed=seed)
     plan_time = time.perf_counter() - start
     plan_q = follower.Q.copy()
     schedule = {move_at: np.array(OBSTACLE_MOVED, dtype=float)}
@@ -132,43 +149,83 @@ def run_framework_scenario(method: str = "e3gsa", seed: int = 0, *, budget: int 
     clearance_at_move = np.nan
     for k in range(N):
         obstacle_p[k] = scene.obstacles["obstacle"].position   # where it is while the arm is at point k
+        if k == N - 1:
+            break
         if k in schedule:
-            scene.move("obstacle", schedule[k])                # announced now, there at point k + 1
+            old = obstacle_p[k].copy()
+            scene.move("obstacle", schedule[k])                # announced now ...
             if k == move_at:  # what the old plan would have met, and what a jump onto the arm would hit
                 unregenerated = float(scene.exact_min_distance(plan_q[k + 1:]).min())
                 clearance_at_move = float(scene.min_distance(follower.executed[k]))
             follower.react()
-        follower.advance()
+            scene.move("obstacle", old)                        # ... still here during the motion to k + 1
+            follower.advance()
+            scene.move("obstacle", schedule[k])                # ... there on arrival
+        else:
+            follower.advance()
+        if follower.index != k + 1:                            # no certified motion: the arm stays
+            obstacle_p[k + 1:] = obstacle_p[k]
+            break
     executed = follower.executed
-    # independent checks with Drake: each executed configuration against the obstacle of its moment,
-    # and the straight joint-space motion between consecutive points at interior samples
-    distances = np.zeros(N)
-    swept = np.full(N - 1, np.inf)
+    reached = follower.index
+    halted = follower.halted
+    # independent checks: each executed configuration against the obstacle of its moment (Drake),
+    # each executed motion certified against the obstacle where it was during it, and Drake's
+    # exact distance at interior samples of each straight piece
+    from drake_mh.reactive.follower.detour import certify_chains
+    from drake_mh.reactive.follower.motion import polyline
+
+    distances = np.full(N, np.nan)
+    swept = np.full(N - 1, np.nan)
+    motion_lower = np.full(N - 1, np.nan)
+    motion_ok = np.zeros(N - 1, dtype=bool)
+    first_failure, failure_reason = -1, ""
     fractions = np.arange(1, substeps + 1) / (substeps + 1)
-    for k in range(N):
+    chains = follower.executed_chains()
+    for k in range(reached + 1):
         if k > 0:   # the obstacle jumps on arrival at point k: before that it is where it was at k - 1
-            Q_mid = executed[k - 1] + fractions[:, None] * (executed[k] - executed[k - 1])
             scene.move("obstacle", obstacle_p[k - 1])
+            chain = chains[k - 1]
+            cert = certify_chains(scene, [chain], tolerance=1e-3)
+            motion_ok[k - 1], motion_lower[k - 1] = cert.all_certified, cert.lower[0]
+            if not cert.all_certified and first_failure < 0:
+                first_failure, failure_reason = k - 1, cert.reason(0)
+            Q_mid = np.vstack([a + fractions[:, None] * (b - a) for a, b in zip(chain[:-1], chain[1:])])
             swept[k - 1] = scene.exact_min_distance(Q_mid).min()
         scene.move("obstacle", obstacle_p[k])
         distances[k] = scene.min_distance(executed[k])
-    p_WE = np.array([robot.fk_drake(q)[:3, 3] for q in executed])  # verified with Drake
-    position_error = np.linalg.norm(p_WE - follower.points, axis=1)
+    done = reached == N - 1
+    motion_certified = bool(reached > 0 and motion_ok[:reached].all())
+    pieces = np.vstack([np.abs(np.diff(c, axis=0)) for c in chains]) if chains else np.zeros((0, 6))
+    p_WE = np.array([robot.fk_drake(q)[:3, 3] for q in executed[:reached + 1]])  # verified with Drake
+    position_error = np.linalg.norm(p_WE - follower.points[:reached + 1], axis=1)
     events = follower.events
     record = {
         "method": config.method, "seed": int(seed), "n_points": N, "obstacle_shape": "sphere",
         "obstacle_radius": float(obstacle_radius), "move_at": int(move_at),
         "path_event": path_event is not None,
         "plan_time": plan_time, "plan_failed": int(follower.plan_failed.size),
-        "max_step_plan": largest_joint_step(plan_q), "max_step_executed": largest_joint_step(executed),
+        "max_step_plan": largest_joint_step(plan_q), "max_step_executed": largest_joint_step(executed[:reached + 1]),
         "min_distance_plan": float(scene_min(robot, plan_q, OBSTACLE_START, obstacle_radius)),
         "min_distance_unregenerated": unregenerated,
-        "min_distance_executed": float(distances.min()),
+        "min_distance_executed": float(np.nanmin(distances)),
         # the configuration occupied when the move is seen, against the new position: what an
         # instantaneous jump would have hit (informative; the obstacle arrives one point later)
         "clearance_at_move": clearance_at_move,
-        "min_distance_after_move": float(distances[move_at + 1:].min()),
-        "min_distance_swept": float(swept.min()),
+        "min_distance_after_move": (float(np.nanmin(distances[move_at + 1:])) if reached > move_at
+                                    else float("nan")),
+        "min_distance_swept": float(np.nanmin(swept)) if reached else float("nan"),
+        # the executed motion between the points, certified (a lower bound, every configuration on it)
+        "motion_certified": motion_certified,
+        "motion_min_clearance": float(np.min(motion_lower[:reached])) if motion_certified else float("nan"),
+        "motion_first_failure": int(first_failure),
+        "motion_failure_reason": failure_reason,
+        "reached": int(reached),
+        "halted": halted is not None,
+        "halted_at": int(reached) if halted is not None else -1,
+        "halt_reason": halted or "",
+        "max_step_executed_motion": float(pieces.max()) if len(pieces) else 0.0,
+        **follower.detour_summary(),
         "max_position_error": float(position_error.max()),
         "n_events": len(events),
         "points_regenerated": int(sum(e.regenerated.size for e in events)),
@@ -186,18 +243,21 @@ def run_framework_scenario(method: str = "e3gsa", seed: int = 0, *, budget: int 
             f"event{i}_max_step_after": e.max_step_after, f"event{i}_ms_per_point":
                 1e3 * e.time / max(1, e.regenerated.size),
         })
-    record["success"] = bool(record["min_distance_executed"] >= 0 and record["min_distance_swept"] >= 0
+    record["success"] = bool(done and motion_certified and record["min_distance_executed"] >= 0
+                             and record["min_distance_swept"] >= 0
                              and record["max_position_error"] <= config.position_tolerance
                              and record["points_failed"] == 0 and record["plan_failed"] == 0)
     record.update({
         "traj_t": path.times.copy(), "traj_q": executed.copy(), "plan_q": plan_q, "final_q": follower.Q.copy(),
-        "clearance": distances,
+        "clearance": distances, "motion_lower": motion_lower,
+        "traj_vias": np.array([len(c) - 2 for c in chains] + [0] * (N - 1 - len(chains)), dtype=int),
+        "motion_q": polyline(chains) if chains else executed[:1].copy(),
         "path_initial": path.points.copy(), "path_final": follower.points.copy(), "obstacle_p": obstacle_p,
         "regenerated": follower.regenerated_mask.copy(),
         "event_index": np.array([e.index for e in events], dtype=int),
         "event_time": np.array([e.time for e in events]),
         "event_points": np.array([e.regenerated.size for e in events], dtype=int),
-        "joint_steps": joint_steps(executed),
+        "joint_steps": joint_steps(executed[:reached + 1]),
     })
     return record
 
