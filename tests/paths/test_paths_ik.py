@@ -59,3 +59,41 @@ def test_bad_input(arm6):
         ik_along_path(arm6, np.zeros((2, 3)), ref_weight=-1.0)
     with pytest.raises(InvalidArgument, match="search_radii"):
         ik_along_path(arm6, np.zeros((2, 3)), search_radii=(0.3, -1.0))
+
+
+def _dense(Q, per_segment=50):
+    s = np.linspace(0.0, 1.0, per_segment)[:, None]
+    return np.vstack([a + s * (b - a) for a, b in zip(Q[:-1], Q[1:])])
+
+
+def test_motion_through_the_solutions_is_certified(arm6):
+    from drake_mh.scene import Scene, Sphere
+
+    scene = Scene(arm6)
+    scene.add("ball", Sphere(0.2), (0.2, 0.2, 0.6))              # the framework scenario's obstacle
+    path = trapezoidal_path(n_points=24)
+    jp = ik_along_path(arm6, path, method="hybrid", seed=0, scene=scene, clearance=0.015)
+    assert jp.motion_certified and jp.all_success and jp.motion_first_failure is None
+    assert 0 <= jp.motion_min_clearance <= scene.exact_min_distance(jp.q).min()
+    # Drake's exact distance at 50 configurations per segment never finds a collision
+    assert scene.exact_min_distance(_dense(jp.q)).min() >= jp.motion_min_clearance - 1e-9
+    assert ik_along_path(arm6, path, method="hybrid", seed=0).motion_certified is None   # no scene: no verdict
+
+
+def test_motion_not_certified_is_reported_and_fails(arm6):
+    from drake_mh.scene import Scene, Sphere
+
+    scene = Scene(arm6)
+    path = trapezoidal_path(n_points=24)
+    free = ik_along_path(arm6, path, method="hybrid", seed=0)
+    # a ball that reaches the tool's path half-way through the motion, moving with the path's times
+    k = 12
+    p_mid = 0.5 * (arm6.fk(free.q[k])[:3, 3] + arm6.fk(free.q[k + 1])[:3, 3])
+    t_mid = 0.5 * (path.times[k] + path.times[k + 1])
+    velocity = np.array([0.0, 0.0, -0.5])
+    scene.add("ball", Sphere(0.05), p_mid - velocity * t_mid, velocity=velocity)
+    jp = ik_along_path(arm6, path, method="hybrid", seed=0, scene=scene)
+    assert np.all(jp.success)                                      # every point is clear where the ball is now
+    assert jp.motion_certified is False and not jp.all_success     # the motion is not
+    assert jp.motion_first_failure is not None and "segment" in jp.motion_failure_reason
+    assert np.isnan(jp.motion_min_clearance)
