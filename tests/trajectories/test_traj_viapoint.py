@@ -129,3 +129,24 @@ def test_minimize_finds_the_free_optimum(arm):
     res = drake_mh.minimize(prob, prob.bounds, method="de", budget=3000, seed=0)
     terms = {k: float(v[0]) for k, v in prob.terms(res.x).items()}
     assert terms["t_T"] < 0.3 and terms["f_q"] == pytest.approx(np.pi / 2, rel=1e-2)
+
+
+def test_optimized_motion_is_certified_at_every_instant(arm):
+    """The ABC result's whole motion is certified collision-free (not its samples), and Drake's exact
+    distance at dense samples never contradicts the certified bound."""
+    centre = (0.5 * np.cos(np.pi / 4), 0.0, -0.5 * np.sin(np.pi / 4))
+    prob = ViaPointProblem(arm, START, GOAL, obstacles=((centre, 0.05),))
+    res = drake_mh.minimize(prob, prob.bounds, method="abc", budget=2000, seed=0)
+    motion = prob.certify_motion(res.x)
+    assert motion["motion_certified"] and motion["motion_min_clearance"] >= 0
+    assert 0 < motion["motion_margin"] <= 1e-3 and motion["motion_chords"] >= 2 * 16
+    _, Q = prob.trajectory(res.x).sample(50 * motion["motion_chords"] // 2)
+    assert prob._scene.exact_min_distance(Q).min() >= motion["motion_min_clearance"]
+    # through the obstacle: refused, with where and why
+    through = prob.certify_motion(np.array([-np.pi / 4, 0.0, np.pi / 4, 0.0, 1.0, 1.0]))
+    assert not through["motion_certified"] and np.isnan(through["motion_min_clearance"])
+    assert 0 < through["motion_failure_time"] < 2.0 and "blocked" in through["motion_failure_reason"]
+    # a 0.1 s swing between the fitness's samples is caught too
+    fast = prob.certify_motion(np.array([-np.pi / 2, 0.0, 0.0, 0.0, 2.0, 0.1]))
+    assert not fast["motion_certified"]
+    assert ViaPointProblem(arm, START, GOAL).certify_motion(res.x)["motion_certified"]   # no obstacle
