@@ -12,6 +12,12 @@ Table 1's parts and where they are here (details in ``docs/app.md``):
 * part 6 (obstacle position): sliders "Obstacle X/Y/Z" (and radius) move the obstacle live; the
   follower regenerates (§3.4.1) or re-plans (§3.4.2) at once (:mod:`drake_mh.reactive.follower`).
 
+The robot moves only along certified motions: the follower certifies the motion between two
+path points against the obstacle as it is when the arm starts it (a detour through via
+configurations where the straight joint-space line is not certified); without one the arm stops
+and the status says why. The state reports whether the motion ahead is certified, its certified
+clearance, the clearance certified along what the arm executed, and the detours.
+
 A status line ("Setup: ..." / "Status: ...", inert buttons at the bottom of the panel: Meshcat
 has no text element) reports what happened. ``status_file`` receives the same state as JSON
 (rewritten atomically on every change) for scripts and tests; ``max_seconds`` ends the loop.
@@ -145,6 +151,8 @@ class PlannerApp:
         self.mode = "idle"          # idle | test | run
         self.t = 0.0                # time along the path [s]
         self.follower = None
+        self.motion: dict = {}
+        self._shown_motion = None   # (segment, chain) certified for display
         self.message = "ready: press Generate / Regenerate solutions"
         self.events = 0
         self.regenerated_total = 0
@@ -237,18 +245,73 @@ class PlannerApp:
                             colour=EDITED_POINT_COLOUR if i == self.edit else POINT_COLOUR)
         view.set_q(self.follower.q if self.follower is not None else self.robot.home)
 
-    def _pose_along(self, t: float) -> None:
-        """Poses the robot at time ``t`` of the path (linear between the points' solutions)."""
+    def _pose_along(self, t: float) -> bool:
+        """Poses the robot at time ``t`` of the path along the certified motion between the points'
+        solutions (straight in joint space, or a detour); returns ``False`` when the arm stopped:
+        no certified motion to the next point (the status says why)."""
+        from drake_mh.reactive.follower.detour import chain_durations
+
         f = self.follower
         times = self.path.times
         k = int(np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 1))
         while f.index < k:
+            before = f.index
             f.advance()
+            if f.index == before:
+                return self._halt()
         if k >= len(times) - 1:
             self.view.set_q(f.Q[-1])
+            return True
+        if self._shown_motion is None or self._shown_motion[0] != k:
+            chain = f.next_motion()
+            if chain is None:
+                return self._halt()
+            self._shown_motion = (k, chain)
+        chain = self._shown_motion[1]
+        s = float(np.clip((t - times[k]) / max(times[k + 1] - times[k], 1e-9), 0.0, 1.0))
+        ends = np.concatenate([[0.0], np.cumsum(chain_durations(chain, 1.0))])
+        i = int(np.clip(np.searchsorted(ends, s, side="right") - 1, 0, len(chain) - 2))
+        u = (s - ends[i]) / max(ends[i + 1] - ends[i], 1e-12)
+        self.view.set_q(chain[i] + np.clip(u, 0.0, 1.0) * (chain[i + 1] - chain[i]))
+        return True
+
+    def _halt(self) -> bool:
+        self.view.set_q(self.follower.q)
+        self.mode = "idle"
+        self.message = f"{self.follower.halted}; move the obstacle or regenerate"
+        self._update_motion()
+        return False
+
+    def _motion_words(self) -> str:
+        m = self.motion
+        if not m:
+            return ""
+        if m["motion_certified"]:
+            clear = m["motion_min_clearance"]
+            words = "; motion certified collision-free" + (f" (>= {clear:.3f} m)" if clear is not None else "")
+        else:
+            words = f"; NO certified motion on segments {m['motion_blocked']}"
+        if m["detours_found"]:
+            words += f", {m['detours_found']} detours"
+        return words
+
+    def _update_motion(self) -> None:
+        """The verdict on the follower's motion (the app's result): ahead and executed."""
+        f = self.follower
+        self._shown_motion = None
+        if f is None:
+            self.motion = {}
             return
-        s = (t - times[k]) / max(times[k + 1] - times[k], 1e-9)
-        self.view.set_q(f.Q[k] + np.clip(s, 0.0, 1.0) * (f.Q[k + 1] - f.Q[k]))
+        cert = f.certify_remaining()
+        executed = f.segment_lower[:f.index]
+        self.motion = {
+            "motion_certified": True if cert is None else cert.all_certified,
+            "motion_min_clearance": None if cert is None or not cert.all_certified else float(cert.min_clearance),
+            "motion_blocked": sorted(int(k) for k in f.blocked),
+            "executed_min_clearance": float(np.min(executed)) if executed.size else None,
+            "halted": f.halted,
+            **f.detour_summary(),
+        }
 
     # --- actions (buttons) -------------------------------------------------------------------
 
@@ -264,13 +327,15 @@ class PlannerApp:
             if k % 5 == 0 or k == n:
                 self._status(f"generating with {self.method}: {k}/{n} points")
 
-        self.follower = RegeneratingFollower.plan(self.robot, self.scene, self.path.points, self._follower_config(),
+        self.follower = RegeneratingFollower.plan(self.robot, self.scene, self.path, self._follower_config(),
                                                   seed=seed, progress=progress)
         took = time.perf_counter() - start
         failed = self.follower.plan_failed
+        self._update_motion()
         self.message = (f"solutions generated with {self.method} in {took:.1f} s, largest joint step "
                         f"{self.follower.remaining_max_step():.3f} rad"
-                        + (f"; NOT verified at points {failed.tolist()}" if failed.size else "; all verified"))
+                        + (f"; NOT verified at points {failed.tolist()}" if failed.size else "; all verified")
+                        + self._motion_words())
         self.show_environment()
 
     def play(self, mode: str) -> None:
@@ -279,6 +344,7 @@ class PlannerApp:
             self.message = "no solutions yet: press Generate / Regenerate solutions first"
             return
         self.follower.restart(0)
+        self._shown_motion = None
         self.t = 0.0
         self.mode = mode
         self.run_frames, self.run_time = 0, 0.0
@@ -341,7 +407,8 @@ class PlannerApp:
             self.last_event = event.summary()
             if event.replans:
                 self.view.add_path(self.follower.points, "path")
-        self.message = event.summary()
+        self._update_motion()
+        self.message = event.summary() + self._motion_words()
 
     def edit_path(self, changed: dict) -> None:
         """A path slider moved: new path, solutions discarded."""
@@ -388,16 +455,21 @@ class PlannerApp:
             if self.t >= self.path.duration:
                 closed = np.allclose(self.path.points[0], self.path.points[-1])
                 if self.mode == "run" and closed:
-                    self._pose_along(self.path.duration)
+                    if not self._pose_along(self.path.duration):
+                        return
                     self.t -= self.path.duration
                     self.follower.restart(0)
                     self.follower.react()  # the whole loop lies ahead again
+                    self._update_motion()
                 else:
-                    self._pose_along(self.path.duration)
-                    self.message = "test run finished" if self.mode == "test" else "run finished"
-                    self.mode = "idle"
+                    if self._pose_along(self.path.duration):
+                        self._update_motion()
+                        self.message = ("test run finished" if self.mode == "test" else "run finished") \
+                            + self._motion_words()
+                        self.mode = "idle"
                     return
-            self._pose_along(self.t)
+            if not self._pose_along(self.t):
+                return
         self.frames += 1
 
     def _status(self, message: str | None = None) -> None:
@@ -424,6 +496,7 @@ class PlannerApp:
             "clicks": dict(self.clicks), "frames": self.frames,
             "run_fps": self.run_frames / self.run_time if self.run_time > 0 else None,
             "elapsed": time.monotonic() - self.started,
+            **(self.motion if f is not None else {}),
         }
 
     def write_status(self) -> None:

@@ -148,3 +148,42 @@ def test_cli_bad_method_exits_2():
     out = subprocess.run([sys.executable, "-m", "drake_mh", "app", "--method", "simplex", "--max-seconds", "1"],
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 2 and "available" in out.stderr
+
+
+def test_the_robot_moves_only_along_certified_motion(app):
+    """The plan's motion (detours included) is certified and Drake's exact distance at 50 configurations
+    per piece agrees; a test run executes it with every motion certified when it starts."""
+    app.handle("Generate / Regenerate solutions")
+    state = app.state()
+    assert state["motion_certified"] and state["motion_min_clearance"] >= 0 and state["motion_blocked"] == []
+    assert "motion certified collision-free" in state["message"]
+    f = app.follower
+    s = np.linspace(0.0, 1.0, 50)[:, None]
+    dense = np.vstack([a + s * (b - a) for k in range(f.n_points - 1) for a, b in zip(f.chain(k)[:-1], f.chain(k)[1:])])
+    assert app.scene.exact_min_distance(dense).min() >= state["motion_min_clearance"]
+    app.handle("Test run")
+    for _ in range(400):
+        app.tick(0.1)
+        if app.mode == "idle":
+            break
+    state = app.state()
+    assert state["message"].startswith("test run finished") and state["halted"] is None
+    assert state["index"] == f.n_points - 1 and state["executed_min_clearance"] >= 0
+
+
+def test_the_robot_stops_where_no_certified_motion_exists(app):
+    app.handle("Generate / Regenerate solutions")
+    app.handle("Run")
+    app.tick(0.05)
+    f = app.follower
+    # the obstacle lands on the configuration the arm is leaving (no reaction asked): the motion
+    # from there cannot be certified, so the arm stops instead of moving through it
+    app.scene.move("obstacle", app.robot.link_poses(f.Q[f.index])["link3"][:3, 3])
+    index = f.index
+    for _ in range(40):
+        app.tick(0.1)
+        if app.mode == "idle":
+            break
+    state = app.state()
+    assert app.mode == "idle" and state["index"] == index and "halted at point" in state["message"]
+    assert state["halted"] and state["detours_failed"] >= 1
