@@ -9,6 +9,12 @@ manipulability (Drake Jacobian) at ``(θ_k, t_k)`` are recorded.
 
 Compute time of a step = the distance query at ``θ_{k-1}`` + building the rows + the solve;
 verification and moving the obstacles (the simulation) are not counted.
+
+The samples say nothing about the motion between them: with ``verify`` the whole executed
+motion (straight in joint space from ``θ_{k-1}`` to ``θ_k`` during ``[t_{k-1}, t_k]``, the
+obstacles moving with their velocities, split where a velocity changes) is certified
+collision-free with :meth:`drake_mh.scene.Scene.certify_segments` (:func:`certify_esm_motion`;
+``ESMRun.motion_certified``, ``motion_min_clearance``).
 """
 
 from __future__ import annotations
@@ -45,6 +51,11 @@ class ESMRun:
             Drake checks of every accepted step (:class:`drake_mh.reactive.esm.verify.StepCheck`).
         active_rows: ``(N,)`` obstacle inequalities with less than 1e-3 m/s of slack at the answer.
         relaxed_rows: ``(N,)`` rows nothing in the box satisfied (relaxed, see ``ESMStep``).
+        motion_certified: the whole executed motion certified collision-free
+            (:func:`certify_esm_motion`); ``None`` when not verified.
+        motion_min_clearance: its certified lower bound of the clearance [m] (NaN if not
+            certified or not verified).
+        motion_first_failure: first step k (``θ_{k-1} -> θ_k``, 1-based) not certified, or -1.
     """
 
     scenario: str
@@ -71,6 +82,9 @@ class ESMRun:
     jacobian_error: np.ndarray
     active_rows: np.ndarray
     relaxed_rows: np.ndarray
+    motion_certified: bool | None = None
+    motion_min_clearance: float = float("nan")
+    motion_first_failure: int = -1
 
     @property
     def threshold_violations(self) -> int:
@@ -159,8 +173,50 @@ def run_esm(robot, scenario: ESMScenario, solver, seed=0, steps: int | None = No
             p, v = obstacle.state(t[k])
             scene.move(obstacle.name, position=p, velocity=v)
         pairs, query_time, error[k], mu[k], dist[k], link[k] = _record_state(robot, scene, theta, targets[k])
+    motion = {}
     if not verify:
         checks[:] = np.nan
+    else:
+        motion = certify_esm_motion(robot, scenario, t, thetas)
     return ESMRun(scenario.name, solver.name, solver.budget_label, t, thetas, targets, error, mu, dist,
                   link.astype(str), cfg.threshold, F, times[3], times[0], times[1], times[2], nfe, feas,
-                  checks[0], checks[1], checks[2], checks[3], active, relaxed)
+                  checks[0], checks[1], checks[2], checks[3], active, relaxed, **motion)
+
+
+def certify_esm_motion(robot, scenario: ESMScenario, t, theta, clearance: float = 0.0,
+                       tolerance: float = 1e-3) -> dict:
+    """Certify the executed motion of a run: ``theta[k-1] -> theta[k]`` straight in joint space
+    during ``[t[k-1], t[k]]``, the scenario's obstacles moving with their (piecewise-constant)
+    velocities; a step in which a velocity changes is cut there.
+
+    Args:
+        robot: the arm; scenario: its :class:`ESMScenario`.
+        t: ``(N+1,)`` [s]; theta: ``(N+1, nq)`` [rad].
+        clearance: [m] required at every instant (default 0: collision-free).
+        tolerance: [m] of the reported lower bound.
+
+    Returns:
+        ``{"motion_certified", "motion_min_clearance" [m], "motion_first_failure" (1-based step or -1)}``.
+    """
+    from drake_mh.scene import Scene
+
+    scene = Scene(robot)
+    for obstacle in scenario.obstacles:
+        p, v = obstacle.state(0.0)
+        scene.add(obstacle.name, obstacle.shape, p, velocity=v)
+    switches = np.unique([t_from for o in scenario.obstacles for t_from, _ in o.velocities])
+    lowest, first = np.inf, -1
+    for k in range(1, len(t)):
+        a, b = float(t[k - 1]), float(t[k])
+        cuts = np.concatenate([[a], switches[(switches > a) & (switches < b)], [b]])
+        for c0, c1 in zip(cuts[:-1], cuts[1:]):
+            for obstacle in scenario.obstacles:
+                p, v = obstacle.state(c0)
+                scene.move(obstacle.name, position=p, velocity=v)
+            q0 = theta[k - 1] + (c0 - a) / (b - a) * (theta[k] - theta[k - 1])
+            q1 = theta[k - 1] + (c1 - a) / (b - a) * (theta[k] - theta[k - 1])
+            cert = scene.certify_segments(q0, q1, clearance, tolerance=tolerance, duration=c1 - c0)
+            if not cert.all_certified:
+                return {"motion_certified": False, "motion_min_clearance": float("nan"), "motion_first_failure": k}
+            lowest = min(lowest, float(cert.lower[0]))
+    return {"motion_certified": True, "motion_min_clearance": float(lowest), "motion_first_failure": first}

@@ -106,3 +106,35 @@ def test_reference_optimum(robot):
     assert mu == pytest.approx(MU_STAR, rel=1e-6)
     np.testing.assert_allclose(robot.fk(theta)[:3, 3], TARGET, atol=1e-8)
     assert robot.within_limits(theta)
+
+
+def test_executed_motion_is_certified_between_the_samples(robot):
+    """The whole executed motion (not its samples) is certified; Drake's exact distance at 50
+    configurations per step, the cube where it is at that instant, never finds a collision; the
+    cube's reversal at t = 5 s falls inside a step and is cut there."""
+    from drake_mh.reactive.esm.controller import certify_esm_motion
+    from drake_mh.scene import Scene
+
+    scenario = get_scenario("tracking", duration=6.0)
+    run = run_esm(robot, scenario, QPBaseline(), seed=0)
+    assert run.motion_certified and run.motion_first_failure == -1
+    assert 0 <= run.motion_min_clearance <= run.min_distance.min()
+    cube = scenario.obstacles[0]
+    scene = Scene(robot)
+    scene.add(cube.name, cube.shape, cube.state(0.0)[0])
+    worst = np.inf
+    for k in range(150, 200):   # around the reversal (5 s = step 178.6)
+        for s in np.linspace(0.0, 1.0, 50):
+            scene.move(cube.name, position=cube.state(run.t[k - 1] + s * (run.t[k] - run.t[k - 1]))[0])
+            worst = min(worst, scene.min_distance(run.theta[k - 1] + s * (run.theta[k] - run.theta[k - 1])))
+    assert worst >= run.motion_min_clearance
+    # a ball that crosses the hand's place at step 10 at 1 m/s: the samples (every 28 mm of its
+    # travel) may miss it, the certificate refuses the motion and names a step
+    import dataclasses
+
+    p_hand = robot.fk(run.theta[10])[:3, 3]
+    v = np.array([1.0, 0.0, 0.0])
+    ball = MovingObstacle("ball", Sphere(0.01), tuple(p_hand - v * 0.5 * (run.t[9] + run.t[10])),
+                          ((0.0, tuple(v)),))
+    bad = certify_esm_motion(robot, dataclasses.replace(scenario, obstacles=(ball,)), run.t, run.theta)
+    assert not bad["motion_certified"] and 1 <= bad["motion_first_failure"] <= 10
