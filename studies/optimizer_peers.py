@@ -276,9 +276,10 @@ def significance(ok: list[dict]) -> list[dict]:
 def _verdict(test: dict) -> str:
     if not math.isfinite(test["p_holm"]):
         return "-"
+    effect = f"A {test['A']:.2f}"
     if test["p_holm"] > SIGNIFICANCE:
-        return f"n.s. ({test['p_holm']:.2g})"
-    return f"{'**better**' if test['A'] > 0.5 else 'worse'} ({test['p_holm']:.1e})"
+        return f"n.s. ({test['p_holm']:.2g}, {effect})"
+    return f"{'**better**' if test['A'] > 0.5 else 'worse'} ({test['p_holm']:.1e}, {effect})"
 
 
 def summarize(records: list[dict]) -> str:
@@ -350,8 +351,9 @@ def summarize(records: list[dict]) -> str:
         lines += ["", "Final error, ours against each peer of the algorithm, per function and D: Wilcoxon rank-sum "
                   "test (two-sided; runs are independent, nothing pairs them), Holm-corrected over the "
                   f"{len(tests) // max(len(functions) * len(dims), 1)} tests of the same function and D (one column), "
-                  f"level {SIGNIFICANCE}. Cell: **better** / worse (ours has the lower / higher errors; Holm p) or "
-                  f"n.s. (Holm p). Ours significantly better in {count('p_holm', True)}, worse in "
+                  f"level {SIGNIFICANCE}. Cell: **better** / worse (ours has the lower / higher errors) or n.s., "
+                  "then the Holm p and Vargha-Delaney A = P(ours < peer) + P(tie) / 2 (1: ours below every peer "
+                  f"run, 0: above every one). Ours significantly better in {count('p_holm', True)}, worse in "
                   f"{count('p_holm', False)} of {len(tests)} (Holm over all {len(tests)} tests at once: "
                   f"{count('p_holm_all', True)} / {count('p_holm_all', False)}). With {n_min} runs a side the "
                   f"smallest possible two-sided p is {2 / math.comb(2 * n_min, n_min):.1e}.", "",
