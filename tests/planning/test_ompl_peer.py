@@ -1,0 +1,109 @@
+"""OMPL as an optional peer (the ``peers`` extra): skipped where ``ompl`` is not installed,
+except the check that nothing is registered then."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import drake_mh
+from drake_mh.errors import InvalidArgument
+from drake_mh.planning import MotionProblem, available_motion_methods, solve_motion
+from drake_mh.scene import Scene, Sphere
+
+PANDA = drake_mh.load_robot("panda")
+
+
+def _needs_ompl():
+    pytest.importorskip("ompl", reason="OMPL is an optional peer: pip install ompl (the peers extra)")
+
+
+def ball_problem(goal=None):
+    scene = Scene(PANDA)
+    scene.add("ball", Sphere(0.1), [0.5, 0.0, 0.5])
+    if goal is None:
+        goal = PANDA.home.copy()
+        goal[0] += 1.0
+    return MotionProblem(PANDA, scene, PANDA.home, goal)
+
+
+def wall_problem():
+    """The straight line from home to joint 1 + 1.5 rad runs through a ball."""
+    scene = Scene(PANDA)
+    middle = PANDA.home.copy()
+    middle[0] += 0.75
+    scene.add("ball", Sphere(0.08), PANDA.fk(middle)[:3, 3])
+    goal = PANDA.home.copy()
+    goal[0] += 1.5
+    return MotionProblem(PANDA, scene, PANDA.home, goal)
+
+
+def test_nothing_is_registered_without_ompl():
+    code = ("import sys; sys.modules['ompl'] = None\n"  # makes `import ompl` raise ImportError
+            "from drake_mh.planning import available_motion_methods\n"
+            "from drake_mh.planning.ompl_peer import OMPL_AVAILABLE\n"
+            "names = [m for m in available_motion_methods() if m.startswith('ompl')]\n"
+            "assert not OMPL_AVAILABLE and not names, names\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+
+
+@pytest.mark.parametrize("method", ["ompl_rrtconnect", "ompl_bitstar"])
+def test_plans_around_an_obstacle_and_verifies(method):
+    _needs_ompl()
+    assert method in available_motion_methods()
+    problem = wall_problem()
+    assert not solve_motion(problem, "straight").success
+    result = solve_motion(problem, method, timeout=10, optimize_time=0.2)
+    assert result.success, result.message
+    assert result.info["exact"] and result.info["motions_checked"] > 0
+    # dense Drake sampling of the certified piecewise-linear motion never finds less than its
+    # certified clearance, nor the retimed trajectory a collision
+    s = np.linspace(0, 1, 60)[:, None]
+    dense = np.concatenate([a + s * (b - a) for a, b in zip(result.path[:-1], result.path[1:])])
+    assert problem.scene.exact_min_distance(dense).min() >= result.info["certificate"].min_clearance - 1e-9
+    t = np.linspace(0, result.duration, 120)
+    assert problem.scene.exact_min_distance(result.trajectory.position(t)).min() >= problem.clearance
+
+
+def test_same_seed_same_path():
+    _needs_ompl()
+    problem = wall_problem()
+    first = solve_motion(problem, "ompl_rrtconnect", seed=3, timeout=10)
+    again = solve_motion(problem, "ompl_rrtconnect", seed=3, timeout=10)
+    other = solve_motion(problem, "ompl_rrtconnect", seed=4, timeout=10)
+    assert first.success and again.success and other.success
+    assert np.array_equal(first.path, again.path)
+    assert first.info["seed"] != other.info["seed"]
+
+
+def test_several_goals_and_sampled_motions():
+    _needs_ompl()
+    goals = np.stack([PANDA.home, PANDA.home]) + np.array([[1.0] + [0] * 6, [-1.0] + [0] * 6])
+    problem = ball_problem(goals)
+    result = solve_motion(problem, "ompl_rrtconnect", timeout=10, motion="sampled")
+    assert result.success, result.message
+    assert result.info["motion"] == "sampled" and 0 < result.info["resolution"] < 0.01
+    assert result.goal_index in (0, 1)
+
+
+def test_blocked_goal_times_out_honestly():
+    _needs_ompl()
+    robot = drake_mh.load_robot("planar2r")
+    scene = Scene(robot)
+    scene.add("up", Sphere(0.05), [0.0, 0.0, 0.16])  # the first link cannot turn past either ball
+    scene.add("down", Sphere(0.05), [0.0, 0.0, -0.16])
+    problem = MotionProblem(robot, scene, np.zeros(2), np.array([3.0, 0.0]))
+    for method in ("ompl_rrtconnect", "ompl_bitstar"):
+        result = solve_motion(problem, method, timeout=0.3)
+        assert not result.success and result.path is None and "timeout" in result.message
+        assert result.planning_time < 1.5
+
+
+def test_unknown_option():
+    _needs_ompl()
+    with pytest.raises(InvalidArgument, match="unknown OMPL option"):
+        solve_motion(ball_problem(), "ompl_rrtconnect", range=0.1)
+    with pytest.raises(InvalidArgument, match="motion"):
+        solve_motion(ball_problem(), "ompl_rrtconnect", motion="exact")
