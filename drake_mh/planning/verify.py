@@ -8,12 +8,16 @@ A path ``(M, nq)`` succeeds when
    problem's clearances (:func:`drake_mh.scene.segments.certify_path`: every configuration on
    every segment, not only the waypoints);
 3. it retimes into a trajectory certified against the robot's velocity, acceleration and torque
-   limits (:func:`drake_mh.trajectories.retime`). toppra's cubic spline through the waypoints
-   leaves the straight segments, so it is accepted only where its deviation is covered: per
-   piece, the Bernstein bound ``δ_j`` of ``|spline_j - chord_j|`` moves any sphere at most
+   limits (:func:`drake_mh.trajectories.retime`: toppra, else ruckig) whose *executed* motion is
+   certified too. Neither retimer follows the straight segments exactly (toppra's cubic spline
+   leaves the chords; ruckig's profiles may fall back from phase to time synchronization), so
+   the trajectory itself is certified: sampled every ``Δt``, the straight segments between the
+   samples are certified, and between two samples a joint deviates from that segment by at most
+   ``δ_j = Δt² a_j / 8`` (the linear-interpolation error bound), ``a_j`` the certified bound of
+   its acceleration (the trajectory's certificate). A sphere then moves at most
    ``max_c Σ_j reach[c, j] δ_j`` (:attr:`~drake_mh.scene.batch.CollisionModel.reach`) from the
-   certified chord, so the chord's certified clearance minus that is certified for the spline.
-   Otherwise ruckig, which stops at every waypoint and follows the straight segments exactly.
+   certified segments; ``Δt`` is chosen so that this is :data:`TRAJECTORY_SHIFT`, and the
+   trajectory's certified clearance is the segments' minus it.
 """
 
 from __future__ import annotations
@@ -25,6 +29,9 @@ from drake_mh.planning.result import MotionResult
 
 REPORT_TOLERANCE = 1e-3
 """[m] the certified minimum clearance is refined to within this of the smallest value seen."""
+
+TRAJECTORY_SHIFT = 1e-3
+"""[m] largest sphere displacement between a retimed trajectory and its sampled chords."""
 
 
 def _reaches_goal(problem, q_end: np.ndarray) -> tuple[int | None, str]:
@@ -42,17 +49,6 @@ def _reaches_goal(problem, q_end: np.ndarray) -> tuple[int | None, str]:
     if position <= POSE_POSITION_TOLERANCE and angle <= POSE_ORIENTATION_TOLERANCE:
         return 0, ""
     return None, f"the path ends {position * 1e3:.2f} mm / {angle:.4f} rad from the goal pose (Drake FK)"
-
-
-def chord_deviation(spline) -> np.ndarray:
-    """``(pieces, nq)`` Bernstein bound of ``max |spline(s) - chord(s)|`` on each cubic piece [rad]."""
-    c = spline.c  # (4, pieces, nq), highest power first, local variable s - x_i
-    h = np.diff(spline.x)[:, None]
-    a3, a2, a1 = c[0] * h ** 3, c[1] * h ** 2, c[2] * h  # monomials in τ = (s - x_i) / h
-    slope = a1 + a2 + a3  # the chord: q_i + τ (q_{i+1} - q_i)
-    b1 = (a1 - slope) / 3.0  # Bernstein coefficients of spline - chord (b0 = b3 = 0)
-    b2 = (2.0 * (a1 - slope) + a2) / 3.0
-    return np.maximum(np.abs(b1), np.abs(b2))
 
 
 def _max_jerk(trajectory) -> float:
@@ -117,36 +113,53 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
     return result
 
 
+def trajectory_clearance(problem, trajectory) -> tuple[float, str]:
+    """Certified lower bound of the obstacle clearance along ``trajectory``'s executed motion [m]
+    (NaN and the reason where it cannot be certified with the problem's clearances)."""
+    robot, scene = problem.robot, problem.scene
+    cert = trajectory.info.get("certificate")
+    if cert is None or "acceleration" not in cert.ratios:
+        return float("nan"), "the trajectory has no certified acceleration bound"
+    a_bound = np.asarray(cert.ratios["acceleration"]) * robot.acceleration_limits * cert.scale
+    if not np.all(np.isfinite(a_bound)):
+        return float("nan"), "the robot declares no finite acceleration limit to bound the trajectory with"
+    reach = scene.collision_model.reach  # (C, nq)
+    per_dt2 = float(np.max(reach @ (a_bound / 8.0)))  # sphere shift per Δt²
+    duration = float(trajectory.end_time - trajectory.start_time)
+    dt = np.sqrt(TRAJECTORY_SHIFT / per_dt2) if per_dt2 > 0 else duration
+    n = max(2, int(np.ceil(duration / max(dt, 1e-9))) + 1)
+    t = np.linspace(trajectory.start_time, trajectory.end_time, n)
+    shift = per_dt2 * (t[1] - t[0]) ** 2
+    Q = trajectory.position(t)
+    path = scene.certify_path(Q, problem.clearance + shift, problem.self_clearance + shift,
+                              tolerance=REPORT_TOLERANCE)
+    if not path.certified:
+        return float("nan"), (f"the retimed trajectory ({trajectory.method}) is not certified at "
+                              f"{problem.clearance * 1e3:.1f} mm + {shift * 1e3:.2f} mm between its samples: "
+                              f"{path.segments.reason(path.first_failure)}")
+    return path.min_clearance - shift, ""
+
+
 def _retime(problem, P: np.ndarray, cert) -> tuple[object, str]:
-    """toppra where its spline is certified clear, else ruckig (straight segments)."""
+    """toppra, else ruckig; the executed motion certified (:func:`trajectory_clearance`)."""
     from drake_mh.errors import DrakeMhError
     from drake_mh.trajectories import retime
 
-    robot, scene = problem.robot, problem.scene
+    robot = problem.robot
     keep = np.r_[True, np.any(np.abs(np.diff(P, axis=0)) > 1e-12, axis=1)]  # repeated rows break splines
     W = P[keep]
     if len(W) < 2:
-        W = np.vstack([P[0], P[0] + 1e-9 * (robot.upper - robot.lower)])
-        W[1] = np.minimum(W[1], robot.upper)
-    try:
-        trajectory = retime(W, robot, "toppra")
-        spline = trajectory.path
-        knots = spline(spline.x)  # waypoints and inserted chord midpoints: all on the certified path
-        chords = scene.certify_path(knots, problem.clearance, problem.self_clearance, tolerance=REPORT_TOLERANCE)
-        if chords.certified:
-            reach = scene.collision_model.reach
-            deviation = chord_deviation(spline)  # (pieces, nq)
-            shift = np.max(deviation @ reach.T, axis=1)  # (pieces,) largest sphere displacement
-            clear = chords.segments.lower - shift
-            clear_self = chords.segments.lower_self - shift
-            if np.all(clear >= problem.clearance) and np.all(clear_self >= problem.self_clearance):
-                trajectory.info["certified_clearance"] = float(np.min(clear))
-                return trajectory, ""
-    except DrakeMhError:
-        pass
-    try:
-        trajectory = retime(W, robot, "ruckig")
-        trajectory.info["certified_clearance"] = cert.min_clearance  # exactly the certified segments
-        return trajectory, ""
-    except DrakeMhError as exc:
-        return None, f"certified path, but no certified trajectory: {exc}"
+        return None, "the path does not move: nothing to retime"
+    reasons = []
+    for method in ("toppra", "ruckig"):
+        try:
+            trajectory = retime(W, robot, method)
+        except DrakeMhError as exc:
+            reasons.append(f"{method}: {exc}")
+            continue
+        clearance, why = trajectory_clearance(problem, trajectory)
+        if np.isfinite(clearance):
+            trajectory.info["certified_clearance"] = clearance
+            return trajectory, ""
+        reasons.append(why)
+    return None, "certified path, but no certified trajectory: " + "; ".join(reasons)
