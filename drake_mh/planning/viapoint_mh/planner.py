@@ -1,0 +1,262 @@
+"""``mh_<optimizer>``: metaheuristic via-point trajectory optimization as a motion planner.
+
+One run (:func:`plan`):
+
+1. **First population** (``pop_size`` individuals of :class:`~.objective.ViaPointMotion`): with
+   ``warm_start`` (e.g. ``"rrt_connect"``), that planner's path, its via points resampled to
+   ``K`` (its own corners when it has at most ``K``, split at the middle of its longest
+   segments up to ``K``, so the polyline is kept exactly; else points at equal joint-space arc
+   length), and noisy copies fill ``warm_fraction`` of it; with ``init="straight"``, evenly
+   spaced via points on the straight line to each goal and noisy copies fill
+   ``seed_fraction``; the rest is uniform in the box (the optimizer's own initialization).
+2. **Ask/tell** with the chosen optimizer of :mod:`drake_mh.optim` on the batched fitness
+   until the budget (minus ``repair_fraction``), the deadline, or a stall with a
+   collision-free best.
+3. **Certification**: the best individual and the next best of the final population
+   (``candidates``, best first) are certified as piecewise-linear motions (all their segments
+   in one :meth:`~drake_mh.scene.Scene.certify_segments` call); the first certified is returned.
+4. **Repair** when none is: each blocked segment of the best individual is re-planned as a
+   one-via-point problem between its ends with the same optimizer and the budget left, and
+   the path is certified again (``repair_rounds`` times at most).
+5. When still not certified, the best individual's path is returned anyway, and
+   :func:`~drake_mh.planning.verify_motion` reports it as not certified (never hidden).
+
+``info`` carries the evaluations used (``nfe``, never more than ``budget``), generations, the
+best individual's fitness terms, which candidate was certified, the repair and the warm start.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from drake_mh.errors import InvalidArgument
+from drake_mh.planning.viapoint_mh.objective import ViaPointMotion, ViaPointMotionConfig
+
+DEFAULT_BUDGET = 6000
+"""Fitness evaluations when ``solve_motion`` gets no budget (one evaluation = one individual)."""
+
+_CONFIG_FIELDS = frozenset(ViaPointMotionConfig.__dataclass_fields__)
+
+
+def _split_options(options: dict) -> tuple[ViaPointMotionConfig, dict]:
+    config = options.pop("config", None)
+    if config is not None and not isinstance(config, ViaPointMotionConfig):
+        raise InvalidArgument(f"config must be a ViaPointMotionConfig, got {type(config).__name__}")
+    fields = {k: options.pop(k) for k in list(options) if k in _CONFIG_FIELDS}
+    if config is None:
+        config = ViaPointMotionConfig(**fields)
+    elif fields:
+        import dataclasses
+
+        config = dataclasses.replace(config, **fields)
+    return config, options  # the rest: the optimizer's hyper-parameters
+
+
+def resample_via(path: np.ndarray, K: int) -> np.ndarray:
+    """``(K, nq)`` via configurations of a path ``(M, nq)`` from its start to its goal (step 1 of
+    the module docstring)."""
+    path = np.asarray(path, dtype=float)
+    inner = path[1:-1]
+    if len(inner) <= K:
+        W = list(path)
+        while len(W) - 2 < K:  # split the longest segment in the middle: the polyline is unchanged
+            lengths = [np.linalg.norm(b - a) for a, b in zip(W[:-1], W[1:])]
+            i = int(np.argmax(lengths))
+            W.insert(i + 1, 0.5 * (W[i] + W[i + 1]))
+        return np.asarray(W[1:-1])
+    s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))]
+    targets = s[-1] * np.arange(1, K + 1) / (K + 1)
+    return np.stack([np.interp(targets, s, path[:, j]) for j in range(path.shape[1])], axis=1)
+
+
+def _warm_path(problem, goals, rng, deadline, name: str) -> tuple[np.ndarray | None, dict]:
+    from drake_mh.planning import solve as registry
+
+    registry._load()
+    if name not in registry._METHODS:
+        raise InvalidArgument(f"warm_start {name!r} is not a registered motion method; available: "
+                              f"{sorted(registry._METHODS)} (rrt_connect may not be installed yet)")
+    if name.startswith("mh_"):
+        raise InvalidArgument("warm_start must be another family of planner (e.g. 'rrt_connect'), not mh_*")
+    function = registry._METHODS[name][0]
+    start = time.perf_counter()
+    child = np.random.default_rng(rng.integers(2 ** 63))
+    path, info = function(problem, goals, child, deadline, None)
+    out = {"method": name, "time": time.perf_counter() - start, "found": path is not None}
+    if path is not None:
+        path = np.asarray(path, dtype=float)
+        out["waypoints"] = int(len(path))
+        out["certified"] = bool(problem.scene.certify_path(path, problem.clearance, problem.self_clearance).certified)
+    return path, out
+
+
+def _first_population(objective: ViaPointMotion, config: ViaPointMotionConfig, pop_size: int, rng,
+                      warm: np.ndarray | None) -> np.ndarray | None:
+    """The seeded rows of the first population (the optimizer fills the rest uniformly)."""
+    rows = []
+    lo, hi = objective.bounds[:, 0], objective.bounds[:, 1]
+    K, nq = objective.K, objective.nq
+    via_part = np.arange(K * nq)
+
+    def noisy(x, count, sigma):
+        out = np.repeat(x[None], count, axis=0)
+        out[1:, via_part] += rng.normal(0.0, sigma, size=(count - 1, K * nq))
+        return np.clip(out, lo, hi)
+
+    if warm is not None and config.warm_fraction > 0:
+        goal = int(np.argmin(np.max(np.abs(objective.goals - warm[-1]), axis=1)))
+        x = objective.encode(resample_via(warm, K), goal)
+        rows.append(noisy(x, max(1, int(round(config.warm_fraction * pop_size))), config.warm_sigma))
+    if config.init == "straight" and config.seed_fraction > 0:
+        G = objective.n_goals
+        count = max(G, int(round(config.seed_fraction * pop_size)))
+        u = np.arange(1, K + 1) / (K + 1)
+        for g in range(G):
+            via = objective.q_start + u[:, None] * (objective.goals[g] - objective.q_start)
+            rows.append(noisy(objective.encode(via, g), max(1, count // G), config.seed_sigma))
+    if not rows:
+        return None
+    X0 = np.vstack(rows)
+    return X0[:pop_size]
+
+
+def _optimize(objective: ViaPointMotion, optimizer: str, budget: int, rng, deadline, config, params,
+              x0_warm: np.ndarray | None) -> dict:
+    """Steps 1-2 of the module docstring on one objective; the final population, best first."""
+    from drake_mh.optim import get_method
+
+    cls = get_method(optimizer)
+    D = objective.dimension
+    pop_size = config.pop_size or cls.default_pop_size(D)
+    pop_size = max(pop_size, cls.min_pop_size)
+    X0 = _first_population(objective, config, pop_size, rng, x0_warm)
+    opt = cls(objective.bounds, budget=budget, seed=rng, pop_size=pop_size, x0=X0, **params)
+    best_f, best_penalty, improved_at, generations = np.inf, np.inf, 0, 0
+    patience = config.stall * budget
+    best_terms, best_seen = {}, np.inf
+    last_X, last_F = None, None
+    reason = "budget"
+    while not opt.done:
+        X = opt.ask()
+        X = X[:opt.budget - opt.nfe]
+        terms = objective.terms(X)
+        F = terms["fitness"]
+        opt.tell(X, F)
+        generations += 1
+        i = int(np.argmin(F))
+        if F[i] < best_seen:
+            best_seen, best_terms = float(F[i]), {k: float(v[i]) for k, v in terms.items()}
+        if F[i] < best_f * (1.0 - 1e-4):
+            best_f, best_penalty, improved_at = float(F[i]), float(terms["penalty"][i]), opt.nfe
+        if last_X is None or len(X) >= len(last_X):
+            last_X, last_F = X.copy(), F.copy()
+        if deadline is not None and time.perf_counter() > deadline:
+            reason = "deadline"
+            break
+        if patience and opt.nfe - improved_at >= patience and best_penalty == 0.0 and not opt.done:
+            reason = "stall"
+            break
+    result = opt.result()
+    Xs = np.vstack([result.x[None], last_X])
+    Fs = np.r_[result.f, last_F]
+    if result.population is not None and result.population_f is not None:
+        Xs = np.vstack([Xs, result.population])
+        Fs = np.r_[Fs, result.population_f]
+    order = np.argsort(Fs, kind="stable")
+    Xs, Fs = Xs[order], Fs[order]
+    _, first = np.unique(np.round(Xs, 12), axis=0, return_index=True)
+    keep = np.sort(first)
+    return {"X": Xs[keep], "F": Fs[keep], "nfe": int(opt.nfe), "generations": generations, "stop": reason,
+            "pop_size": pop_size, "best_terms": best_terms}
+
+
+def _certify_candidates(problem, objective: ViaPointMotion, X: np.ndarray, count: int):
+    """Index of the first individual of ``X[:count]`` whose path is certified (None), the paths."""
+    paths = [objective.path(x) for x in X[:count]]
+    QA = np.vstack([P[:-1] for P in paths])
+    QB = np.vstack([P[1:] for P in paths])
+    cert = problem.scene.certify_segments(QA, QB, problem.clearance, problem.self_clearance)
+    ok = cert.certified
+    start = 0
+    first = None
+    blocked = []
+    for i, P in enumerate(paths):
+        n = len(P) - 1
+        seg = ok[start:start + n]
+        blocked.append(np.flatnonzero(~seg))
+        if first is None and np.all(seg):
+            first = i
+        start += n
+    return first, paths, blocked
+
+
+def _repair(problem, path: np.ndarray, blocked: np.ndarray, optimizer: str, budget: int, rng, deadline,
+            config: ViaPointMotionConfig, params: dict) -> tuple[np.ndarray, int, int]:
+    """Re-plan each blocked segment of ``path`` with one via point; returns the new path, the
+    evaluations used and the segments re-planned."""
+    if budget < 2 or not len(blocked):
+        return path, 0, 0
+    share = max(2, budget // len(blocked))
+    used = 0
+    pieces = []
+    blocked = set(int(b) for b in blocked)
+    for i in range(len(path) - 1):
+        pieces.append(path[i][None])
+        if i not in blocked or used + 2 > budget or (deadline is not None and time.perf_counter() > deadline):
+            continue
+        sub = ViaPointMotion(problem.robot, problem.scene, path[i], path[i + 1][None], problem.clearance,
+                             problem.self_clearance, config, problem.frame, n_via=1)
+        run = _optimize(sub, optimizer, min(share, budget - used), rng, deadline, config, params, None)
+        used += run["nfe"]
+        first, paths, _ = _certify_candidates(problem, sub, run["X"], config.candidates)
+        pieces.append(paths[0 if first is None else first][1:-1])
+    pieces.append(path[-1][None])
+    return np.vstack(pieces), used, len(blocked)
+
+
+def plan(problem, goals, rng, deadline, budget, *, optimizer: str, **options):
+    """Plan with via-point trajectory optimization (module docstring); ``options``: the fields
+    of :class:`~.objective.ViaPointMotionConfig` (or ``config=``) and the optimizer's
+    hyper-parameters."""
+    config, params = _split_options(dict(options))
+    budget = DEFAULT_BUDGET if budget is None else int(budget)
+    info = {"optimizer": optimizer, "n_via": config.n_via, "trajectory": config.trajectory, "budget": budget}
+    warm = None
+    if config.warm_start is not None:
+        warm, info["warm_start"] = _warm_path(problem, goals, rng, deadline, config.warm_start)
+    objective = ViaPointMotion(problem.robot, problem.scene, problem.q_start, goals, problem.clearance,
+                               problem.self_clearance, config, problem.frame)
+    reserve = int(budget * config.repair_fraction) if config.repair and config.repair_rounds else 0
+    main_budget = max(1, budget - reserve)
+    run = _optimize(objective, optimizer, main_budget, rng, deadline, config, params, warm)
+    info.update(nfe=run["nfe"], generations=run["generations"], stop=run["stop"], pop_size=run["pop_size"],
+                dimension=objective.dimension)
+    info["best"] = run["best_terms"]
+    first, paths, blocked = _certify_candidates(problem, objective, run["X"], config.candidates)
+    info["candidate"] = first
+    if first is not None:
+        info["certified_by_planner"] = True
+        return paths[first], info
+    path = paths[0]
+    info["best_blocked_segments"] = [int(b) for b in blocked[0]]
+    left = budget - run["nfe"]
+    rounds = 0
+    while config.repair and rounds < config.repair_rounds and left >= 2 \
+            and (deadline is None or time.perf_counter() < deadline):
+        cert = problem.scene.certify_path(path, problem.clearance, problem.self_clearance)
+        bad = np.flatnonzero(~cert.segments.certified)
+        if not len(bad):
+            break
+        path, used, _ = _repair(problem, path, bad, optimizer, left, rng, deadline, config, params)
+        left -= used
+        info["nfe"] += used
+        rounds += 1
+    info["repair_rounds"] = rounds
+    certified = bool(problem.scene.certify_path(path, problem.clearance, problem.self_clearance).certified)
+    info["certified_by_planner"] = certified
+    if not certified:
+        info["note"] = ("the best individual (and the next best of the final population) is not certified "
+                        "collision-free; returned for the verification to report")
+    return path, info
