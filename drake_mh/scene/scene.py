@@ -5,9 +5,10 @@ cylinders with a pose and an optional linear velocity) are registered *in that c
 anchored geometry of the robot's obstacle source, so they are added, moved and removed
 without rebuilding the diagram. Exact signed distances robot-link vs obstacle — and, if
 asked, robot self-distances (Drake already filters adjacent links) — come from
-``QueryObject.ComputeSignedDistancePairwiseClosestPoints``; the pairs Drake solves with GJK
-(robot capsule vs box, cylinder or capsule obstacle) are refined by an exact segment search
-(:mod:`drake_mh.scene.segment_distance`), because Drake 1.51 was measured up to 6.7 mm optimistic there.
+:mod:`drake_mh.scene.exact`: compiled closed forms, segment searches and a certified GJK for
+link geometry vs obstacle pairs (Drake 1.51's GJK was measured up to 16 mm optimistic there,
+and 10-20x slower from Python), Drake's ``QueryObject.ComputeSignedDistancePairwiseClosestPoints``
+for the other self pairs and Drake's penetration depth where the exact methods do not hold.
 
 For populations, :meth:`Scene.batch_min_distance` uses the robot's
 :class:`drake_mh.spheres.SphereModel` and the obstacles' closed-form signed distances. Its
@@ -29,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drake_mh.errors import SceneError, UnknownObstacle
+from drake_mh.scene.exact import DistancePair, ExactDistances, exclude_from_drake, link_kinds
 from drake_mh.shapes import Box, Capsule, Cylinder, Sphere, as_shape
 from drake_mh.spheres import DEFAULT_TOLERANCE, SphereModel
 
@@ -68,29 +70,6 @@ class Obstacle:
         return self.X_WO[:3, 3].copy()
 
 
-@dataclass(frozen=True)
-class DistancePair:
-    """Signed distance between a robot link and an obstacle (or another link).
-
-    Attributes:
-        distance: signed distance [m] (negative: penetration depth).
-        link: the robot link.
-        other: the obstacle name, or the other link for self-distances.
-        is_self: whether ``other`` is a robot link.
-        p_W_link: closest point on the link, in W [m].
-        p_W_other: closest point on the other geometry, in W [m].
-        nhat_W: unit normal pointing from ``other`` towards the link, in W.
-    """
-
-    distance: float
-    link: str
-    other: str
-    is_self: bool
-    p_W_link: np.ndarray
-    p_W_other: np.ndarray
-    nhat_W: np.ndarray
-
-
 class Scene:
     """Obstacles around a :class:`drake_mh.robot.Robot` and distance queries.
 
@@ -118,7 +97,6 @@ class Scene:
         self._sg_context = robot.scene_graph.GetMyMutableContextFromRoot(self._context)
         self._obstacles: dict[str, Obstacle] = {}
         self._ids: dict[str, object] = {}
-        self._robot_shapes: dict = {}
         self._self_link_pairs: list = []  # link pairs Drake's filter keeps (self_collision only)
         self._obstacle_arrays = None  # the obstacles as the compiled kernels read them (batch.py)
         self._free_function = None
@@ -211,14 +189,11 @@ class Scene:
         instance.set_proximity_properties(ProximityProperties())
         sg = self.robot.scene_graph
         gid = sg.RegisterGeometry(self._sg_context, self.robot.obstacle_source_id, sg.world_frame_id(), instance)
-        if isinstance(shape, Capsule) and self._capsule_links:
-            # Drake 1.51's capsule-capsule query never returns when the two axes are collinear and
-            # touch, and takes 8-10 s per pair in deep penetration: those pairs are filtered out of
-            # Drake's query and computed in closed form (_capsule_pairs)
-            from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
-
-            sg.collision_filter_manager(self._sg_context).Apply(
-                CollisionFilterDeclaration().ExcludeBetween(GeometrySet([gid]), GeometrySet(list(self._capsule_links))))
+        # the link geometries drake_mh.scene.exact computes (sphere, capsule, box, cylinder,
+        # ellipsoid, convex mesh) leave Drake's query against obstacles: Drake 1.51's GJK is
+        # optimistic there (up to 16 mm), its capsule-capsule query never returns on collinear
+        # touching axes, and its Python pair objects cost more than the compiled kernel
+        exclude_from_drake(self, gid)
         return gid
 
     @functools.cached_property
@@ -234,30 +209,15 @@ class Scene:
                 out[gid] = from_drake(shape)
         return out
 
-    def _capsule_pairs(self, query, max_distance: float) -> list:
-        """Capsule link vs capsule obstacle pairs and, with ``self_collision``, capsule link vs
-        capsule link pairs (all filtered out of Drake's query), in closed form:
-        ``[(distance, link geometry id, obstacle name or other link's geometry id, p_W_link,
-        p_W_other, nhat_W)]``."""
-        from drake_mh.scene.segment_distance import capsule_distance
+    @functools.cached_property
+    def _link_kinds(self) -> dict:
+        """``{geometry id: (kernel link kind, shape)}`` (:func:`drake_mh.scene.exact.link_kinds`)."""
+        return link_kinds(self.robot, self._robot_ids)
 
-        out = []
-        for name, obstacle in self._obstacles.items():
-            if not isinstance(obstacle.shape, Capsule):
-                continue
-            for gid, capsule in self._capsule_links.items():
-                X_WG = query.GetPoseInWorld(gid).GetAsMatrix4()
-                d, p_link, p_other, nhat = capsule_distance(X_WG, capsule.radius, capsule.length,
-                                                            obstacle.X_WO, obstacle.shape)
-                if d <= max_distance:
-                    out.append((d, gid, name, p_link, p_other, nhat))
-        for a, b in self._self_capsule_pairs:  # self pairs: the other link's geometry id stands for it
-            ca, cb = self._capsule_links[a], self._capsule_links[b]
-            d, p_a, p_b, nhat = capsule_distance(query.GetPoseInWorld(a).GetAsMatrix4(), ca.radius, ca.length,
-                                                 query.GetPoseInWorld(b).GetAsMatrix4(), cb)
-            if d <= max_distance:
-                out.append((d, a, b, p_a, p_b, nhat))
-        return out
+    @functools.cached_property
+    def _exact(self) -> ExactDistances:
+        """The compiled exact-distance layout of this scene (:class:`drake_mh.scene.exact.ExactDistances`)."""
+        return ExactDistances(self)
 
     def _get(self, name: str) -> Obstacle:
         if name not in self._obstacles:
@@ -299,80 +259,26 @@ class Scene:
             if np.any(obstacle.velocity_W != 0):
                 self.move(name, position=obstacle.position + obstacle.velocity_W * float(dt))
 
-    # --- exact distances (Drake) ------------------------------------------------------------
+    # --- exact distances (drake_mh.scene.exact) --------------------------------------------------------
 
     def distances(self, q, max_distance: float = np.inf) -> list[DistancePair]:
         """Exact signed distances of every link-obstacle (and self) pair within ``max_distance``.
 
+        One row per pair of collision geometries (a link with several geometries has several
+        rows); how each is computed: :mod:`drake_mh.scene.exact`.
+
         Returns:
-            Pairs sorted by distance (closest first).
+            Pairs sorted by distance (closest first), robot side first.
 
         Raises:
-            SceneError: the robot has no collision geometry.
+            SceneError: the robot has no collision geometry, or a bad ``max_distance``.
+            InvalidConfiguration: ``q`` is not ``(nq,)`` finite numbers.
         """
         self._require_geometry()
         if not (isinstance(max_distance, (int, float, np.number)) and not isinstance(max_distance, bool)
                 and max_distance >= 0):  # NaN fails this too (it gave [] before)
             raise SceneError(f"max_distance must be a number >= 0 [m] (inf for all pairs), got {max_distance!r}")
-        q = self.robot.check_q(q)
-        self.robot.plant.SetPositions(self._plant_context, q)
-        query = self.robot.scene_graph.get_query_output_port().Eval(self._sg_context)
-        inspector = query.inspector()
-        plant = self.robot.plant
-        names = {gid: name for name, gid in self._ids.items()}
-        out = []
-        for pair in query.ComputeSignedDistancePairwiseClosestPoints(float(max_distance)):
-            ids = [pair.id_A, pair.id_B]
-            points = [query.GetPoseInWorld(pair.id_A) @ pair.p_ACa, query.GetPoseInWorld(pair.id_B) @ pair.p_BCb]
-            nhat = np.asarray(pair.nhat_BA_W)  # from B towards A
-            if pair.id_A in names:  # make the robot side first
-                ids.reverse()
-                points.reverse()
-                nhat = -nhat
-            link = plant.GetBodyFromFrameId(inspector.GetFrameId(ids[0])).name()
-            distance = float(pair.distance)
-            if ids[1] in names:
-                other, is_self = names[ids[1]], False
-                refined = self._refine(query, ids[0], self._obstacles[other])
-                if refined is not None and refined[0] < distance:
-                    distance, points[0], points[1], nhat = refined
-            else:
-                other, is_self = plant.GetBodyFromFrameId(inspector.GetFrameId(ids[1])).name(), True
-            out.append(DistancePair(distance, link, other, is_self,
-                                    np.asarray(points[0]), np.asarray(points[1]), nhat))
-        for d, gid, other, p_link, p_other, nhat in self._capsule_pairs(query, float(max_distance)):
-            link = plant.GetBodyFromFrameId(inspector.GetFrameId(gid)).name()
-            is_self = other not in self._obstacles
-            if is_self:
-                other = plant.GetBodyFromFrameId(inspector.GetFrameId(other)).name()
-            out.append(DistancePair(float(d), link, other, is_self, np.asarray(p_link), np.asarray(p_other),
-                                    np.asarray(nhat)))
-        out.sort(key=lambda p: p.distance)
-        return out
-
-    def _refine(self, query, robot_id, obstacle: Obstacle):
-        """Exact capsule-vs-box/cylinder/capsule distance where Drake uses GJK (see
-        :mod:`drake_mh.scene.segment_distance`: Drake 1.51 was measured up to 6.7 mm optimistic), for
-        a capsule link or a capsule obstacle."""
-        from drake_mh.scene.segment_distance import capsule_distance
-        from drake_mh.shapes import Capsule, Sphere, from_drake
-
-        from drake_mh.shapes import Box, Cylinder
-
-        if isinstance(obstacle.shape, Sphere):
-            return None  # sphere pairs are closed-form in Drake
-        if robot_id not in self._robot_shapes:
-            self._robot_shapes[robot_id] = from_drake(query.inspector().GetShape(robot_id))
-        shape = self._robot_shapes[robot_id]
-        X_WG = query.GetPoseInWorld(robot_id).GetAsMatrix4()
-        if isinstance(shape, Capsule):
-            return capsule_distance(X_WG, shape.radius, shape.length, obstacle.X_WO, obstacle.shape)
-        if isinstance(obstacle.shape, Capsule) and isinstance(shape, (Box, Cylinder)):
-            # the same search with the roles swapped (Drake's GJK measured 13 mm optimistic for a
-            # box link and a capsule obstacle)
-            out = capsule_distance(obstacle.X_WO, obstacle.shape.radius, obstacle.shape.length, X_WG, shape)
-            return out[0], out[2], out[1], -out[3]
-        return None
+        return self._exact.distances(q, float(max_distance))
 
     def _require_geometry(self) -> None:
         if not self._robot_ids:
@@ -384,9 +290,11 @@ class Scene:
         """Smallest exact signed distance [m] over all pairs (link-obstacle, and link-link with
         ``self_collision``).
 
-        Exact means Drake's value, refined for capsule links against boxes, cylinders and
-        capsules (:meth:`distances`); for mesh links against those shapes it is Drake's GJK/EPA
-        value (refine with the sphere model's lower bound if in doubt).
+        Exact as :meth:`distances` (:mod:`drake_mh.scene.exact`: closed forms and segment
+        searches for sphere and capsule links, a certified GJK — at most 1e-10 m below the truth —
+        for box, cylinder, ellipsoid and convex-mesh links, Drake's penetration depth where those
+        do not hold), without building the pairs: pairs are refined in the order of a cheap lower
+        bound until it reaches the minimum.
 
         Returns:
             The distance; ``inf`` when there is nothing to collide with (no obstacle, and no
@@ -396,8 +304,7 @@ class Scene:
             SceneError: the robot has no collision geometry.
         """
         self._require_geometry()
-        pairs = self.distances(q)
-        return pairs[0].distance if pairs else np.inf
+        return self._exact.min_distance(q)
 
     def in_collision(self, q, margin: float = 0.0) -> bool:
         """Whether some pair is closer than ``margin`` [m] (exact, Drake)."""
@@ -406,9 +313,11 @@ class Scene:
         return self.min_distance(q) < margin
 
     def exact_min_distance(self, Q) -> np.ndarray:
-        """:meth:`min_distance` for each row of ``Q (N, nq)`` (a loop over Drake; for checks)."""
+        """:meth:`min_distance` for each row of ``Q (N, nq)`` (one compiled call per row; for checks)."""
+        self._require_geometry()
         Q = self.robot.check_Q(Q)
-        return np.array([self.min_distance(q) for q in Q])
+        exact = self._exact
+        return np.array([exact.min_distance(q) for q in Q], dtype=float).reshape(-1)
 
     # --- batched conservative distances (sphere model) ----------------------------------------
 

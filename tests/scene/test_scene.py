@@ -121,28 +121,17 @@ def _obstacle_near_the_arm(robot, rng, kind):
 def _random_scene_check(robot, seed, n=60):
     """Random obstacles of every kind near the arm; the guarantee against Scene's exact distance.
 
-    Allowances on the *pessimism* side only (the never-more-clearance side stays strict): a
-    cylinder obstacle is handled as its circumscribed 16-gon prism (2 % of its radius), and
-    Drake's GJK distance of a mesh, box or cylinder link to a box, cylinder or capsule obstacle
-    is not refined by Scene and was seen optimistic by 7.5 mm for a mesh link and a capsule
-    (sampled truth <= 134.8 mm, Drake 142.3 mm, spheres 126.2 mm; 10 mm allowed) and by 16 mm
-    for an ellipsoid link and a box (sampled truth 22.3 mm, Drake 38.1 mm, spheres 13.3 mm;
-    20 mm allowed). Capsule links are refined exactly."""
-    from pydrake.geometry import Ellipsoid as DrakeEllipsoid
-    from pydrake.geometry import Role
-
+    Allowance on the *pessimism* side only (the never-more-clearance side stays strict): a
+    cylinder obstacle is handled as its circumscribed 16-gon prism (2 % of its radius). Mesh,
+    box, cylinder and ellipsoid links need none since Scene's certified GJK replaced Drake's
+    (seen optimistic by 7.5 mm for a mesh link and a capsule, 16 mm for an ellipsoid link and
+    a box; 10 and 20 mm were allowed here before)."""
     rng = np.random.default_rng(seed)
-    polytope_links = any(core.kind == 1 for core in robot.sphere_model.geometries)
-    inspector = robot.scene_graph.model_inspector()
-    ellipsoid_links = any(isinstance(inspector.GetShape(g), DrakeEllipsoid)
-                          for g in inspector.GetAllGeometryIds(Role.kProximity))
     for kind in ("sphere", "box", "cylinder", "capsule"):
         scene = Scene(robot)
         shape, centre, rpy = _obstacle_near_the_arm(robot, rng, kind)
         scene.add("o", shape, centre, rpy=rpy)
         extra = 0.02 * shape.radius if isinstance(shape, Cylinder) else 0.0
-        if polytope_links and not isinstance(shape, Sphere):
-            extra += 0.02 if ellipsoid_links else 0.01
         _check_guarantee(scene, robot.random_configurations(n, int(rng.integers(1 << 31))), extra)
 
 
