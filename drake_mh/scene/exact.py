@@ -381,8 +381,9 @@ def drake_reference(scene):
     no longer asks Drake for the pairs :class:`ExactDistances` computes.
 
     Returns:
-        ``query(q, max_distance=inf) -> list[pydrake SignedDistancePair]``, with attribute
-        ``names``: ``{geometry id: link or obstacle name}``.
+        ``query(q, max_distance=inf) -> list[pydrake SignedDistancePair]``, with attributes
+        ``names`` (``{geometry id: link or obstacle name}``), ``plant_context`` and
+        ``sg_context`` (for Drake's other queries, e.g. ``HasCollisions``, on the same state).
     """
     from pydrake.geometry import CollisionFilterDeclaration, GeometryInstance, GeometrySet, ProximityProperties
     from pydrake.math import RigidTransform, RotationMatrix
@@ -417,4 +418,5 @@ def drake_reference(scene):
         return port.Eval(sg_context).ComputeSignedDistancePairwiseClosestPoints(max_distance)
 
     query.names = names
+    query.plant_context, query.sg_context = plant_context, sg_context
     return query
