@@ -24,7 +24,6 @@ A robot without collision geometry has no clearance: every query that needs one 
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -432,9 +431,11 @@ class Scene:
             clearance = check_clearance(clearance, "clearance")
             self_clearance = check_clearance(self_clearance, "self_clearance")
         free = self._free()
-        if type(Q) is np.ndarray and Q.dtype == np.float64 and Q.shape == self._q_shape \
-                and math.isfinite(Q.dot(Q)):  # one valid configuration: no copy, no checks
-            return bool(free(Q.reshape(-1, 1), clearance, self_clearance)[0])
+        if type(Q) is np.ndarray and Q.dtype == np.float64 and Q.shape == self._q_shape:
+            out = free(Q.reshape(-1, 1), clearance, self_clearance)  # one configuration: no copy
+            if out is not None:
+                return bool(out[0])
+            self.robot.check_q(Q)  # raises, naming the joints
         one = np.ndim(Q) == 1
         QT = self.robot.batch._transposed(Q)
         out = free(QT, clearance, self_clearance)
