@@ -74,9 +74,14 @@ def _previous(scene, Q):
 
 
 def _drake(scene, boolean: bool):
-    """Drake's own query on the scene's context, for one configuration."""
-    plant, context = scene.robot.plant, scene._plant_context
-    port, sg_context = scene.robot.scene_graph.get_query_output_port(), scene._sg_context
+    """Drake's own query on a plain context with the same robot and obstacles
+    (:func:`drake_mh.scene.exact.drake_reference`: the scene's own context leaves the pairs our
+    kernels compute out of Drake's query), for one configuration."""
+    from drake_mh.scene.exact import drake_reference
+
+    reference = drake_reference(scene)
+    plant, context = scene.robot.plant, reference.plant_context
+    port, sg_context = scene.robot.scene_graph.get_query_output_port(), reference.sg_context
 
     def query(q):
         plant.SetPositions(context, q)
