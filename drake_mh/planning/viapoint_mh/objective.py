@@ -104,6 +104,9 @@ class ViaPointMotionConfig:
             is 0 (0: never; the run then uses the whole budget).
         candidates: individuals of the final population (best first) certified before giving
             up on the population.
+        certify_extra: [m] the candidates are certified with this much more than the problem's
+            clearances first (``verify_motion`` certifies the retimed trajectory between its
+            samples with up to about 1 mm more), then with the problem's own.
         repair: when none of them is certified, re-plan each blocked segment with one more via
             point (same optimizer, the budget left over, up to ``repair_rounds`` times).
         repair_rounds: see ``repair``.
@@ -128,6 +131,7 @@ class ViaPointMotionConfig:
     warm_sigma: float = 0.05
     stall: float = 0.25
     candidates: int = 8
+    certify_extra: float = 0.002
     repair: bool = True
     repair_rounds: int = 2
     repair_fraction: float = 0.2
@@ -158,6 +162,7 @@ class ViaPointMotionConfig:
         number("length_unit", 0, open_low=True), number("kappa", 0), number("margin", 0)
         number("seed_fraction", 0, 1), number("seed_sigma", 0), number("warm_fraction", 0, 1)
         number("warm_sigma", 0), number("repair_fraction", 0, 0.9), number("stall", 0, 1)
+        number("certify_extra", 0)
         if self.pop_size is not None:
             integer("pop_size", 2)
         if self.warm_start is not None and not isinstance(self.warm_start, str):

@@ -14,7 +14,10 @@ One run (:func:`plan`):
    collision-free best.
 3. **Certification**: the best individual and the next best of the final population
    (``candidates``, best first) are certified as piecewise-linear motions (all their segments
-   in one :meth:`~drake_mh.scene.Scene.certify_segments` call); the first certified is returned.
+   in one :meth:`~drake_mh.scene.Scene.certify_segments` call), first with ``certify_extra``
+   above the problem's clearances (the verification certifies the *retimed* trajectory between
+   its samples with up to about a millimetre more: a path certified at exactly the clearance
+   can fail there), then, if none is, with the problem's own; the first certified is returned.
 4. **Repair** when none is: each blocked segment of the best individual is re-planned as a
    one-via-point problem between its ends with the same optimizer and the budget left, and
    the path is certified again (``repair_rounds`` times at most).
@@ -172,23 +175,28 @@ def _optimize(objective: ViaPointMotion, optimizer: str, budget: int, rng, deadl
             "pop_size": pop_size, "best_terms": best_terms}
 
 
-def _certify_candidates(problem, objective: ViaPointMotion, X: np.ndarray, count: int):
-    """Index of the first individual of ``X[:count]`` whose path is certified (None), the paths."""
+def _certify_candidates(problem, objective: ViaPointMotion, X: np.ndarray, count: int, extra: float = 0.0):
+    """Index of the first individual of ``X[:count]`` whose path is certified (None), the paths,
+    the blocked segments of each. Certified first with ``extra`` [m] above the problem's
+    clearances, then, if no path is, with the problem's own."""
     paths = [objective.path(x) for x in X[:count]]
     QA = np.vstack([P[:-1] for P in paths])
     QB = np.vstack([P[1:] for P in paths])
-    cert = problem.scene.certify_segments(QA, QB, problem.clearance, problem.self_clearance)
-    ok = cert.certified
-    start = 0
-    first = None
-    blocked = []
-    for i, P in enumerate(paths):
-        n = len(P) - 1
-        seg = ok[start:start + n]
-        blocked.append(np.flatnonzero(~seg))
-        if first is None and np.all(seg):
-            first = i
-        start += n
+    for add in dict.fromkeys((float(extra), 0.0)):
+        cert = problem.scene.certify_segments(QA, QB, problem.clearance + add, problem.self_clearance + add)
+        ok = cert.certified
+        start = 0
+        first = None
+        blocked = []
+        for i, P in enumerate(paths):
+            n = len(P) - 1
+            seg = ok[start:start + n]
+            blocked.append(np.flatnonzero(~seg))
+            if first is None and np.all(seg):
+                first = i
+            start += n
+        if first is not None:
+            break
     return first, paths, blocked
 
 
@@ -210,7 +218,7 @@ def _repair(problem, path: np.ndarray, blocked: np.ndarray, optimizer: str, budg
                              problem.self_clearance, config, problem.frame, n_via=1)
         run = _optimize(sub, optimizer, min(share, budget - used), rng, deadline, config, params, None)
         used += run["nfe"]
-        first, paths, _ = _certify_candidates(problem, sub, run["X"], config.candidates)
+        first, paths, _ = _certify_candidates(problem, sub, run["X"], config.candidates, config.certify_extra)
         pieces.append(paths[0 if first is None else first][1:-1])
     pieces.append(path[-1][None])
     return np.vstack(pieces), used, len(blocked)
@@ -234,7 +242,8 @@ def plan(problem, goals, rng, deadline, budget, *, optimizer: str, **options):
     info.update(nfe=run["nfe"], generations=run["generations"], stop=run["stop"], pop_size=run["pop_size"],
                 dimension=objective.dimension)
     info["best"] = run["best_terms"]
-    first, paths, blocked = _certify_candidates(problem, objective, run["X"], config.candidates)
+    first, paths, blocked = _certify_candidates(problem, objective, run["X"], config.candidates,
+                                                config.certify_extra)
     info["candidate"] = first
     if first is not None:
         info["certified_by_planner"] = True
