@@ -238,39 +238,12 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
                     c += 1
             if c == 0:
                 continue
-            _sphere_pairs_free(c, idx, g_anchor[ga], g_anchor[gb], g_start[ga], g_start[ga + 1], g_start[gb],
-                               g_start[gb + 1], s_offset, s_radius, self_clearance, R, p, alive)
+            for i in range(c):  # the lanes whose bounding spheres are near: every sphere pair
+                b = idx[i]
+                alive[b] &= _pair_min(b, g_anchor[ga], g_anchor[gb], g_start[ga], g_start[ga + 1], g_start[gb],
+                                      g_start[gb + 1], s_offset, s_radius, R, p) >= self_clearance
         for b in range(used):
             out[n0 + b] = alive[b]
-
-
-@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
-def _sphere_pairs_free(c, idx, aa, ab, s0, s1, t0, t1, s_offset, s_radius, self_clearance, R, p, alive):
-    """``alive[idx[i]] &=`` every sphere of one link at least ``self_clearance`` from every sphere
-    of the other (the lanes listed in ``idx``)."""
-    for i in range(c):
-        b = idx[i]
-        free = True
-        for s in range(s0, s1):
-            o = s_offset[s]
-            if aa < 0:
-                ax, ay, az = o[0], o[1], o[2]
-            else:
-                ax = p[aa, 0, b] + R[aa, 0, 0, b] * o[0] + R[aa, 0, 1, b] * o[1] + R[aa, 0, 2, b] * o[2]
-                ay = p[aa, 1, b] + R[aa, 1, 0, b] * o[0] + R[aa, 1, 1, b] * o[1] + R[aa, 1, 2, b] * o[2]
-                az = p[aa, 2, b] + R[aa, 2, 0, b] * o[0] + R[aa, 2, 1, b] * o[1] + R[aa, 2, 2, b] * o[2]
-            for t in range(t0, t1):
-                e = s_offset[t]
-                if ab < 0:
-                    ex, ey, ez = e[0], e[1], e[2]
-                else:
-                    ex = p[ab, 0, b] + R[ab, 0, 0, b] * e[0] + R[ab, 0, 1, b] * e[1] + R[ab, 0, 2, b] * e[2]
-                    ey = p[ab, 1, b] + R[ab, 1, 0, b] * e[0] + R[ab, 1, 1, b] * e[1] + R[ab, 1, 2, b] * e[2]
-                    ez = p[ab, 2, b] + R[ab, 2, 0, b] * e[0] + R[ab, 2, 1, b] * e[1] + R[ab, 2, 2, b] * e[2]
-                lim = self_clearance + s_radius[s] + s_radius[t]
-                dx, dy, dz = ax - ex, ay - ey, az - ez
-                free &= dx * dx + dy * dy + dz * dz >= lim * lim
-        alive[b] &= free
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
