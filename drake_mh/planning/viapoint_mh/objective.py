@@ -104,9 +104,10 @@ class ViaPointMotionConfig:
             is 0 (0: never; the run then uses the whole budget).
         candidates: individuals of the final population (best first) certified before giving
             up on the population.
-        certify_extra: [m] the candidates are certified with this much more than the problem's
-            clearances first (``verify_motion`` certifies the retimed trajectory between its
-            samples with up to about 1 mm more), then with the problem's own.
+        certify_extra: [m] the planner accepts a path certified with this much more than the
+            problem's clearances (``verify_motion`` certifies the retimed trajectory between its
+            samples with up to about 1 mm more: a path certified at exactly the clearance can
+            fail there).
         repair: when none of them is certified, re-plan each blocked segment with one more via
             point (same optimizer, the budget left over, up to ``repair_rounds`` times).
         repair_rounds: see ``repair``.

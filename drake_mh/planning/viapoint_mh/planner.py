@@ -14,13 +14,14 @@ One run (:func:`plan`):
    collision-free best.
 3. **Certification**: the best individual and the next best of the final population
    (``candidates``, best first) are certified as piecewise-linear motions (all their segments
-   in one :meth:`~drake_mh.scene.Scene.certify_segments` call), first with ``certify_extra``
+   in one :meth:`~drake_mh.scene.Scene.certify_segments` call) with ``certify_extra`` (2 mm)
    above the problem's clearances (the verification certifies the *retimed* trajectory between
    its samples with up to about a millimetre more: a path certified at exactly the clearance
-   can fail there), then, if none is, with the problem's own; the first certified is returned.
-4. **Repair** when none is: each blocked segment of the best individual is re-planned as a
-   one-via-point problem between its ends with the same optimizer and the budget left, and
-   the path is certified again (``repair_rounds`` times at most).
+   can fail there); the first certified is returned.
+4. **Repair** when none is: each segment of the best individual not certified (with
+   ``certify_extra``) is re-planned as a one-via-point problem between its ends with the same
+   optimizer and the budget left, and the path is certified again (``repair_rounds`` times at
+   most).
 5. When still not certified, the best individual's path is returned anyway, and
    :func:`~drake_mh.planning.verify_motion` reports it as not certified (never hidden).
 
@@ -176,27 +177,23 @@ def _optimize(objective: ViaPointMotion, optimizer: str, budget: int, rng, deadl
 
 
 def _certify_candidates(problem, objective: ViaPointMotion, X: np.ndarray, count: int, extra: float = 0.0):
-    """Index of the first individual of ``X[:count]`` whose path is certified (None), the paths,
-    the blocked segments of each. Certified first with ``extra`` [m] above the problem's
-    clearances, then, if no path is, with the problem's own."""
+    """Index of the first individual of ``X[:count]`` whose path is certified with ``extra`` [m]
+    above the problem's clearances (None if none is), the paths, the blocked segments of each."""
     paths = [objective.path(x) for x in X[:count]]
     QA = np.vstack([P[:-1] for P in paths])
     QB = np.vstack([P[1:] for P in paths])
-    for add in dict.fromkeys((float(extra), 0.0)):
-        cert = problem.scene.certify_segments(QA, QB, problem.clearance + add, problem.self_clearance + add)
-        ok = cert.certified
-        start = 0
-        first = None
-        blocked = []
-        for i, P in enumerate(paths):
-            n = len(P) - 1
-            seg = ok[start:start + n]
-            blocked.append(np.flatnonzero(~seg))
-            if first is None and np.all(seg):
-                first = i
-            start += n
-        if first is not None:
-            break
+    cert = problem.scene.certify_segments(QA, QB, problem.clearance + extra, problem.self_clearance + extra)
+    ok = cert.certified
+    start = 0
+    first = None
+    blocked = []
+    for i, P in enumerate(paths):
+        n = len(P) - 1
+        seg = ok[start:start + n]
+        blocked.append(np.flatnonzero(~seg))
+        if first is None and np.all(seg):
+            first = i
+        start += n
     return first, paths, blocked
 
 
@@ -252,9 +249,10 @@ def plan(problem, goals, rng, deadline, budget, *, optimizer: str, **options):
     info["best_blocked_segments"] = [int(b) for b in blocked[0]]
     left = budget - run["nfe"]
     rounds = 0
+    extra = config.certify_extra
     while config.repair and rounds < config.repair_rounds and left >= 2 \
             and (deadline is None or time.perf_counter() < deadline):
-        cert = problem.scene.certify_path(path, problem.clearance, problem.self_clearance)
+        cert = problem.scene.certify_path(path, problem.clearance + extra, problem.self_clearance + extra)
         bad = np.flatnonzero(~cert.segments.certified)
         if not len(bad):
             break
