@@ -1,0 +1,218 @@
+"""``rrt_connect`` and ``rrt_connect_smooth``: the Python side of the compiled planner.
+
+:func:`plan` reads the problem, binds the scene's compiled arrays (once per obstacle set),
+and makes one call into :func:`._kernels.plan_kernel`, which plans, certifies and shortcuts.
+:func:`prepare` compiles (or loads from numba's cache) that kernel once per process, so that
+no planning clock counts it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import numbers
+import time
+import weakref
+
+import numpy as np
+
+from drake_mh.errors import InvalidArgument
+from drake_mh.planning.rrt_connect import _kernels as K
+from drake_mh.planning.rrt_connect._clock import clock_address
+
+DEFAULT_MAX_NODES = 200_000
+"""Tree nodes when neither ``budget`` nor a deadline bounds a run (a blocked goal then fails
+after this many nodes instead of running forever)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class RRTConnectConfig:
+    """Options of ``rrt_connect`` (``solve_motion`` keywords).
+
+    Attributes:
+        step: [rad] longest tree edge (EXTEND's range, Euclidean in joint space). Default 1.0,
+            measured best on the Panda table and shelf scenes (0.5 and 2.0 were slower).
+        resolution: [states per rad] of joint-space motion checked in one batched call (at
+            least; more where ``margin`` needs them). VAMP checks its Panda motions at 32 per
+            unit.
+        margin: [m] largest extra clearance the batched check may ask of every state so that
+            the motion between states is certified with no further work (more states are
+            checked when the motion's Lipschitz constant needs them, see
+            :func:`._kernels._motion`); motions that pass closer go through the segment
+            bisection instead.
+        lanes: states of a motion checked first, in one batched call, spread along it (most
+            motions that collide stop after this call).
+        block: states per batched call after the first.
+        certify: how a motion that passes within the margin is certified: ``"boolean"``
+            (bisection with batched boolean checks at halving margins) or ``"bisection"``
+            (the scene's :func:`drake_mh.scene.segments.certify_segments` kernel, on clearance
+            values); the same Lipschitz bound, measured 2x faster boolean.
+        goal_bias: probability of sampling a root of the other tree (a goal configuration when
+            the start tree grows, the start when the goal tree grows) instead of a uniform
+            sample.
+        balance: grow the smaller tree next (VAMP), else alternate (Kuffner & LaValle).
+        shortcut_iterations: random shortcut attempts on the found path (0: none).
+        max_certify_evaluations: most configurations the bisection may evaluate for one
+            motion before it counts as not certified.
+        profile: time sampling, nearest neighbours, checks and certification inside the
+            kernel (``info["time_*"]``; costs about 70 ns per clock reading).
+    """
+
+    step: float = 1.0
+    resolution: float = 16.0
+    margin: float = 0.02
+    lanes: int = 8
+    block: int = 32
+    certify: str = "boolean"
+    goal_bias: float = 0.05
+    balance: bool = True
+    shortcut_iterations: int = 16
+    max_certify_evaluations: int = 512
+    profile: bool = False
+
+    def __post_init__(self):
+        for name in ("step", "resolution", "margin"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value <= 0:
+                raise InvalidArgument(f"rrt_connect: {name} must be a finite number > 0, got {value!r}")
+        if self.certify not in ("boolean", "bisection"):
+            raise InvalidArgument(f"rrt_connect: certify must be 'boolean' or 'bisection', got {self.certify!r}")
+        if isinstance(self.goal_bias, bool) or not isinstance(self.goal_bias, numbers.Real) \
+                or not 0.0 <= self.goal_bias <= 1.0:
+            raise InvalidArgument(f"rrt_connect: goal_bias must be in [0, 1], got {self.goal_bias!r}")
+        for name, least in (("shortcut_iterations", 0), ("max_certify_evaluations", 2), ("lanes", 1), ("block", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
+                raise InvalidArgument(f"rrt_connect: {name} must be an integer >= {least}, got {value!r}")
+
+    @classmethod
+    def from_options(cls, options: dict, **defaults) -> "RRTConnectConfig":
+        """The config of ``solve_motion``'s keywords over ``defaults`` (the defaults' instance is
+        built once: a plan without options spends no time here)."""
+        if not options:
+            key = tuple(sorted(defaults.items()))
+            config = _CONFIGS.get(key)
+            if config is None:
+                config = _CONFIGS[key] = cls(**defaults)
+            return config
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(options) - names)
+        if unknown:
+            raise InvalidArgument(f"rrt_connect: unknown option(s) {unknown}; options are {sorted(names)}")
+        return cls(**{**defaults, **options})
+
+
+_CONFIGS: dict = {}
+_COUNTS = K.T_SAMPLE  # counts first, then seconds
+_COUNT_NAMES = K.STAT_NAMES[:_COUNTS]
+
+
+_CLOCK = clock_address()
+
+#: per scene: (obstacle arrays it was bound to, kernel arguments)
+_BOUND: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_PREPARED = False
+
+
+def _arguments(scene) -> tuple:
+    """``(ints, floats, v_WO, reach)`` of the scene's current obstacles (cached until they change)."""
+    from drake_mh.scene._collision_kernels import pack
+    from drake_mh.scene.batch import bounding_radii
+
+    arrays = scene._obstacle_arrays  # None after add/move/remove: the property rebuilds it
+    if arrays is None:
+        arrays = scene.obstacle_arrays
+    cached = _BOUND.get(scene)
+    if cached is not None and cached[0] is arrays:
+        return cached[1]
+    model = scene.collision_model
+    kinds, R_WO, p_WO, v_WO, dims = arrays
+    ints, floats = pack(*model._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(arrays), *model.pair_arrays)
+    bound = (ints, floats, np.ascontiguousarray(v_WO, dtype=float), np.ascontiguousarray(model.reach))
+    _BOUND[scene] = (arrays, bound)
+    return bound
+
+
+def prepare(problem) -> float:
+    """Compile or load the kernel (once per process) and bind the problem's scene; seconds taken.
+
+    Without it, the first :func:`plan` of a process does it (its ``info["prepare_time"]``;
+    the deadline is then extended by that time: it measures planning, not loading, as
+    :func:`drake_mh.solve_ik`'s timeout does). Loading from numba's cache takes about 0.2 s,
+    compiling after a change of the kernels 1-2 minutes."""
+    global _PREPARED
+    start = time.perf_counter()
+    ints, floats, v_WO, reach = _arguments(problem.scene)
+    if not _PREPARED:
+        q = np.ascontiguousarray(problem.q_start, dtype=float)
+        robot = problem.robot
+        stats = np.zeros(len(K.STAT_NAMES))
+        K.plan_kernel(q, q[None].copy(), robot.lower.astype(float), robot.upper.astype(float), ints, floats, v_WO,
+                      reach, float(problem.clearance), float(problem.self_clearance), np.zeros(1, np.uint64),
+                      1.0, 16.0, 0.02, 8, 32, 0.05, True, 1, 1.0, 16, 1, True, _CLOCK, False, stats)
+        _PREPARED = True
+    return time.perf_counter() - start
+
+
+def plan(problem, goals, rng, deadline, budget, **options):
+    """RRT-Connect from ``problem.q_start`` to any row of ``goals``; every edge certified, the
+    path shortcut (options: :class:`RRTConnectConfig`; ``budget``: tree nodes)."""
+    config = RRTConnectConfig.from_options(options)
+    return _run(problem, goals, rng, deadline, budget, config)
+
+
+def plan_smooth(problem, goals, rng, deadline, budget, **options):
+    """:func:`plan` with 128 shortcut attempts instead of 16 (shorter paths, for more time)."""
+    config = RRTConnectConfig.from_options(options, shortcut_iterations=128)
+    return _run(problem, goals, rng, deadline, budget, config)
+
+
+def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
+    prepare_time = prepare(problem) if not _PREPARED else 0.0
+    ints, floats, v_WO, reach = _arguments(problem.scene)
+    robot = problem.robot
+    seed = np.array([rng.bit_generator.random_raw()], dtype=np.uint64)  # the splitmix64 state
+    # the deadline measures planning, not loading (as solve_ik's timeout)
+    time_limit = np.inf if deadline is None else deadline + prepare_time - time.perf_counter()
+    max_nodes = DEFAULT_MAX_NODES if budget is None else int(budget)
+    stats = np.zeros(len(K.STAT_NAMES))
+    path, outcome, goal = K.plan_kernel(
+        np.ascontiguousarray(problem.q_start, dtype=float), np.ascontiguousarray(goals, dtype=float),
+        robot.lower.astype(float), robot.upper.astype(float), ints, floats, v_WO, reach,
+        float(problem.clearance), float(problem.self_clearance), seed, float(config.step), float(config.resolution),
+        float(config.margin), int(config.lanes), int(config.block), float(config.goal_bias), bool(config.balance),
+        max_nodes, float(time_limit), int(config.max_certify_evaluations), int(config.shortcut_iterations),
+        config.certify == "boolean", _CLOCK, bool(config.profile), stats)
+    info = dict(zip(_COUNT_NAMES, map(int, stats[:_COUNTS].tolist())))
+    info["t_total"] = float(stats[K.T_TOTAL])
+    if config.profile:
+        info.update(zip(K.STAT_NAMES[_COUNTS:], stats[_COUNTS:].tolist()))
+    info["prepare_time"] = prepare_time
+    if outcome == K.FOUND:
+        info["goal"] = int(goal)
+        return path, info
+    why = "budget" if outcome == K.BUDGET else "timeout"
+    info["message"] = (f"no path: {why} reached after {info['nodes']} tree nodes and {info['motions']} motion checks"
+                       + (" (budget: tree nodes)" if why == "budget" else ""))
+    return None, info
+
+
+def certify_motions(scene, QA, QB, clearance: float = 0.0, self_clearance: float = 0.0, **options) -> np.ndarray:
+    """``(M,)`` bool: whether ``rrt_connect``'s motion check certifies each straight joint-space
+    motion ``QA[i] -> QB[i]`` collision-free with these clearances (``QA[i]`` must be free: the
+    planner only extends from free nodes). ``options``: those of :class:`RRTConnectConfig`
+    that concern the check (``resolution``, ``margin``, ``lanes``, ``block``,
+    ``max_certify_evaluations``, ``certify``)."""
+    from drake_mh.scene.segments import check_clearance
+
+    config = RRTConnectConfig.from_options(options)
+    robot = scene.robot
+    QA = np.ascontiguousarray(np.atleast_2d(robot.check_Q(np.atleast_2d(QA))), dtype=float)
+    QB = np.ascontiguousarray(np.atleast_2d(robot.check_Q(np.atleast_2d(QB))), dtype=float)
+    if QA.shape != QB.shape:
+        raise InvalidArgument(f"QA and QB must hold as many configurations, got {len(QA)} and {len(QB)}")
+    ints, floats, v_WO, reach = _arguments(scene)
+    return K.certify_motions(QA, QB, ints, floats, v_WO, reach, check_clearance(clearance, "clearance"),
+                             check_clearance(self_clearance, "self_clearance"), float(config.resolution),
+                             float(config.margin), int(config.lanes), int(config.block),
+                             int(config.max_certify_evaluations), config.certify == "boolean", _CLOCK,
+                             np.zeros(len(K.STAT_NAMES)))

@@ -1,0 +1,179 @@
+"""rrt_connect: every returned motion verified and clear under Drake's exact distance, seeded,
+bounded by its budget and deadline, and its motion check never certifies a colliding motion."""
+
+import time
+
+import numpy as np
+import pytest
+
+import drake_mh
+from drake_mh.errors import InvalidArgument
+from drake_mh.planning import MotionProblem, available_motion_methods, solve_motion
+from drake_mh.planning.rrt_connect import certify_motions, prepare
+from drake_mh.scene import Box, Cylinder, Scene, Sphere
+
+PANDA = drake_mh.load_robot("panda")
+READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # MotionBenchMaker's start
+
+
+def table_scene(self_collision: bool = False) -> Scene:
+    scene = Scene(PANDA, self_collision=self_collision)
+    scene.add("table", Box((0.8, 1.4, 0.05)), [0.6, 0.0, 0.1])
+    scene.add("can1", Cylinder(0.04, 0.2), [0.5, 0.2, 0.225])
+    scene.add("can2", Cylinder(0.04, 0.2), [0.6, -0.15, 0.225])
+    scene.add("block", Box((0.1, 0.1, 0.15)), [0.45, -0.35, 0.2])
+    scene.add("ball", Sphere(0.05), [0.7, 0.05, 0.175])
+    return scene
+
+
+def slot_scene() -> Scene:
+    """Two boards 22 cm apart and a back wall: the hand must enter the slot (a narrow passage)."""
+    scene = Scene(PANDA)
+    scene.add("floor", Box((0.5, 0.9, 0.02)), [0.65, 0.0, 0.4])
+    scene.add("roof", Box((0.5, 0.9, 0.02)), [0.65, 0.0, 0.64])
+    scene.add("back", Box((0.02, 0.9, 0.6)), [0.91, 0.0, 0.5])
+    return scene
+
+
+def goals_in(scene, lo, hi, count, seed=0, clearance=0.0):
+    """Free configurations whose flange lies in the box [lo, hi] (batched sampling)."""
+    Q = PANDA.random_configurations(100_000, rng=np.random.default_rng(seed))
+    p = PANDA.batch.fk(Q)[:, :3, 3]
+    Q = Q[np.all((p >= lo) & (p <= hi), axis=1)]
+    return Q[scene.collision_free(Q, clearance)][:count]
+
+
+def dense_exact(scene, path, per_segment=50):
+    """Drake's exact minimum distance at ``per_segment`` points of every segment (ends included)."""
+    t = np.linspace(0.0, 1.0, per_segment)[:, None]
+    Q = np.vstack([a + t * (b - a) for a, b in zip(path[:-1], path[1:])])
+    return scene.exact_min_distance(Q)
+
+
+@pytest.fixture(scope="module")
+def table_problems():
+    scene = table_scene()
+    prepare(MotionProblem(PANDA, scene, READY, READY))
+    goals = goals_in(scene, [0.35, -0.45, 0.15], [0.8, 0.45, 0.35], 3)
+    return [MotionProblem(PANDA, scene, READY, g, clearance=c) for g, c in zip(goals, (0.0, 0.01, 0.0))]
+
+
+def test_registered():
+    methods = available_motion_methods()
+    assert "rrt_connect" in methods and "rrt_connect_smooth" in methods
+
+
+def test_paths_verify_and_dense_exact_sampling_finds_no_collision(table_problems):
+    for problem in table_problems:
+        for method in ("rrt_connect", "rrt_connect_smooth"):
+            result = solve_motion(problem, method, seed=1, timeout=5.0, retime=False)
+            assert result.success, result.message
+            assert result.min_clearance >= problem.clearance
+            assert np.array_equal(result.path[0], problem.q_start)
+            exact = dense_exact(problem.scene, result.path)
+            assert exact.min() >= problem.clearance - 1e-9, (method, exact.min())
+            assert result.info["nodes"] >= 0 and result.info["motions"] >= 1
+
+
+def test_same_seed_same_path(table_problems):
+    problem = table_problems[0]
+    first = solve_motion(problem, "rrt_connect", seed=7, retime=False)
+    again = solve_motion(problem, "rrt_connect", seed=7, retime=False)
+    assert first.success and np.array_equal(first.path, again.path)
+    assert first.info["motions"] == again.info["motions"]
+    others = [solve_motion(problem, "rrt_connect", seed=s, retime=False).path for s in (8, 9, 10)]
+    assert any(p.shape != first.path.shape or not np.array_equal(p, first.path) for p in others)
+
+
+def test_shortcutting_shortens(table_problems):
+    problem = table_problems[0]
+    raw = solve_motion(problem, "rrt_connect", seed=3, retime=False, shortcut_iterations=0)
+    smooth = solve_motion(problem, "rrt_connect_smooth", seed=3, retime=False)
+    assert raw.success and smooth.success
+    assert smooth.path_length <= raw.path_length + 1e-9
+
+
+def test_narrow_passage():
+    scene = slot_scene()
+    goal = goals_in(scene, [0.6, -0.2, 0.41], [0.8, 0.2, 0.63], 1)[0]
+    problem = MotionProblem(PANDA, scene, READY, goal)
+    assert not solve_motion(problem, "straight", retime=False).success  # the straight line is blocked
+    result = solve_motion(problem, "rrt_connect", seed=1, timeout=10.0, retime=False)
+    assert result.success, result.message
+    assert dense_exact(scene, result.path).min() >= 0.0
+
+
+def test_several_goals_grow_one_tree():
+    scene = table_scene()
+    goals = goals_in(scene, [0.35, -0.45, 0.15], [0.8, 0.45, 0.35], 4, seed=5)
+    problem = MotionProblem(PANDA, scene, READY, goals)
+    result = solve_motion(problem, "rrt_connect", seed=0, retime=False)
+    assert result.success
+    assert np.any(np.all(np.abs(goals - result.path[-1]) <= 1e-12, axis=1))
+
+
+def blocked_planar(planar2r):
+    """Balls on link 1's circle at ±90°: no motion from 0 to 3 rad exists (q2 cannot help)."""
+    scene = Scene(planar2r)
+    scene.add("up", Sphere(0.05), [0.0, 0.0, 0.15])
+    scene.add("down", Sphere(0.05), [0.0, 0.0, -0.15])
+    return scene
+
+
+def test_blocked_goal_fails_honestly_within_budget_and_deadline(planar2r):
+    problem = MotionProblem(planar2r, blocked_planar(planar2r), [0.0, 0.0], [3.0, 0.0])
+    prepare(problem)
+    start = time.perf_counter()
+    result = solve_motion(problem, "rrt_connect", seed=0, budget=300, timeout=None, retime=False)
+    assert not result.success and "budget" in result.message and result.path is None
+    assert result.info["nodes"] <= 300
+    assert time.perf_counter() - start < 5.0
+    start = time.perf_counter()
+    result = solve_motion(problem, "rrt_connect", seed=0, timeout=0.2, retime=False)
+    assert not result.success and "timeout" in result.message
+    assert time.perf_counter() - start < 1.5
+
+
+def test_reachable_goal_among_unreachable_ones(planar2r):
+    problem = MotionProblem(planar2r, blocked_planar(planar2r), [0.0, 0.0], [[3.0, 0.0], [0.8, -0.5]])
+    assert len(problem.goal_configurations) == 2
+    result = solve_motion(problem, "rrt_connect", seed=2, retime=False)
+    assert result.success and result.goal_index == 1
+
+
+def test_motion_check_never_certifies_what_dense_exact_sampling_finds_in_collision():
+    scene = table_scene()
+    rng = np.random.default_rng(4)
+    QA = PANDA.random_configurations(400, rng=rng)
+    QA = QA[scene.collision_free(QA)][:60]
+    QB = np.clip(QA + rng.normal(0.0, 0.6, QA.shape), PANDA.lower, PANDA.upper)
+    for certify in ("boolean", "bisection"):
+        ok = certify_motions(scene, QA, QB, 0.005, certify=certify)
+        assert 0 < ok.sum() < len(ok)  # both outcomes occur
+        reference = scene.certify_segments(QA[ok], QB[ok], 0.005)
+        assert not np.any(reference.status == 0)  # the scene's bisection never finds them blocked
+        for a, b in zip(QA[ok][:15], QB[ok][:15]):
+            assert dense_exact(scene, np.stack([a, b])).min() >= 0.005 - 1e-9
+
+
+def test_self_collision_scene():
+    scene = table_scene(self_collision=True)
+    goal = goals_in(scene, [0.35, -0.45, 0.15], [0.8, 0.45, 0.35], 1, seed=2)[0]
+    problem = MotionProblem(PANDA, scene, READY, goal)
+    result = solve_motion(problem, "rrt_connect", seed=0, timeout=10.0, retime=False)
+    assert result.success, result.message
+    assert scene.certify_path(result.path).certified
+
+
+def test_profile_and_options(table_problems):
+    problem = table_problems[0]
+    result = solve_motion(problem, "rrt_connect", seed=0, retime=False, profile=True)
+    for key in ("t_sample", "t_nn", "t_check", "t_certify", "t_shortcut", "t_total"):
+        assert result.info[key] >= 0.0
+    assert result.info["t_total"] <= result.planning_time
+    with pytest.raises(InvalidArgument, match="unknown option"):
+        solve_motion(problem, "rrt_connect", bogus=1)
+    with pytest.raises(InvalidArgument, match="step"):
+        solve_motion(problem, "rrt_connect", step=0.0)
+    with pytest.raises(InvalidArgument, match="certify"):
+        solve_motion(problem, "rrt_connect", certify="exact")
