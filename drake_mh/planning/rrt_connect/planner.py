@@ -126,7 +126,7 @@ def _arguments(scene) -> tuple:
     from drake_mh.scene._collision_kernels import pack
     from drake_mh.scene.batch import bounding_radii
 
-    arrays = scene._obstacle_arrays  # None after add/move/remove: the property rebuilds it
+    arrays = getattr(scene, "_obstacle_arrays", None)  # None after add/move/remove: the property rebuilds it
     if arrays is None:
         arrays = scene.obstacle_arrays
     cached = _BOUND.get(scene)
