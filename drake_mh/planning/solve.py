@@ -1,7 +1,9 @@
 """``solve_motion``: one entry point for every motion planner, one verification for all.
 
 Methods register themselves with :func:`register` (one folder each under
-:mod:`drake_mh.planning`); :func:`available_motion_methods` lists them. A method is a function
+:mod:`drake_mh.planning`); :func:`available_motion_methods` lists them. A method's
+``plan.prepare(problem)``, if it has one, loads what it needs (compiled kernels) before the
+clock starts: a timeout measures planning, not loading (``info["prepare_time"]``). A method is a function
 ``plan(problem, goals (G, nq), rng, deadline, budget, **options) -> (path (M, nq) | None, info)``
 that plans from ``problem.q_start`` to any row of ``goals``; it may use ``problem.is_free`` and
 ``problem.scene.certify_segments`` as it likes, but its answer is verified by
@@ -131,10 +133,15 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
     goal_start = time.perf_counter()
     goals = goal_configurations(problem)
     goal_time = time.perf_counter() - goal_start
+    prepare_start = time.perf_counter()
+    if hasattr(function, "prepare"):  # load compiled kernels before the clock starts (once per process)
+        function.prepare(problem)
+    prepare_time = time.perf_counter() - prepare_start
     wall, cpu = time.perf_counter(), time.process_time()
     deadline = None if timeout is None else wall + float(timeout)
     path, info = function(problem, goals, rng, deadline, budget, **options)
     result = MotionResult(method, seed=seed, info=dict(info or {}), goal_time=goal_time)
+    result.info.setdefault("prepare_time", prepare_time)
     result.planning_time = time.perf_counter() - wall
     result.cpu_time = time.process_time() - cpu
     if path is None:
