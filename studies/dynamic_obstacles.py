@@ -37,6 +37,8 @@ joint-space line is not certified: detours taken, their cost; success requires t
 motion), and Drake's exact distance at 4 samples per straight piece for comparison.
 
 Run: ``drake-mh study dynamic_obstacles [--quick]`` or ``python studies/dynamic_obstacles.py``.
+Full grid (138 cases): 41 min on 2 shared cores at load ~5 (the 105 framework cases 19 min,
+``--first-by h1,rep`` runs them first); ``--quick``: ~35 s.
 """
 
 from __future__ import annotations
