@@ -53,6 +53,7 @@ def test_easy_problem_succeeds_and_verifies():
     result = solve_motion(problem, "mh_pso", seed=0, budget=1500)
     assert result.success, result.message
     assert result.info["certified_by_planner"] and result.info["nfe"] <= 1500
+    assert "prepare_time" in result.info  # kernels compiled before the clock (planner.prepare)
     again = verify_motion(problem, result.path, "again", retime=False)
     assert again.success and np.array_equal(result.path[0], problem.q_start)
     assert result.trajectory is not None and result.duration > 0

@@ -27,9 +27,9 @@ import functools
 
 from drake_mh.planning.solve import register
 from drake_mh.planning.viapoint_mh.objective import ViaPointMotion, ViaPointMotionConfig, rest_to_rest_time
-from drake_mh.planning.viapoint_mh.planner import DEFAULT_BUDGET, plan, resample_via
+from drake_mh.planning.viapoint_mh.planner import DEFAULT_BUDGET, plan, prepare, resample_via
 
-__all__ = ["ViaPointMotion", "ViaPointMotionConfig", "plan", "resample_via", "rest_to_rest_time",
+__all__ = ["ViaPointMotion", "ViaPointMotionConfig", "plan", "prepare", "resample_via", "rest_to_rest_time",
            "DEFAULT_BUDGET", "METHOD_PREFIX"]
 
 METHOD_PREFIX = "mh_"
@@ -41,6 +41,7 @@ def _register_all() -> None:
     for name in available_methods():
         function = functools.partial(plan, optimizer=name)
         functools.update_wrapper(function, plan)
+        function.prepare = prepare  # solve_motion compiles the kernels before its clock starts
         register(f"{METHOD_PREFIX}{name}",
                  f"via-point trajectory optimization (ABC paper's fitness, K via configurations) with {name}")(function)
 
