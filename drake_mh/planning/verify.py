@@ -16,7 +16,7 @@ A path ``(M, nq)`` succeeds when
    ``δ_j = Δt² a_j / 8`` (the linear-interpolation error bound), ``a_j`` the certified bound of
    its acceleration (the trajectory's certificate). A sphere then moves at most
    ``max_c Σ_j reach[c, j] δ_j`` (:attr:`~drake_mh.scene.batch.CollisionModel.reach`) from the
-   certified segments; ``Δt`` is chosen so that this is :data:`TRAJECTORY_SHIFT`, and the
+   certified segments; ``Δt`` is chosen so that this is :data:`TRAJECTORY_SHIFTS` (1 mm, finer if needed), and the
    trajectory's certified clearance is the segments' minus it.
 """
 
@@ -30,8 +30,10 @@ from drake_mh.planning.result import MotionResult
 REPORT_TOLERANCE = 1e-3
 """[m] the certified minimum clearance is refined to within this of the smallest value seen."""
 
-TRAJECTORY_SHIFT = 1e-3
-"""[m] largest sphere displacement between a retimed trajectory and its sampled chords."""
+TRAJECTORY_SHIFTS = (1e-3, 1e-4, 1e-5)
+"""[m] largest sphere displacement allowed between a retimed trajectory and its sampled chords:
+1 mm first, then finer (about 3x more samples each) where a path certified close to its
+clearance cannot absorb it."""
 
 
 def _reaches_goal(problem, q_end: np.ndarray) -> tuple[int | None, str]:
@@ -126,18 +128,19 @@ def trajectory_clearance(problem, trajectory) -> tuple[float, str]:
     reach = scene.collision_model.reach  # (C, nq)
     per_dt2 = float(np.max(reach @ (a_bound / 8.0)))  # sphere shift per Δt²
     duration = float(trajectory.end_time - trajectory.start_time)
-    dt = np.sqrt(TRAJECTORY_SHIFT / per_dt2) if per_dt2 > 0 else duration
-    n = max(2, int(np.ceil(duration / max(dt, 1e-9))) + 1)
-    t = np.linspace(trajectory.start_time, trajectory.end_time, n)
-    shift = per_dt2 * (t[1] - t[0]) ** 2
-    Q = trajectory.position(t)
-    path = scene.certify_path(Q, problem.clearance + shift, problem.self_clearance + shift,
-                              tolerance=REPORT_TOLERANCE)
-    if not path.certified:
-        return float("nan"), (f"the retimed trajectory ({trajectory.method}) is not certified at "
-                              f"{problem.clearance * 1e3:.1f} mm + {shift * 1e3:.2f} mm between its samples: "
-                              f"{path.segments.reason(path.first_failure)}")
-    return path.min_clearance - shift, ""
+    why = ""
+    for target in TRAJECTORY_SHIFTS:  # finer sampling only where a coarse one cannot certify
+        dt = np.sqrt(target / per_dt2) if per_dt2 > 0 else duration
+        n = max(2, int(np.ceil(duration / max(dt, 1e-9))) + 1)
+        t = np.linspace(trajectory.start_time, trajectory.end_time, n)
+        shift = per_dt2 * (t[1] - t[0]) ** 2
+        path = scene.certify_path(trajectory.position(t), problem.clearance + shift, problem.self_clearance + shift,
+                                  tolerance=REPORT_TOLERANCE)
+        if path.certified:
+            return path.min_clearance - shift, ""
+        why = (f"the retimed trajectory ({trajectory.method}) is not certified at {problem.clearance * 1e3:.1f} mm "
+               f"+ {shift * 1e3:.3f} mm between its {n} samples: {path.segments.reason(path.first_failure)}")
+    return float("nan"), why
 
 
 def _retime(problem, P: np.ndarray, cert) -> tuple[object, str]:
