@@ -63,6 +63,19 @@ def available_motion_methods() -> dict:
     return {name: description for name, (_, description) in _METHODS.items()}
 
 
+def get_motion_method(name: str):
+    """The registered planner ``plan(problem, goals, rng, deadline, budget, **options)`` named
+    ``name`` (e.g. to warm-start one planner from another).
+
+    Raises:
+        UnknownMethod: no such method.
+    """
+    _load()
+    if not isinstance(name, str) or name not in _METHODS:
+        raise UnknownMethod(name, list(_METHODS), what="motion planning method")
+    return _METHODS[name][0]
+
+
 def goal_configurations(problem: MotionProblem, count: int = 4, timeout: float | None = 5.0) -> np.ndarray:
     """The problem's goal configurations; for a pose goal, up to ``count`` collision-free IK
     answers (hybrid IK with the scene, seeds 0, 1, ..., each verified with Drake, then

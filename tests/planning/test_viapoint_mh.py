@@ -157,7 +157,7 @@ def test_warm_start_from_a_registered_method():
     problem = easy_problem()
     result = solve_motion(problem, "mh_pso", seed=0, budget=600, warm_start="straight", retime=False)
     assert result.success and result.info["warm_start"]["found"]
-    with pytest.raises(InvalidArgument, match="not a registered"):
+    with pytest.raises(InvalidArgument, match="warm_start: unknown motion planning method"):
         solve_motion(problem, "mh_pso", warm_start="no_such_planner")
 
 

@@ -76,15 +76,15 @@ def resample_via(path: np.ndarray, K: int) -> np.ndarray:
 
 
 def _warm_path(problem, goals, rng, deadline, name: str) -> tuple[np.ndarray | None, dict]:
-    from drake_mh.planning import solve as registry
+    from drake_mh.errors import UnknownMethod
+    from drake_mh.planning.solve import get_motion_method
 
-    registry._load()
-    if name not in registry._METHODS:
-        raise InvalidArgument(f"warm_start {name!r} is not a registered motion method; available: "
-                              f"{sorted(registry._METHODS)} (rrt_connect may not be installed yet)")
     if name.startswith("mh_"):
         raise InvalidArgument("warm_start must be another family of planner (e.g. 'rrt_connect'), not mh_*")
-    function = registry._METHODS[name][0]
+    try:
+        function = get_motion_method(name)
+    except UnknownMethod as exc:
+        raise InvalidArgument(f"warm_start: {exc}") from None
     start = time.perf_counter()
     child = np.random.default_rng(rng.integers(2 ** 63))
     path, info = function(problem, goals, child, deadline, None)
