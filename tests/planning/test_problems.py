@@ -1,0 +1,253 @@
+"""Problem sets: generated problems valid and deterministic; the MotionBenchMaker converter on a
+tiny synthetic archive in the same format (the real one is never needed here)."""
+
+from __future__ import annotations
+
+import io
+import tarfile
+
+import numpy as np
+import pytest
+
+import drake_mh
+from drake_mh.errors import InvalidArgument, UnknownMethod
+from drake_mh.planning import MotionProblem
+from drake_mh.planning.problems import (
+    MBM_SETS, ProblemSet, available_problem_sets, load_problem_robot, motionbenchmaker_set, problem_set,
+    read_motionbenchmaker, ready_configuration, tool_transform,
+)
+from drake_mh.planning.problems.generate import MARGIN, always_close_pairs, grasp_pose, unwrap
+
+PANDA = load_problem_robot("panda")
+
+
+def _obstacle_poses(problem) -> np.ndarray:
+    return np.array([o.X_WO for o in problem.scene.obstacles.values()])
+
+
+@pytest.mark.parametrize("name", list(available_problem_sets()))
+def test_every_set_gives_certified_free_problems(name):
+    problems = problem_set(name, PANDA, count=1, seed=5)
+    assert isinstance(problems, ProblemSet) and len(problems) == 1 and problems.name == name
+    problem = problems[0]
+    assert isinstance(problem, MotionProblem) and problem.name == f"{name}/000"
+    assert problem.scene.self_collision and len(problem.scene.obstacles) >= 7
+    q_goal = problem.goal_configurations[0]
+    for q in (problem.q_start, q_goal):
+        assert PANDA.within_limits(q)
+        assert problem.scene.collision_free(q, problem.clearance + MARGIN, problem.self_clearance + MARGIN)
+        assert problem.scene.min_distance(q) > 0.0  # Drake's exact distance agrees
+    assert np.max(np.abs(q_goal - problem.q_start)) > 1e-3
+    info = problems.info[0]
+    assert info["straight_free"] == problem.scene.segment_free(problem.q_start, q_goal)
+    # the goal is the IK answer of the recorded grasp pose (Drake FK)
+    X_WE = PANDA.fk_drake(q_goal) @ tool_transform(PANDA)
+    assert np.linalg.norm(X_WE[:3, 3] - info["X_WT"][:3, 3]) < 2e-3
+    summary = problems.summary()
+    assert summary["problems"] == 1 and summary["obstacles_max"] == len(problem.scene.obstacles)
+
+
+def test_problem_sets_are_deterministic_per_seed():
+    a = problem_set("bookshelf_tall", PANDA, count=2, seed=11)
+    b = problem_set("bookshelf_tall", PANDA, count=2, seed=11)
+    c = problem_set("bookshelf_tall", PANDA, count=1, seed=11, first=1)
+    for p, q in zip(a, b):
+        assert np.array_equal(p.q_start, q.q_start) and np.array_equal(p.goal_configurations, q.goal_configurations)
+        assert np.array_equal(_obstacle_poses(p), _obstacle_poses(q))
+    assert np.array_equal(a[1].goal_configurations, c[0].goal_configurations)  # independent of count
+    other = problem_set("bookshelf_tall", PANDA, count=1, seed=12)[0]
+    assert not np.array_equal(_obstacle_poses(a[0]), _obstacle_poses(other))
+
+
+def test_straight_line_is_usually_blocked():
+    problems = problem_set("cage", PANDA, count=3, seed=0)
+    assert problems.straight_line_blocked >= 2 / 3
+    assert "blocked" in repr(problems)
+
+
+def test_ready_configuration_grasp_pose_and_always_close_pairs():
+    assert np.allclose(ready_configuration(PANDA), [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
+    planar = drake_mh.load_robot("planar5")
+    assert np.allclose(ready_configuration(planar), planar.home)
+    X = grasp_pose([0.5, 0.0, 0.3], [1.0, 0.0, 0.0])
+    assert np.allclose(X[:3, 2], [1, 0, 0]) and abs(X[2, 1]) < 1e-12  # fingers close horizontally
+    assert np.allclose(X[:3, :3].T @ X[:3, :3], np.eye(3))
+    down = grasp_pose([0.5, 0.0, 0.3], [0.0, 0.0, -1.0], yaw=0.3)
+    assert np.allclose(down[:3, 2], [0, 0, -1]) and np.isclose(np.linalg.det(down[:3, :3]), 1.0)
+    # the capsule Panda's link1/link3 spheres are 0.9 mm apart in every configuration: left out
+    assert ("panda_link1", "panda_link3") in always_close_pairs(PANDA)
+
+
+def test_unwrap_turns_joints_by_whole_turns_towards_the_reference():
+    arm = drake_mh.Robot.from_dh([0.3, 0.3], [0.0, 0.0], [0.0, 0.0], lower=[-6.2, -6.2], upper=[6.2, 6.2])
+    q = np.array([5.0, -5.5])
+    near = unwrap(arm, q, np.zeros(2))
+    assert np.allclose(near, [5.0 - 2 * np.pi, -5.5 + 2 * np.pi])
+    assert np.allclose(arm.fk(near), arm.fk(q))  # the same geometry
+    assert np.allclose(unwrap(arm, q, q), q)
+    assert np.allclose(unwrap(PANDA, PANDA.home, PANDA.home + 6.0), PANDA.home)  # no room within the limits
+
+
+def test_problem_set_errors():
+    with pytest.raises(UnknownMethod, match="bookshelf_small"):
+        problem_set("shelf", PANDA)
+    with pytest.raises(InvalidArgument, match="count"):
+        problem_set("cage", PANDA, count=-1)
+    assert len(problem_set("cage", PANDA, count=0)) == 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("robot", ["panda_hand", "ur5"])
+def test_mesh_robot_problems(robot):
+    from robot_fixtures import erd_root
+
+    erd_root()
+    problems = problem_set("bookshelf_small", robot, count=1, seed=0)
+    problem = problems[0]
+    assert len(problem.robot.collision_summary()) >= 6  # meshes (convex hulls)
+    if robot == "panda_hand":  # Franka's acceleration limits added: motions can be retimed
+        assert np.allclose(problem.robot.acceleration_limits, [15, 7.5, 10, 12.5, 15, 20, 20])
+        assert problem.robot.locked_joints == {"panda_finger_joint1": 0.04, "panda_finger_joint2": 0.04}
+    for q in (problem.q_start, problem.goal_configurations[0]):
+        assert problem.scene.collision_free(q, MARGIN, MARGIN) and problem.scene.min_distance(q) > 0.0
+
+
+# --- MotionBenchMaker archives --------------------------------------------------------------------
+
+READY = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]
+GOAL = [0.8, -0.5, 0.0, -2.0, 0.0, 1.8, 0.785]
+
+SCENE = """robot_model_name: panda
+world:
+  collision_objects:
+    - id: shelf
+      primitives:
+        - type: box
+          dimensions: [0.2, 0.4, 0.04]
+      primitive_poses:
+        - position: [{x}, 0.5, 0.3]
+          orientation: [0, 0, 0.3826834, 0.9238795]
+    - id: Can1
+      pose:
+        position: [0.0, -0.6, 0.0]
+        orientation: [0, 0, 0, 1]
+      primitives:
+        - type: cylinder
+          dimensions: [0.14, 0.03]
+        - type: sphere
+          dimensions: [0.05]
+      primitive_poses:
+        - position: [0.1, 0.0, 0.2]
+          orientation: [0, 0, 0, 1]
+        - position: [0.1, 0.0, 0.5]
+          orientation: [0, 0, 0, 1]
+"""
+
+REQUEST = """start_state:
+  joint_state:
+    name: [panda_joint1, panda_joint2, panda_joint3, panda_joint4, panda_joint5, panda_joint6, panda_joint7, panda_finger_joint1]
+    position: {start}
+goal_constraints:
+  - joint_constraints:
+{goal}
+group_name: panda_arm
+"""
+
+
+def _request(start, goal) -> str:
+    lines = "\n".join(f"      - joint_name: panda_joint{j + 1}\n        position: {v}" for j, v in enumerate(goal))
+    return REQUEST.format(start=list(start) + [0.065], goal=lines)
+
+
+def _add(tar: tarfile.TarFile, name: str, text: str) -> None:
+    data = text.encode()
+    info = tarfile.TarInfo(name)
+    info.size = len(data)
+    tar.addfile(info, io.BytesIO(data))
+
+
+def _archive(path, blocked_goal: bool = True):
+    """Two problems of ``cage_panda`` (the second's goal inside an obstacle) and one of ``box_panda``."""
+    flange = drake_mh.load_robot("panda").fk(np.array(GOAL))[:3, 3]
+    with tarfile.open(path, "w:bz2") as tar:
+        _add(tar, "problems/cage_panda/scene0001.yaml", SCENE.format(x=0.0))
+        _add(tar, "problems/cage_panda/request0001.yaml", _request(READY, GOAL))
+        scene2 = SCENE.format(x=0.0) + (
+            f"    - id: blocker\n      primitives:\n        - type: sphere\n          dimensions: [0.1]\n"
+            f"      primitive_poses:\n        - position: {flange.tolist()}\n          orientation: [0, 0, 0, 1]\n"
+            if blocked_goal else "")
+        _add(tar, "problems/cage_panda/scene0002.yaml", scene2)
+        _add(tar, "problems/cage_panda/request0002.yaml", _request(READY, GOAL))
+        _add(tar, "problems/box_panda/scene0001.yaml", SCENE.format(x=0.1))
+        _add(tar, "problems/box_panda/request0001.yaml", _request(READY, GOAL))
+    return path
+
+
+def test_converter_reads_the_motionbenchmaker_format(tmp_path):
+    from drake_mh.shapes import Box, Cylinder, Sphere
+
+    data = read_motionbenchmaker(_archive(tmp_path / "problems.tar.bz2"))
+    assert sorted(data) == ["box", "cage"] and [p.index for p in data["cage"]] == [1, 2]
+    problem = data["cage"][0]
+    names = [o[0] for o in problem.obstacles]
+    assert names == ["shelf", "Can1_0", "Can1_1"]  # every primitive of an object
+    shelf, can, ball = problem.obstacles
+    assert shelf[1] == Box(0.2, 0.4, 0.04) and np.allclose(shelf[2], [0.0, 0.5, 0.3])
+    c, s = np.cos(np.pi / 4), np.sin(np.pi / 4)
+    assert np.allclose(shelf[3], [[c, -s, 0], [s, c, 0], [0, 0, 1]], atol=1e-6)  # quaternion [x, y, z, w]
+    assert can[1] == Cylinder(0.03, 0.14)  # MoveIt cylinders: [height, radius]
+    assert np.allclose(can[2], [0.1, -0.6, 0.2])  # the object's pose composed with the primitive's
+    assert ball[1] == Sphere(0.05) and np.allclose(ball[2], [0.1, -0.6, 0.5])
+    assert problem.start["panda_joint4"] == -2.356 and problem.start["panda_finger_joint1"] == 0.065
+    assert [problem.goal[f"panda_joint{j + 1}"] for j in range(7)] == GOAL
+    assert list(read_motionbenchmaker(tmp_path / "problems.tar.bz2", sets=["box"])) == ["box"]
+
+
+def test_converter_builds_problems_and_skips_invalid_ones(tmp_path):
+    path = _archive(tmp_path / "problems.tar.bz2")
+    problems = motionbenchmaker_set(path, "cage", robot="panda")
+    assert len(problems) == 1 and problems.name == "mbm/cage"
+    assert [index for index, _ in problems.skipped] == [2] and "goal" in problems.skipped[0][1]
+    assert "hand" in problems.note  # the bundled Panda has no hand: said, not hidden
+    problem = problems[0]
+    assert np.allclose(problem.q_start, READY) and np.allclose(problem.goal_configurations[0], GOAL)
+    assert len(problem.scene.obstacles) == 3 and problems.info[0]["index"] == 1
+    assert len(motionbenchmaker_set(path, "cage", robot="panda", count=1)) == 1
+
+
+def test_converter_reads_the_sdist_and_folders(tmp_path):
+    inner = _archive(tmp_path / "problems.tar.bz2").read_bytes()
+    sdist = tmp_path / "vamp_planner-0.0.0.tar.gz"
+    with tarfile.open(sdist, "w:gz") as tar:
+        info = tarfile.TarInfo("vamp_planner-0.0.0/resources/panda/problems.tar.bz2")
+        info.size = len(inner)
+        tar.addfile(info, io.BytesIO(inner))
+    assert [p.index for p in read_motionbenchmaker(sdist)["cage"]] == [1, 2]
+    folder = tmp_path / "extracted"
+    with tarfile.open(tmp_path / "problems.tar.bz2") as tar:
+        tar.extractall(folder, filter="data")
+    assert sorted(read_motionbenchmaker(folder)) == ["box", "cage"]
+
+
+def test_converter_errors(tmp_path):
+    with pytest.raises(InvalidArgument, match="does not exist"):
+        read_motionbenchmaker(tmp_path / "missing.tar.bz2")
+    empty = tmp_path / "empty.tar.bz2"
+    with tarfile.open(empty, "w:bz2") as tar:
+        _add(tar, "README", "nothing")
+    with pytest.raises(InvalidArgument, match="no MotionBenchMaker problems"):
+        read_motionbenchmaker(empty)
+    lonely = tmp_path / "lonely.tar.bz2"
+    with tarfile.open(lonely, "w:bz2") as tar:
+        _add(tar, "problems/cage_panda/scene0001.yaml", SCENE.format(x=0.0))
+    with pytest.raises(InvalidArgument, match="no request"):
+        read_motionbenchmaker(lonely)
+    cone = tmp_path / "cone.tar.bz2"
+    with tarfile.open(cone, "w:bz2") as tar:
+        _add(tar, "problems/cage_panda/scene0001.yaml", SCENE.format(x=0.0).replace("type: box", "type: cone"))
+        _add(tar, "problems/cage_panda/request0001.yaml", _request(READY, GOAL))
+    with pytest.raises(InvalidArgument, match="cone"):
+        read_motionbenchmaker(cone)
+    with pytest.raises(UnknownMethod):
+        motionbenchmaker_set(empty, "kitchen")
+    assert "bookshelf_thin" in MBM_SETS
