@@ -75,5 +75,15 @@ def plan_warm(problem, goals, rng, deadline, budget, **options):
     return path, info
 
 
+def _prepare_warm(problem) -> None:
+    """Load the warm-start planner's compiled kernels before the clock starts (its first
+    compilation on a fresh machine takes minutes; a timeout measures planning)."""
+    prepare = getattr(_registry()[WARM_START][0], "prepare", None)
+    if prepare is not None:
+        prepare(problem)
+
+
+plan_warm.prepare = _prepare_warm
+
 if _warm_start_registered():
     register("drake_kto_warm", "drake_kto warm-started from the rrt_connect path (its time included)")(plan_warm)
