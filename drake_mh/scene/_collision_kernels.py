@@ -247,25 +247,23 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
+def _lane_point(a, o, R, p, b):
+    """World position of offset ``o`` fixed in moving frame ``a`` (-1: the world), lane ``b``."""
+    if a < 0:
+        return o[0], o[1], o[2]
+    return (p[a, 0, b] + R[a, 0, 0, b] * o[0] + R[a, 0, 1, b] * o[1] + R[a, 0, 2, b] * o[2],
+            p[a, 1, b] + R[a, 1, 0, b] * o[0] + R[a, 1, 1, b] * o[1] + R[a, 1, 2, b] * o[2],
+            p[a, 2, b] + R[a, 2, 0, b] * o[0] + R[a, 2, 1, b] * o[1] + R[a, 2, 2, b] * o[2])
+
+
+@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
 def _pair_min(b, aa, ab, s0, s1, t0, t1, s_offset, s_radius, R, p):
     """Smallest ``|c_s - c_t| - r_s - r_t`` over the spheres of two links, lane ``b``."""
     best = np.inf
     for s in range(s0, s1):
-        o = s_offset[s]
-        if aa < 0:
-            ax, ay, az = o[0], o[1], o[2]
-        else:
-            ax = p[aa, 0, b] + R[aa, 0, 0, b] * o[0] + R[aa, 0, 1, b] * o[1] + R[aa, 0, 2, b] * o[2]
-            ay = p[aa, 1, b] + R[aa, 1, 0, b] * o[0] + R[aa, 1, 1, b] * o[1] + R[aa, 1, 2, b] * o[2]
-            az = p[aa, 2, b] + R[aa, 2, 0, b] * o[0] + R[aa, 2, 1, b] * o[1] + R[aa, 2, 2, b] * o[2]
+        ax, ay, az = _lane_point(aa, s_offset[s], R, p, b)
         for t in range(t0, t1):
-            e = s_offset[t]
-            if ab < 0:
-                ex, ey, ez = e[0], e[1], e[2]
-            else:
-                ex = p[ab, 0, b] + R[ab, 0, 0, b] * e[0] + R[ab, 0, 1, b] * e[1] + R[ab, 0, 2, b] * e[2]
-                ey = p[ab, 1, b] + R[ab, 1, 0, b] * e[0] + R[ab, 1, 1, b] * e[1] + R[ab, 1, 2, b] * e[2]
-                ez = p[ab, 2, b] + R[ab, 2, 0, b] * e[0] + R[ab, 2, 1, b] * e[1] + R[ab, 2, 2, b] * e[2]
+            ex, ey, ez = _lane_point(ab, s_offset[t], R, p, b)
             dx, dy, dz = ax - ex, ay - ey, az - ez
             best = min(best, math.sqrt(dx * dx + dy * dy + dz * dz) - s_radius[s] - s_radius[t])
     return best
