@@ -39,9 +39,10 @@ STANDOFF = 0.03
 """[m] from the grasp point to the object's surface (a pre-grasp: the fingers clear the object)."""
 MARGIN = 0.003
 """[m] start and goal are certified free with this much more than the problem's clearances: the
-verification certifies a retimed trajectory's samples with up to 1 mm more than the clearance
-(:data:`drake_mh.planning.verify.TRAJECTORY_SHIFT`), so a start closer than that could never be
-left by a verified motion."""
+verification certifies a retimed trajectory's samples with a little more than the clearance, for
+the motion between them (:data:`drake_mh.planning.verify.TRAJECTORY_SHIFT`, 1 mm, refined where
+needed), so a start or goal with nothing to spare could not be left or reached by a verified
+motion; the sphere model's certificate is also what every planner checks against."""
 ALWAYS_CLOSE = (0.005, 0.8, 1000)
 """Self-collision pairs left out: closer than 5 mm under the sphere model in at least 80 % of
 1,000 random configurations (links that touch by construction, like MoveIt's "adjacent" and
