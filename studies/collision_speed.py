@@ -35,7 +35,7 @@ from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
 
 ROBOTS = ("panda (bundled, capsules)", "panda_hand")  # then drake_mh.example_arms
-SCENES = ("1 sphere", "10 mixed")
+SCENES = ("1 sphere", "10 mixed")  # drake_mh.scene.benchmark.BENCHMARK_SCENES
 N_BATCH, N_EXACT, N_SEGMENTS = 1024, 50, 200
 
 
@@ -47,19 +47,10 @@ def _robot(name: str):
 
 
 def _scene(robot, kind: str):
-    """One ball in front of the arm, or ten mixed obstacles in its workspace (fixed: drawn once
-    from seed 1, none on the base, about 18 % of random Panda configurations collide)."""
-    from drake_mh.scene import Box, Capsule, Cylinder, Scene, Sphere
+    """The shared benchmark scene (:func:`drake_mh.scene.benchmark.benchmark_scene`)."""
+    from drake_mh.scene.benchmark import benchmark_scene
 
-    scene = Scene(robot)
-    if kind == SCENES[0]:
-        scene.add("ball", Sphere(0.1), [0.5, 0.0, 0.5])
-        return scene
-    shapes = [Sphere(0.08), Box((0.3, 0.2, 0.05)), Cylinder(0.05, 0.4), Capsule(0.04, 0.3)]
-    rng = np.random.default_rng(1)
-    for i in range(10):
-        scene.add(f"o{i}", shapes[i % 4], rng.uniform([-0.8, -0.8, 0.0], [0.8, 0.8, 1.0]), rpy=rng.uniform(-3, 3, 3))
-    return scene
+    return benchmark_scene(robot, kind)
 
 
 def _previous(scene, Q):
