@@ -75,13 +75,18 @@ class Scene:
     Args:
         robot: the robot.
         self_collision: also report robot link vs link distances (adjacent links excluded by
-            Drake; add more pairs with ``ignore_link_pairs``).
+            Drake; add more pairs with ``ignore_link_pairs``). Link pairs that are *always
+            close* — never more than 1 cm apart under the sphere model anywhere in the joint
+            limits, like the capsule Panda's link1-link3 (0.9 mm) — are left out too, listed in
+            :attr:`always_close_pairs` and logged (rule: :mod:`drake_mh.scene.always_close`).
         ignore_link_pairs: extra ``(link_a, link_b)`` pairs to exclude from self-distances.
         sphere_tolerance: covering tolerance of the sphere model [m].
+        keep_always_close: check the always-close pairs as well (default False: with them, no
+            configuration of some robots is certified free of self-collision).
     """
 
     def __init__(self, robot, self_collision: bool = False, ignore_link_pairs=(),
-                 sphere_tolerance: float = DEFAULT_TOLERANCE):
+                 sphere_tolerance: float = DEFAULT_TOLERANCE, keep_always_close: bool = False):
         from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, Role
 
         from drake_mh.robot import Robot
@@ -101,6 +106,7 @@ class Scene:
         self._free_function = None
         self._q_shape = (robot.nq,)
         self._self_capsule_pairs: list = []
+        self._always_close: tuple = ()
         inspector = robot.scene_graph.model_inspector()
         self._robot_ids = [g for g in inspector.GetAllGeometryIds(Role.kProximity)
                            if inspector.GetFrameId(g) != inspector.world_frame_id()]
@@ -115,11 +121,32 @@ class Scene:
             # its capsule-capsule query can hang on collinear axes), so they leave Drake's query
             query_inspector = robot.scene_graph.get_query_output_port().Eval(self._sg_context).inspector()
             self._self_link_pairs = self._unfiltered_link_pairs(query_inspector)
+            if not keep_always_close and self._robot_ids:
+                from drake_mh.scene.always_close import always_close_pairs
+
+                self._always_close = always_close_pairs(robot, self.sphere_model, self._self_link_pairs)
+                for a, b in self._always_close:
+                    ga, gb = (self._link_geometries(link) for link in (a, b))
+                    manager.Apply(CollisionFilterDeclaration().ExcludeBetween(GeometrySet(ga), GeometrySet(gb)))
+                dropped = {frozenset(pair) for pair in self._always_close}
+                self._self_link_pairs = [p for p in self._self_link_pairs if frozenset(p) not in dropped]
+                query_inspector = robot.scene_graph.get_query_output_port().Eval(self._sg_context).inspector()
             capsules = sorted(self._capsule_links, key=lambda g: g.get_value())
             self._self_capsule_pairs = [(a, b) for i, a in enumerate(capsules) for b in capsules[i + 1:]
                                         if not query_inspector.CollisionFiltered(a, b)]
             for a, b in self._self_capsule_pairs:
                 manager.Apply(CollisionFilterDeclaration().ExcludeBetween(GeometrySet([a]), GeometrySet([b])))
+
+    @property
+    def always_close_pairs(self) -> tuple:
+        """``((link_a, link_b), ...)`` left out of self-collision as always close (empty without
+        ``self_collision`` or with ``keep_always_close=True``; :mod:`drake_mh.scene.always_close`)."""
+        return self._always_close
+
+    @property
+    def self_link_pairs(self) -> tuple:
+        """``((link_a, link_b), ...)`` checked for self-collision (empty without ``self_collision``)."""
+        return tuple(self._self_link_pairs)
 
     def _unfiltered_link_pairs(self, inspector) -> list:
         """``[(link_a, link_b)]`` with a geometry pair that Drake's collision filter keeps."""

@@ -74,8 +74,10 @@ def test_ready_configuration_grasp_pose_and_always_close_pairs():
     assert np.allclose(X[:3, :3].T @ X[:3, :3], np.eye(3))
     down = grasp_pose([0.5, 0.0, 0.3], [0.0, 0.0, -1.0], yaw=0.3)
     assert np.allclose(down[:3, 2], [0, 0, -1]) and np.isclose(np.linalg.det(down[:3, :3]), 1.0)
-    # the capsule Panda's link1/link3 spheres are 0.9 mm apart in every configuration: left out
+    # the capsule Panda's link1/link3 spheres are 0.9 mm apart in every configuration: left out,
+    # by the problem sets' scenes as by any self-collision Scene
     assert ("panda_link1", "panda_link3") in always_close_pairs(PANDA)
+    assert problem_set("cage", PANDA, count=1, seed=0)[0].scene.always_close_pairs == always_close_pairs(PANDA)
 
 
 def test_unwrap_turns_joints_by_whole_turns_towards_the_reference():

@@ -81,8 +81,39 @@ def test_self_collision_pairs():
     names = PANDA.link_names()
     adjacent = {frozenset(p) for p in zip(names, names[1:])}
     assert all(frozenset((p.link, p.other)) not in adjacent for p in pairs)
-    filtered = Scene(PANDA, self_collision=True, ignore_link_pairs=[("panda_link5", "panda_link7")])
+    filtered = Scene(PANDA, self_collision=True, ignore_link_pairs=[("panda_link5", "panda_link7")],
+                     keep_always_close=True)
     assert all({p.link, p.other} != {"panda_link5", "panda_link7"} for p in filtered.distances(np.zeros(7)))
+    assert ("panda_link1", "panda_link3") in filtered.self_link_pairs
+    assert ("panda_link5", "panda_link7") not in filtered.self_link_pairs
+
+
+def test_always_close_pairs_are_left_out_by_default(caplog):
+    """The capsule Panda's link1-link3 spheres are 0.9 mm apart in every configuration and
+    link5-link7 3.3 mm: checked, they reject most configurations; left out by default, reported."""
+    from drake_mh.scene.always_close import SEPARATION, largest_separation
+
+    with caplog.at_level("INFO", logger="drake_mh.scene.always_close"):
+        default = Scene(PANDA, self_collision=True, sphere_tolerance=0.0099)  # a fresh model: logged
+    assert default.always_close_pairs == (("panda_link1", "panda_link3"), ("panda_link5", "panda_link7"))
+    assert "panda_link1-panda_link3" in caplog.text and "keep_always_close=True" in caplog.text
+    assert not set(default.always_close_pairs) & set(default.self_link_pairs)
+    keep = Scene(PANDA, self_collision=True, keep_always_close=True)
+    assert keep.always_close_pairs == ()
+    assert set(keep.self_link_pairs) == set(Scene(PANDA, self_collision=True).self_link_pairs) | {
+        ("panda_link1", "panda_link3"), ("panda_link5", "panda_link7")}
+    assert Scene(PANDA).always_close_pairs == () and Scene(PANDA).self_link_pairs == ()
+    Q = PANDA.random_configurations(500, np.random.default_rng(3))
+    assert Scene(PANDA, self_collision=True).collision_free(Q).mean() > 0.9
+    assert keep.collision_free(Q).mean() < 0.8
+    # the rule: every pair left out is never more than SEPARATION apart, every pair kept is, somewhere
+    separation = largest_separation(PANDA, keep.sphere_model, keep.self_link_pairs)
+    assert all((d < SEPARATION) == (pair in Scene(PANDA, self_collision=True).always_close_pairs)
+               for pair, d in separation.items())
+    # exact distances leave them out too
+    pairs = {frozenset((p.link, p.other)) for p in Scene(PANDA, self_collision=True).distances(np.zeros(7))}
+    assert frozenset(("panda_link1", "panda_link3")) not in pairs
+    assert frozenset(("panda_link1", "panda_link3")) in {frozenset((p.link, p.other)) for p in keep.distances(np.zeros(7))}
 
 
 def _check_guarantee(scene, Q, extra_pessimism=0.0):

@@ -43,11 +43,6 @@ verification certifies a retimed trajectory's samples with a little more than th
 the motion between them (:data:`drake_mh.planning.verify.TRAJECTORY_SHIFT`, 1 mm, refined where
 needed), so a start or goal with nothing to spare could not be left or reached by a verified
 motion; the sphere model's certificate is also what every planner checks against."""
-ALWAYS_CLOSE = (0.005, 0.8, 1000)
-"""Self-collision pairs left out: closer than 5 mm under the sphere model in at least 80 % of
-1,000 random configurations (links that touch by construction, like MoveIt's "adjacent" and
-"always" pairs: the capsule Panda's link1-link3 are 0.9 mm apart in every configuration)."""
-
 #: a configuration with the arm raised in front of the base, by the robot's joint names
 READY = {
     ("panda_joint1", "panda_joint2", "panda_joint3", "panda_joint4", "panda_joint5", "panda_joint6",
@@ -192,33 +187,21 @@ def draw_fixture(name: str, rng: np.random.Generator):
     return FIXTURES[name](rng)
 
 
-_ALWAYS: dict = {}
-
-
 def always_close_pairs(robot) -> tuple:
-    """The robot's link pairs left out of self-collision checks (:data:`ALWAYS_CLOSE`), once per
-    robot and process (deterministic: the samples come from seed 0)."""
-    key = id(robot)
-    if key not in _ALWAYS:
-        from drake_mh.scene import Scene
+    """The robot's link pairs that a self-collision :class:`drake_mh.scene.Scene` leaves out by
+    default: never more than 1 cm apart under the sphere model (:mod:`drake_mh.scene.always_close`;
+    the capsule Panda's link1-link3 are 0.9 mm apart in every configuration)."""
+    from drake_mh.scene import Scene
 
-        threshold, fraction, samples = ALWAYS_CLOSE
-        scene = Scene(robot, self_collision=True)
-        model = scene.collision_model
-        Q = robot.random_configurations(samples, np.random.default_rng(0))
-        C = model.clearances(robot.batch._transposed(Q), scene.obstacle_arrays, per_obstacle=False)[:, model.num_links:]
-        close = np.mean(C < threshold, axis=0)
-        _ALWAYS[key] = (robot, tuple(pair for pair, f in zip(model.self_pairs, close) if f >= fraction))
-    return _ALWAYS[key][1]
+    return Scene(robot, self_collision=True).always_close_pairs
 
 
 def new_scene(robot, self_collision: bool = True):
-    """An empty :class:`drake_mh.scene.Scene`, self-collision without :func:`always_close_pairs`."""
+    """An empty :class:`drake_mh.scene.Scene`, self-collision with the default rule: the robot's
+    always-close link pairs left out (:func:`always_close_pairs`)."""
     from drake_mh.scene import Scene
 
-    if not self_collision:
-        return Scene(robot)
-    return Scene(robot, self_collision=True, ignore_link_pairs=always_close_pairs(robot))
+    return Scene(robot, self_collision=bool(self_collision))
 
 
 def certified_with_margin(scene, q, clearance: float, self_clearance: float) -> bool:
