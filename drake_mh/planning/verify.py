@@ -9,9 +9,9 @@ A path ``(M, nq)`` succeeds when
    every segment, not only the waypoints);
 3. it retimes into a trajectory certified against the robot's velocity, acceleration and torque
    limits (:func:`drake_mh.trajectories.retime`: toppra, else ruckig) whose *executed* motion is
-   certified too. Neither retimer follows the straight segments exactly (toppra's cubic spline
-   leaves the chords; ruckig's profiles may fall back from phase to time synchronization), so
-   the trajectory itself is certified: sampled every ``Δt``, the straight segments between the
+   certified too. toppra's cubic spline leaves the chords (ruckig's motion stays on them, to
+   rounding, but is certified the same way), so the trajectory itself is certified: sampled
+   every ``Δt``, the straight segments between the
    samples are certified, and between two samples a joint deviates from that segment by at most
    ``δ_j = Δt² a_j / 8`` (the linear-interpolation error bound), ``a_j`` the certified bound of
    its acceleration (the trajectory's certificate). A sphere then moves at most

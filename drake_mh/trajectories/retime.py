@@ -16,11 +16,17 @@ robot's position limits and the requested limits within ``1 + tol``, or raises.
   evaluated here with exact chain-rule derivatives.
 * ``"drake-toppra"``: Drake's ``Toppra`` on the same spline and gridpoints (CLP LPs; its torque
   constraint uses the plant), the cross-check baseline.
-* ``"ruckig"`` (Berscheid & Kröger, RSS 2021; community edition): jerk-limited. The community
-  edition has no intermediate waypoints (they call a cloud API) and ignores position limits,
-  so the path is driven segment by segment, **stopping at every waypoint**, with phase
-  synchronization (all joints on the straight joint-space segment, which stays inside the
-  position box because the box is convex); positions are then checked by certification.
+* ``"ruckig"`` (Berscheid & Kröger, "Jerk-limited real-time trajectory generation with
+  arbitrary target states", RSS 2021; community edition): jerk-limited, **exactly on the
+  piecewise-linear joint-space path**, **at rest at every waypoint**. The community edition has
+  no intermediate waypoints (they call a cloud API), ignores position limits, and its phase
+  synchronization falls back to time synchronization when it cannot synchronize (segments then
+  left the straight line by up to 0.11 rad); so each segment ``q_a -> q_b`` is a one-dimensional
+  ruckig profile of its parameter ``s: 0 -> 1`` with ``v_s = min_j v_j / |Δq_j|`` (the same for
+  acceleration and jerk), and ``q(t) = q_a + s(t) (q_b - q_a)`` (:func:`_ruckig_line`): every
+  configuration lies on the segment (to rounding), ``s`` is monotone (rest to rest), the
+  segment stays in the convex position box, and under the joints' box limits no rest-to-rest
+  motion along the segment is faster.
 
 Limits are enforced at the check points by toppra; between them the chain-rule values can
 exceed a limit slightly. Every candidate is certified. A velocity/acceleration excess of a
@@ -44,7 +50,8 @@ from drake_mh.errors import InfeasibleTrajectory, InvalidArgument, LimitViolatio
 from drake_mh.trajectories.certify import certify
 from drake_mh.trajectories.dynamics import batch_dynamics
 from drake_mh.trajectories.paths import check_waypoints, joint_path
-from drake_mh.trajectories.trajectory import Trajectory, merge_ppolys
+from drake_mh.trajectories.ruckig_time import _ruckig_path, ruckig_state_to_state
+from drake_mh.trajectories.trajectory import Trajectory
 
 __all__ = ["retime", "RETIMERS", "timing_from_gridpoints", "ruckig_state_to_state"]
 
@@ -70,6 +77,21 @@ def retime(path, robot, method: str = "toppra", *, limits=None, gridpoints: int 
            scale: float = 1.0, tol: float = 1e-6, max_attempts: int = 4,
            bc_type: str = "not-a-knot", check_points: int = 1) -> Trajectory:
     """Time-parameterize a joint path under the robot's limits; the result is certified.
+
+    What the result guarantees, by method:
+
+    * every method: starts at ``path[0]`` and ends at ``path[-1]`` at rest, passes through
+      every waypoint, stays within the position limits and, checked by dense certification
+      (:func:`~drake_mh.trajectories.certify.certify`), within ``scale`` × the enforced limits
+      up to ``1 + tol``;
+    * ``"toppra"`` / ``"drake-toppra"``: the *geometric* path is the ``C²`` cubic spline through
+      the waypoints (:func:`~drake_mh.trajectories.paths.joint_path`), not the straight
+      segments between them; it does not stop at the waypoints; jerk is not limited;
+    * ``"ruckig"``: the motion lies **exactly on the piecewise-linear path** (every
+      configuration on the straight segment between two consecutive waypoints, to rounding:
+      3e-15 rad measured), moves forward along it, **rests at every waypoint**, and each
+      segment is the time-optimal jerk-limited rest-to-rest motion along its line (a 1-D
+      profile of the segment parameter, module docstring); torque is certified, not planned.
 
     Args:
         path: ``(K, nq)`` joint waypoints [rad], ``K >= 2``, inside the position limits.
@@ -465,128 +487,3 @@ def _ppoly_from_drake(traj) -> PPoly:
         for k in range(deg + 1):
             c[deg - k, i] = float(np.asarray(derivs[k].value(t0)).ravel()[0]) / factorial(k)
     return PPoly(c, breaks)
-
-
-# --- ruckig -------------------------------------------------------------------------------------
-
-
-def _profile_ppoly(profile, t_start: float, duration: float) -> PPoly:
-    """Exact cubic ``PPoly`` of one ruckig DOF profile (brake pre-phase + 7 jerk phases)."""
-    phases = []
-    brake = profile.brake
-    if brake.duration > 0:
-        for k in range(len(brake.t)):
-            if brake.t[k] > 0:
-                phases.append((brake.t[k], brake.j[k], brake.a[k], brake.v[k], brake.p[k]))
-    for k in range(7):
-        if profile.t[k] > 0:
-            phases.append((profile.t[k], profile.j[k], profile.a[k], profile.v[k], profile.p[k]))
-    if getattr(profile, "accel", None) is not None and profile.accel.duration > 0:
-        raise InfeasibleTrajectory("ruckig", "ruckig returned an acceleration pre-profile, which "
-                                   "drake_mh does not convert; start from within the limits")
-    x = [t_start]
-    c = []
-    for dt, j, a, v, p in phases:
-        c.append([j / 6.0, a / 2.0, v, p])
-        x.append(x[-1] + dt)
-    if not phases:  # this DOF does not move
-        c.append([0.0, 0.0, 0.0, profile.p[-1]])
-        x.append(t_start + duration)
-    # a DOF that finishes early (time synchronization) rests at its target until `duration`
-    if x[-1] < t_start + duration - 1e-12:
-        c.append([0.0, 0.0, profile.vf if abs(profile.vf) > 0 else 0.0, profile.pf])
-        x.append(t_start + duration)
-    x[-1] = t_start + duration
-    return PPoly(np.array(c).T, np.array(x))
-
-
-def ruckig_state_to_state(robot, q0, q1, v0=None, a0=None, v1=None, a1=None, *, factors=None,
-                          synchronization: str = "phase") -> Trajectory:
-    """One jerk-limited state-to-state motion with ruckig (online use: call again every cycle).
-
-    Ruckig's community edition ignores ``min_position``/``max_position``; the returned motion's
-    position extrema are checked here against the robot's position limits.
-
-    Args:
-        robot: limits (velocity, acceleration, jerk; ``inf`` jerk is replaced by a large value).
-        q0, q1: start and target positions ``(nq,)`` [rad].
-        v0, a0, v1, a1: start/target velocities and accelerations (default 0).
-        factors: quantity -> fraction of the limit to use (default 1).
-        synchronization: ``"phase"`` (straight line in joint space where ruckig can),
-            ``"time"`` (ruckig's default) or ``"none"``.
-
-    Returns:
-        A :class:`Trajectory` (``method="ruckig"``), not yet certified.
-
-    Raises:
-        InfeasibleTrajectory: ruckig reports an error, or the motion leaves the position limits
-            (e.g. braking from ``v0`` needs more room than the limit leaves).
-    """
-    from ruckig import InputParameter, Result, Ruckig, Synchronization
-    from ruckig import Trajectory as RTrajectory
-
-    nq = robot.nq
-    factors = factors or {}
-    zeros = np.zeros(nq)
-    q0, q1 = robot.check_q(q0, "q0"), robot.check_q(q1, "q1")
-    inp = InputParameter(nq)
-    inp.current_position = q0
-    inp.current_velocity = zeros if v0 is None else robot.check_q(v0, "v0")
-    inp.current_acceleration = zeros if a0 is None else robot.check_q(a0, "a0")
-    inp.target_position = q1
-    inp.target_velocity = zeros if v1 is None else robot.check_q(v1, "v1")
-    inp.target_acceleration = zeros if a1 is None else robot.check_q(a1, "a1")
-
-    def lim(arr, q, big):
-        out = np.where(np.isfinite(arr), arr, big) * factors.get(q, 1.0)
-        return out
-
-    inp.max_velocity = lim(robot.velocity_limits, "velocity", 1e3)
-    inp.max_acceleration = lim(robot.acceleration_limits, "acceleration", 1e4)
-    inp.max_jerk = lim(robot.jerk_limits, "jerk", 1e6)
-    sync = {"phase": Synchronization.Phase, "time": Synchronization.Time, "none": Synchronization.No}
-    if synchronization not in sync:
-        raise InvalidArgument(f"synchronization must be one of {sorted(sync)}, got {synchronization!r}")
-    inp.synchronization = sync[synchronization]
-    otg = Ruckig(nq)
-    out = RTrajectory(nq)
-    try:
-        result = otg.calculate(inp, out)
-    except RuntimeError as exc:  # ruckig raises on invalid input (limits, states)
-        raise InfeasibleTrajectory("ruckig", str(exc)) from exc
-    if result not in (Result.Working, Result.Finished):
-        raise InfeasibleTrajectory("ruckig", f"ruckig returned {result}")
-    traj = _from_ruckig(out, robot)
-    ext = out.position_extrema
-    lo = np.array([e.min for e in ext])
-    hi = np.array([e.max for e in ext])
-    bad = ((lo < robot.lower - 1e-12) | (hi > robot.upper + 1e-12)) & ~robot.continuous
-    if np.any(bad):
-        j = int(np.argmax(bad))
-        raise InfeasibleTrajectory(
-            "ruckig", f"the jerk-limited motion takes joint {robot.joint_names[j]!r} to "
-            f"[{lo[j]:.6g}, {hi[j]:.6g}], outside [{robot.lower[j]:.6g}, {robot.upper[j]:.6g}] "
-            "(ruckig's community edition ignores position limits): start with less velocity "
-            "towards the limit or choose a target further from it")
-    return traj
-
-
-def _from_ruckig(out, robot, t_start: float = 0.0) -> Trajectory:
-    duration = out.duration
-    profiles = out.profiles[0]
-    polys = [_profile_ppoly(profiles[j], t_start, duration) for j in range(robot.nq)]
-    return Trajectory(merge_ppolys(polys), None, tuple(robot.joint_names), "ruckig", {})
-
-
-def _ruckig_path(W, robot, factors) -> Trajectory:
-    """Rest-to-rest ruckig segments through every waypoint, concatenated in time."""
-    pieces = []
-    t = 0.0
-    for k in range(len(W) - 1):
-        seg = ruckig_state_to_state(robot, W[k], W[k + 1], factors=factors, synchronization="phase")
-        pp = seg.path
-        pieces.append(PPoly(pp.c, pp.x + t))
-        t += seg.duration
-    x = np.concatenate([pieces[0].x] + [p.x[1:] for p in pieces[1:]])
-    c = np.concatenate([p.c for p in pieces], axis=1)
-    return Trajectory(PPoly(c, x), None, tuple(robot.joint_names), "ruckig", {"segments": len(pieces)})

@@ -172,6 +172,47 @@ def test_ruckig_path_stops_at_waypoints_and_respects_jerk(panda):
         assert np.linalg.norm(V[i]) < 1e-2
 
 
+def _distance_to_path(Q, W):
+    """``(N,)`` distance [rad] of each row of Q to the nearest segment of the path W, and the
+    path parameter ``k + u`` of that nearest point."""
+    best = np.full(len(Q), np.inf)
+    where = np.zeros(len(Q))
+    for k in range(len(W) - 1):
+        d = W[k + 1] - W[k]
+        u = np.clip((Q - W[k]) @ d / (d @ d), 0.0, 1.0)
+        dist = np.linalg.norm(Q - (W[k] + u[:, None] * d), axis=1)
+        closer = dist < best
+        best[closer], where[closer] = dist[closer], k + u[closer]
+    return best, where
+
+
+@pytest.mark.parametrize("seed", [9, 11, 12])
+def test_ruckig_path_follows_the_straight_segments_exactly(panda, seed):
+    """Issue #18: ruckig's phase synchronization can fall back to time synchronization, and
+    segments left the straight line by up to 0.114 rad. The 1-D profile per segment cannot."""
+    W = random_waypoints(panda, np.random.default_rng(seed), k=5)
+    W[2, 3] = W[1, 3]  # a joint that does not move on a segment
+    traj = retime(W, panda, "ruckig")
+    assert traj.info["certificate"].ok(("position", "velocity", "acceleration", "jerk"))
+    t = np.linspace(0.0, traj.duration, 20001)
+    Q = traj.position(t)
+    dist, progress = _distance_to_path(Q, W)
+    assert dist.max() <= 1e-9
+    assert np.all(np.diff(progress) >= -1e-9)  # never goes back along the path
+    assert np.allclose(Q[0], W[0], atol=1e-12) and np.allclose(Q[-1], W[-1], atol=1e-9)
+
+
+def test_ruckig_segment_is_time_optimal_along_the_line(panda):
+    """On one segment the binding joint reaches its velocity (or acceleration) limit: the
+    scaled 1-D limits are exactly the joints' limits along the line."""
+    q_a = panda.home - 0.6
+    q_b = panda.home + 0.6
+    traj = retime(np.array([q_a, q_b]), panda, "ruckig")
+    cert = traj.info["certificate"]
+    assert max(cert.max_ratio(("velocity",)), cert.max_ratio(("acceleration",)),
+               cert.max_ratio(("jerk",))) > 1 - 1e-6
+
+
 def test_timing_from_gridpoints():
     ss = np.array([0.0, 0.5, 1.5, 2.0])
     sd = np.array([0.0, 1.0, 2.0, 0.0])
