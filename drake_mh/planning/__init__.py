@@ -13,9 +13,9 @@
 
 from drake_mh.planning.problem import MotionProblem
 from drake_mh.planning.result import MotionResult
-from drake_mh.planning.solve import (available_motion_methods, get_motion_method, goal_configurations, register,
-                                     solve_motion)
+from drake_mh.planning.solve import (available_motion_methods, get_motion_method, goal_configurations,
+                                     prepare_motion_method, register, solve_motion)
 from drake_mh.planning.verify import verify_motion
 
 __all__ = ["MotionProblem", "MotionResult", "solve_motion", "available_motion_methods", "verify_motion",
-           "goal_configurations", "get_motion_method", "register"]
+           "goal_configurations", "get_motion_method", "prepare_motion_method", "register"]

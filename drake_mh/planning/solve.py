@@ -2,8 +2,10 @@
 
 Methods register themselves with :func:`register` (one folder each under
 :mod:`drake_mh.planning`); :func:`available_motion_methods` lists them. A method's
-``plan.prepare(problem)``, if it has one, loads what it needs (compiled kernels) before the
-clock starts: a timeout measures planning, not loading (``info["prepare_time"]``). A method is a function
+``plan.prepare(problem, **options)``, if it has one, loads what it needs (compiled kernels,
+and, with a warm-start option, the warm-start planner's) before the clock starts: a timeout
+measures planning, not loading (``info["prepare_time"]``). It gets the same options as the plan
+(a ``prepare`` without ``**options`` gets those it names; :func:`prepare_motion_method`). A method is a function
 ``plan(problem, goals (G, nq), rng, deadline, budget, **options) -> (path (M, nq) | None, info)``
 that plans from ``problem.q_start`` to any row of ``goals``; it may use ``problem.is_free`` and
 ``problem.scene.certify_segments`` as it likes, but its answer is verified by
@@ -76,6 +78,37 @@ def get_motion_method(name: str):
     return _METHODS[name][0]
 
 
+def prepare_motion_method(method, problem: MotionProblem, **options) -> float:
+    """Run a method's ``prepare(problem, **options)`` (nothing if it has none): what
+    :func:`solve_motion` does before its clock starts.
+
+    A ``prepare`` that takes ``**options`` gets every option; one that names some gets those
+    (so an option of the plan never breaks a ``prepare`` that does not use it).
+
+    Args:
+        method: a registered name, or the planner function itself.
+        problem: the problem about to be solved.
+        **options: the options the plan will get.
+
+    Returns:
+        The seconds it took.
+
+    Raises:
+        UnknownMethod: no such method.
+    """
+    import inspect
+
+    function = get_motion_method(method) if isinstance(method, str) else method
+    prepare = getattr(function, "prepare", None)
+    start = time.perf_counter()
+    if prepare is not None:
+        parameters = inspect.signature(prepare).parameters
+        if not any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values()):
+            options = {k: v for k, v in options.items() if k in parameters}
+        prepare(problem, **options)
+    return time.perf_counter() - start
+
+
 def goal_configurations(problem: MotionProblem, count: int = 4, timeout: float | None = 5.0) -> np.ndarray:
     """The problem's goal configurations; for a pose goal, up to ``count`` collision-free IK
     answers (hybrid IK with the scene, seeds 0, 1, ..., each verified with Drake, then
@@ -146,10 +179,8 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
     goal_start = time.perf_counter()
     goals = goal_configurations(problem)
     goal_time = time.perf_counter() - goal_start
-    prepare_start = time.perf_counter()
-    if hasattr(function, "prepare"):  # load compiled kernels before the clock starts (once per process)
-        function.prepare(problem)
-    prepare_time = time.perf_counter() - prepare_start
+    # load compiled kernels (the warm-start planner's too) before the clock starts, once per process
+    prepare_time = prepare_motion_method(function, problem, **dict(options))
     wall, cpu = time.perf_counter(), time.process_time()
     deadline = None if timeout is None else wall + float(timeout)
     path, info = function(problem, goals, rng, deadline, budget, **options)

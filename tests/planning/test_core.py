@@ -83,3 +83,38 @@ def test_problem_errors():
         solve_motion(problem, "nope")
     with pytest.raises(InvalidArgument):
         solve_motion(problem, "straight", timeout=-1)
+
+
+def test_prepare_gets_the_options_before_the_clock(monkeypatch):
+    """solve_motion hands the plan's options to its prepare (issue #18): a prepare with
+    **options gets them all, one that names some gets those, and its time is not planning time."""
+    import time
+
+    from drake_mh.planning import prepare_motion_method, solve
+    from drake_mh.planning.straight import plan as straight
+
+    seen = []
+
+    def plan(problem, goals, rng, deadline, budget, **options):
+        seen.append(("plan", options))
+        return straight(problem, goals, rng, deadline, budget)
+
+    def prepare(problem, **options):
+        seen.append(("prepare", options))
+        time.sleep(0.05)
+
+    plan.prepare = prepare
+    monkeypatch.setitem(solve._METHODS, "test_prepared", (plan, "test"))
+    q_goal = PANDA.home.copy()
+    q_goal[0] += 0.5
+    problem = MotionProblem(PANDA, ball_scene(), PANDA.home, q_goal)
+    result = solve_motion(problem, "test_prepared", retime=False, knob=3)
+    assert seen == [("prepare", {"knob": 3}), ("plan", {"knob": 3})]
+    assert result.info["prepare_time"] >= 0.05 and result.planning_time < 0.05
+
+    def named(problem, knob=None):
+        seen.append(("named", knob))
+
+    plan.prepare = named
+    prepare_motion_method(plan, problem, knob=4, other=5)  # `other` is not its business
+    assert seen[-1] == ("named", 4)

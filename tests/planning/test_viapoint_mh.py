@@ -227,3 +227,17 @@ def test_repair_replans_a_blocked_segment():
                                    ViaPointMotionConfig(), {})
     assert segments == 1 and 0 < used <= 800 and len(path) == 3
     assert verify_motion(problem, path, "repaired", retime=False).success
+
+
+def test_prepare_compiles_the_warm_start_planner(monkeypatch):
+    """mh_<optimizer> with warm_start prepares that planner before the clock (issue #18)."""
+    from drake_mh.planning import get_motion_method
+
+    warm = get_motion_method("straight")
+    calls = []
+    monkeypatch.setattr(warm, "prepare", lambda problem, **options: calls.append(problem), raising=False)
+    problem = easy_problem()
+    result = solve_motion(problem, "mh_pso", seed=0, budget=300, warm_start="straight", retime=False)
+    assert calls == [problem] and result.info["warm_start"]["found"]
+    with pytest.raises(InvalidArgument, match="warm_start"):  # checked before the clock, too
+        get_motion_method("mh_pso").prepare(problem, warm_start="mh_de")

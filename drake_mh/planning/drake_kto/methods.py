@@ -75,12 +75,13 @@ def plan_warm(problem, goals, rng, deadline, budget, **options):
     return path, info
 
 
-def _prepare_warm(problem) -> None:
+def _prepare_warm(problem, warm_options=None, **_) -> None:
     """Load the warm-start planner's compiled kernels before the clock starts (its first
-    compilation on a fresh machine takes minutes; a timeout measures planning)."""
-    prepare = getattr(_registry()[WARM_START][0], "prepare", None)
-    if prepare is not None:
-        prepare(problem)
+    compilation on a fresh machine takes minutes; a timeout measures planning), with the
+    ``warm_options`` it will get."""
+    from drake_mh.planning.solve import prepare_motion_method
+
+    prepare_motion_method(_registry()[WARM_START][0], problem, **dict(warm_options or {}))
 
 
 plan_warm.prepare = _prepare_warm

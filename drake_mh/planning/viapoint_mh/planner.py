@@ -75,16 +75,21 @@ def resample_via(path: np.ndarray, K: int) -> np.ndarray:
     return np.stack([np.interp(targets, s, path[:, j]) for j in range(path.shape[1])], axis=1)
 
 
-def _warm_path(problem, goals, rng, deadline, name: str) -> tuple[np.ndarray | None, dict]:
+def _warm_method(name: str):
+    """The registered planner named ``name`` for a warm start (not an ``mh_*``)."""
     from drake_mh.errors import UnknownMethod
     from drake_mh.planning.solve import get_motion_method
 
-    if name.startswith("mh_"):
-        raise InvalidArgument("warm_start must be another family of planner (e.g. 'rrt_connect'), not mh_*")
+    if not isinstance(name, str) or name.startswith("mh_"):
+        raise InvalidArgument(f"warm_start must name another family of planner (e.g. 'rrt_connect'), not {name!r}")
     try:
-        function = get_motion_method(name)
+        return get_motion_method(name)
     except UnknownMethod as exc:
         raise InvalidArgument(f"warm_start: {exc}") from None
+
+
+def _warm_path(problem, goals, rng, deadline, name: str) -> tuple[np.ndarray | None, dict]:
+    function = _warm_method(name)
     start = time.perf_counter()
     child = np.random.default_rng(rng.integers(2 ** 63))
     path, info = function(problem, goals, child, deadline, None)
@@ -224,20 +229,29 @@ def _repair(problem, path: np.ndarray, blocked: np.ndarray, optimizer: str, budg
 _PREPARED: dict = {}
 
 
-def prepare(problem) -> None:
+def prepare(problem, **options) -> None:
     """Compile what a run needs (sphere-model clearances, FK, the gravity screen, certified
-    segments) by one small untimed evaluation, once per robot and process; ``solve_motion``
-    calls it before the clock starts. A warm start's planner is not prepared here (its
-    compilation counts as planning time on its first call)."""
-    key = id(problem.robot)
-    if _PREPARED.get(key) is problem.robot:
-        return
-    robot = problem.robot
-    objective = ViaPointMotion(robot, problem.scene, problem.q_start, problem.q_start[None], 0.0, 0.0,
-                               ViaPointMotionConfig(n_via=1, samples=2))
-    objective.terms(np.repeat(problem.q_start[None], 2, axis=0))
-    problem.scene.certify_segments(problem.q_start, problem.q_start)
-    _PREPARED[key] = robot
+    segments) by one small untimed evaluation, once per robot, trajectory kind and process,
+    and, with ``warm_start``, prepare that planner too
+    (:func:`~drake_mh.planning.solve.prepare_motion_method`); ``solve_motion`` calls it with the
+    run's options before the clock starts.
+
+    Raises:
+        InvalidArgument: bad options (the same as :func:`plan` would raise).
+    """
+    config, _ = _split_options(dict(options))
+    key = (id(problem.robot), config.trajectory)
+    if _PREPARED.get(key) is not problem.robot:
+        robot = problem.robot
+        objective = ViaPointMotion(robot, problem.scene, problem.q_start, problem.q_start[None], 0.0, 0.0,
+                                   ViaPointMotionConfig(n_via=1, samples=2, trajectory=config.trajectory))
+        objective.terms(np.repeat(objective.bounds.mean(axis=1)[None], 2, axis=0))
+        problem.scene.certify_segments(problem.q_start, problem.q_start)
+        _PREPARED[key] = robot
+    if config.warm_start is not None:
+        from drake_mh.planning.solve import prepare_motion_method
+
+        prepare_motion_method(_warm_method(config.warm_start), problem)
 
 
 def plan(problem, goals, rng, deadline, budget, *, optimizer: str, **options):
