@@ -41,7 +41,8 @@ def _register_all() -> None:
     for name in available_methods():
         function = functools.partial(plan, optimizer=name)
         functools.update_wrapper(function, plan)
-        function.prepare = prepare  # solve_motion compiles the kernels before its clock starts
+        # solve_motion compiles the kernels (and starts the optimizer) before its clock starts
+        function.prepare = functools.partial(prepare, optimizer=name)
         register(f"{METHOD_PREFIX}{name}",
                  f"via-point trajectory optimization (ABC paper's fitness, K via configurations) with {name}")(function)
 
