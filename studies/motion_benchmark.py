@@ -152,14 +152,12 @@ def _problem(robot: str, name: str, index: int):
 
 
 def _animate(case: Case, problem, result) -> str:
-    """Attach a Meshcat animation of the executed motion; says what happened."""
+    """Attach a Meshcat animation of the executed motion with its certified clearance
+    (:func:`drake_mh.viz.motion_html`); says what happened."""
     try:
         import drake_mh.viz as viz
 
-        duration = result.duration
-        t = np.linspace(0.0, duration, max(2, int(30 * duration) + 1))
-        Q = result.trajectory.position(t)
-        case.attach("motion.html", viz.animation_html(problem.robot, (t, Q), scene=problem.scene))
+        case.attach("motion.html", viz.motion_html(problem, result))
         return "attached"
     except ImportError:
         return "drake_mh.viz not installed"

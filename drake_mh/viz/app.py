@@ -10,7 +10,10 @@ Table 1's parts and where they are here (details in ``docs/app.md``):
 * part 4 (IK solver): "Generate / Regenerate solutions" (§3.3), "Test run" (play once);
 * parts 5, 7: "Run" (loops on a closed path) and "Stop";
 * part 6 (obstacle position): sliders "Obstacle X/Y/Z" (and radius) move the obstacle live; the
-  follower regenerates (§3.4.1) or re-plans (§3.4.2) at once (:mod:`drake_mh.reactive.follower`).
+  follower regenerates (§3.4.1) or re-plans (§3.4.2) at once (:mod:`drake_mh.reactive.follower`);
+* (beyond Table 1) "8 · Plan a motion": point-to-point planning from where the arm is to a goal
+  pose or configuration with any :func:`drake_mh.planning.available_motion_methods`, in the
+  background, then the certified motion is played (:mod:`drake_mh.viz.app_plan`).
 
 The robot moves only along certified motions: the follower certifies the motion between two
 path points against the obstacle as it is when the arm starts it (a detour through via
@@ -48,7 +51,8 @@ from pathlib import Path
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.viz.app_controls import SECTIONS, Controls, SliderSpec
+from drake_mh.viz.app_controls import MAX_GOAL_JOINTS, SECTIONS, Controls, SliderSpec, joint_slider_name
+from drake_mh.viz.app_plan import AppPlanner, check_plan_settings
 
 logger = logging.getLogger(__name__)
 
@@ -79,6 +83,10 @@ class AppConfig:
         port: Meshcat port (``None``: first free from 7000; 0: any); the app's page takes the
             first free port after Meshcat's (0: any).
         status_file: JSON status written on every change (``None``: none).
+        plan_method: motion planner of "Plan to goal ..." (``None``: ``rrt_connect_smooth``).
+        plan_timeout: [s] planning limit (the slider "Plan timeout [s]"); goal: ``(x, y, z)`` [m]
+            of the goal point (``None``: via point 1); goal_q: goal configuration of the first robot
+            (``None``: its home); plan_clearance: [m] required along motions.
     """
 
     robots: tuple = ("seed000_6dof", "panda")
@@ -93,6 +101,11 @@ class AppConfig:
     speed: float = 1.0
     port: int | None = None
     status_file: str | None = None
+    plan_method: str | None = None
+    plan_timeout: float = 5.0
+    goal: tuple | None = None
+    goal_q: tuple | None = None
+    plan_clearance: float = 0.0
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -115,6 +128,7 @@ class AppConfig:
             raise InvalidArgument(f"obstacle_radius must be a positive length [m], got {self.obstacle_radius!r}")
         if not self.robots:
             raise InvalidArgument("robots must name at least one robot (drake-mh robots lists them)")
+        check_plan_settings(self.plan_method, self.plan_timeout, self.goal, self.plan_clearance)
 
 
 class PlannerApp:
@@ -161,6 +175,7 @@ class PlannerApp:
         self.run_frames, self.run_time = 0, 0.0
         self.started = time.monotonic()
         self.clicks: dict[str, int] = {}
+        self.controls, self.planner = None, AppPlanner(self)
         self._load_robot()
         P = self.points
         o = config.obstacle if config.obstacle is not None else (0.5, 0.5, 0.5)
@@ -174,14 +189,17 @@ class PlannerApp:
             SliderSpec("Obstacle Y [m]", -reach, reach, 0.01, o[1]),
             SliderSpec("Obstacle Z [m]", -reach, reach, 0.01, o[2]),
             SliderSpec("Obstacle radius [m]", 0.01, 0.5, 0.01, config.obstacle_radius),
+            *self.planner.sliders(),
         ]
         self.controls = Controls(self.meshcat, sliders)
+        self.planner.robot_loaded()
         self.page = None
         if page:
             from drake_mh.viz.app_page import AppPage, page_html
 
-            html = page_html(self.meshcat.port(), SECTIONS, [s.name for s in sliders],
-                             primary=("Generate / Regenerate solutions", "Run"),
+            joints = [joint_slider_name(i) for i in range(MAX_GOAL_JOINTS)]
+            html = page_html(self.meshcat.port(), SECTIONS, [s.name for s in sliders] + joints,
+                             primary=("Generate / Regenerate solutions", "Run", "Plan to goal pose"),
                              wide=("Generate / Regenerate solutions",))
             self.page = AppPage(html, port=0 if config.port == 0 else None, first=self.meshcat.port() + 1)
         self.meshcat.SetCameraPose([1.25, -0.65, 0.85], [0.45, 0.35, 0.3])  # the Table 3 workspace, close up
@@ -216,8 +234,9 @@ class PlannerApp:
             position = getattr(self, "_obstacle_p", self.config.obstacle)
             self.scene.add("obstacle", Sphere(radius), position)
         self.view = View(self.robot, meshcat=self.meshcat)
-        self.follower = None
         self._make_path()
+        if self.controls is not None:
+            self.planner.robot_loaded()
 
     def _make_path(self) -> None:
         from drake_mh.paths import trapezoidal_path
@@ -235,7 +254,8 @@ class PlannerApp:
     # --- drawing ---------------------------------------------------------------------------
 
     def show_environment(self) -> None:
-        """Draws the path, its stop points, the obstacle and the robot (Table 1 part 3)."""
+        """Draws the path, its stop points, the obstacle, the planning goal and the robot where it is
+        (Table 1 part 3)."""
         view = self.view
         view.add_obstacles(self.scene, colour=OBSTACLE_COLOUR)
         points = self.follower.points if self.follower is not None else self.path.points
@@ -243,7 +263,8 @@ class PlannerApp:
         for i, p in enumerate(self.points):
             view.add_target(p, f"point{i}", radius=0.025 if i == self.edit else 0.015,
                             colour=EDITED_POINT_COLOUR if i == self.edit else POINT_COLOUR)
-        view.set_q(self.follower.q if self.follower is not None else self.robot.home)
+        self.planner.draw()
+        view.set_q(view.q)
 
     def _pose_along(self, t: float) -> bool:
         """Poses the robot at time ``t`` of the path along the certified motion between the points'
@@ -329,6 +350,7 @@ class PlannerApp:
 
         self.follower = RegeneratingFollower.plan(self.robot, self.scene, self.path, self._follower_config(),
                                                   seed=seed, progress=progress)
+        self.view.set_q(self.follower.q)
         took = time.perf_counter() - start
         failed = self.follower.plan_failed
         self._update_motion()
@@ -351,7 +373,9 @@ class PlannerApp:
         self.message = "test run" if mode == "test" else "running: move the obstacle with its sliders"
 
     def stop(self) -> None:
-        """'Stop'."""
+        """'Stop' (a planned motion stops where the robot is)."""
+        if self.planner.halt("stopped"):
+            return
         self.mode = "idle"
         self.message = f"stopped at point {self.follower.index if self.follower else 0}"
 
@@ -387,6 +411,7 @@ class PlannerApp:
         if self.config.obstacle is None:
             self.message = "no obstacle (started with --no-obstacle)"
             return
+        halted = self.planner.halt("the obstacle moved; the motion was certified for its old place only")
         if radius is not None:
             self._radius = float(radius)
             p = self.scene.obstacles["obstacle"].position
@@ -398,7 +423,7 @@ class PlannerApp:
             self.scene.move("obstacle", position)
             self.view.update_obstacles(self.scene, colour=OBSTACLE_COLOUR)
         if self.follower is None:
-            self.message = "obstacle moved (no solutions yet)"
+            self.message = halted or "obstacle moved (no solutions yet)"
             return
         event = self.follower.react()
         if event.changed:
@@ -408,7 +433,7 @@ class PlannerApp:
             if event.replans:
                 self.view.add_path(self.follower.points, "path")
         self._update_motion()
-        self.message = event.summary() + self._motion_words()
+        self.message = (f"{halted}; " if halted else "") + event.summary() + self._motion_words()
 
     def edit_path(self, changed: dict) -> None:
         """A path slider moved: new path, solutions discarded."""
@@ -432,15 +457,22 @@ class PlannerApp:
             "Next robot": self.next_robot, "Next algorithm": self.next_algorithm, "Edit next point": self.next_point,
             "Show environment": self.show_environment, "Generate / Regenerate solutions": self.generate,
             "Test run": lambda: self.play("test"), "Run": lambda: self.play("run"), "Stop": self.stop,
+            "Plan to goal pose": lambda: self.planner.start("pose"), "Next planner": self.planner.next_method,
+            "Plan to goal joints": lambda: self.planner.start("joints"),
         }
         if name in actions:
             actions[name]()
 
     def tick(self, dt: float) -> None:
-        """One frame: buttons, sliders, motion."""
+        """One frame: buttons, sliders, motion (while planning: only the status; the rest waits)."""
+        if self.planner.busy:
+            return self.planner.poll()
         for name in self.controls.clicked():
             self.handle(name)
+        if self.planner.busy:  # the scene stays as the planner sees it
+            return
         changed = self.controls.changed()
+        self.planner.sliders_changed(changed)
         if any(k.startswith("Point") for k in changed):
             self.edit_path(changed)
         moved = [changed.get(f"Obstacle {a} [m]") for a in "XYZ"]
@@ -448,7 +480,9 @@ class PlannerApp:
             p = [self.controls.value(f"Obstacle {a} [m]") for a in "XYZ"]
             self.move_obstacle(p if any(v is not None for v in moved) else None,
                                changed.get("Obstacle radius [m]"))
-        if self.mode in ("test", "run") and self.follower is not None:
+        if self.mode == "plan":
+            self.planner.advance(dt * self.config.speed)
+        elif self.mode in ("test", "run") and self.follower is not None:
             self.t += dt * self.config.speed
             self.run_frames += 1
             self.run_time += dt
@@ -476,7 +510,7 @@ class PlannerApp:
         if message is not None:
             self.message = message
         setup = (f"Setup: {self.robot_name} | {self.method} | editing {POINT_NAMES[self.edit]} | "
-                 f"{len(self.path.points)} points")
+                 f"{len(self.path.points)} points | planner {self.planner.method}, {self.planner.timeout:g} s")
         self.controls.status(setup, f"Status: {self.message}")
         self.write_status()
 
@@ -496,7 +530,7 @@ class PlannerApp:
             "clicks": dict(self.clicks), "frames": self.frames,
             "run_fps": self.run_frames / self.run_time if self.run_time > 0 else None,
             "elapsed": time.monotonic() - self.started,
-            **(self.motion if f is not None else {}),
+            "q": self.view.q.tolist(), **self.planner.state(), **(self.motion if f is not None else {}),
         }
 
     def write_status(self) -> None:
@@ -529,13 +563,15 @@ class PlannerApp:
         return self.state()
 
 
-def run_app(config: AppConfig, *, generate: bool = False, run: bool = False, max_seconds: float | None = None,
-            out=None) -> int:
+def run_app(config: AppConfig, *, generate: bool = False, run: bool = False, plan: str | None = None,
+            max_seconds: float | None = None, out=None) -> int:
     """``drake-mh app``: starts the app, prints its URL, runs until Ctrl-C or ``max_seconds``.
 
     Args:
         config: :class:`AppConfig`.
         generate: generate solutions before the loop; run: then start running (implies generate).
+        plan: ``"pose"`` / ``"joints"``: plan to the goal point / configuration before the loop,
+            which then plays the motion.
         max_seconds: wall-clock seconds from the printed URL to the end (the start-up generation
             included; a generation under way finishes first); ``None``: until Ctrl-C.
         out: where the two lines go (default ``sys.stdout``).
@@ -555,6 +591,8 @@ def run_app(config: AppConfig, *, generate: bool = False, run: bool = False, max
             app.generate()
         if run:
             app.play("run")
+        if plan is not None:
+            app.planner.start(plan, wait=True)
         left = None if max_seconds is None else max(0.0, float(max_seconds) - (time.monotonic() - started))
         app.run(left)
         reason = "stopped" if max_seconds is None else f"stopped after --max-seconds {max_seconds:g}"

@@ -23,9 +23,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Controls", "SliderSpec", "BUTTONS", "SECTIONS", "STATUS_PREFIXES"]
+__all__ = ["Controls", "SliderSpec", "BUTTONS", "SECTIONS", "STATUS_PREFIXES", "MAX_GOAL_JOINTS", "joint_slider_name"]
 
-#: the app's buttons in panel order (framework paper Table 1: parts 1, 2, 4, 5/7)
+MAX_GOAL_JOINTS = 12
+"""Goal joint sliders the page has places for (a robot with more joints: the rest are listed
+after the sections)."""
+
+
+def joint_slider_name(i: int) -> str:
+    """Name of the slider of joint ``i`` (0-based) of the planning goal configuration."""
+    return f"Goal joint {i + 1}"
+
+
+#: the app's buttons in panel order (framework paper Table 1: parts 1, 2, 4, 5/7; then planning)
 BUTTONS = (
     "Next robot",
     "Next algorithm",
@@ -35,6 +45,9 @@ BUTTONS = (
     "Test run",
     "Run",
     "Stop",
+    "Plan to goal pose",
+    "Plan to goal joints",
+    "Next planner",
 )
 
 #: the app page's sections (Table 1's parts) and their controls, in order
@@ -43,6 +56,9 @@ SECTIONS = (
     ("2 · Path", ("Edit next point", "Point X [m]", "Point Y [m]", "Point Z [m]", "Points in path")),
     ("3-5, 7 · Solve and run", ("Generate / Regenerate solutions", "Test run", "Run", "Stop", "Show environment")),
     ("6 · Obstacle (moves live)", ("Obstacle X [m]", "Obstacle Y [m]", "Obstacle Z [m]", "Obstacle radius [m]")),
+    ("8 · Plan a motion", ("Plan to goal pose", "Plan to goal joints", "Next planner", "Plan timeout [s]",
+                           "Goal X [m]", "Goal Y [m]", "Goal Z [m]",
+                           *(joint_slider_name(i) for i in range(MAX_GOAL_JOINTS)))),
 )
 
 #: labels of the inert status buttons start with these (the page shows them as its status box)
@@ -104,6 +120,15 @@ class Controls:
                 self._values[name] = value
                 out[name] = value
         return out
+
+    def add_slider(self, spec: SliderSpec) -> None:
+        """Adds a slider (e.g. one per joint of a newly loaded robot)."""
+        self._values[spec.name] = float(self.meshcat.AddSlider(spec.name, spec.low, spec.high, spec.step, spec.value))
+
+    def remove_slider(self, name: str) -> None:
+        """Deletes a slider added before."""
+        if self._values.pop(name, None) is not None:
+            self.meshcat.DeleteSlider(name)
 
     def value(self, name: str) -> float:
         """Current value of a slider."""

@@ -42,13 +42,13 @@ _PAGE = r"""<!DOCTYPE html>
 <style>
   html, body { margin: 0; height: 100%; font: 14px/1.35 system-ui, sans-serif; background: #1e1f24; color: #eee; }
   #wrap { display: flex; height: 100vh; }
-  #panel { width: 360px; min-width: 360px; height: 100vh; overflow-y: auto; box-sizing: border-box;
+  #panel { width: 360px; min-width: 360px; height: 100vh; overflow-y: auto; overflow-x: hidden; box-sizing: border-box;
            padding: 10px 12px; background: #1e1f24; border-right: 1px solid #444; }
   #view { flex: 1; border: 0; height: 100vh; }
   h1 { font-size: 16px; margin: 0 0 8px; font-weight: 600; }
   h1 small { display: block; font-size: 12px; font-weight: 400; color: #aaa; }
   #status { background: #fff8d6; color: #222; border-left: 5px solid #e0a000; padding: 6px 8px;
-            margin-bottom: 8px; min-height: 58px; }
+            margin-bottom: 8px; min-height: 58px; position: sticky; top: 0; z-index: 1; }
   #status .setup { font-size: 12px; color: #444; }
   #status .message { font-weight: 600; margin-top: 3px; }
   #status.down { background: #ffd9d6; border-left-color: #c0392b; }

@@ -5,6 +5,7 @@ Example::
     drake-mh app                                   # seed000_6dof, e3gsa, Table 3 path, obstacle
     drake-mh app --method pso --n-points 80 --generate --run
     drake-mh app --max-seconds 60 --status-file app.json    # headless / scripted use
+    drake-mh app --robot panda --goal 0.5 0.3 0.4 --plan pose --plan-method rrt_connect
 
 Prints the Meshcat URL (localhost only) and runs until Ctrl-C or ``--max-seconds``. Exit code
 0 on a normal end, 2 for bad input (unknown robot or method: one line naming the choices).
@@ -60,6 +61,21 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
                         "start included, and exit 0 (for scripts and tests; default: run until Ctrl-C)")
     p.add_argument("--status-file", default=None, metavar="PATH",
                    help="write the app's state as JSON on every change (for scripts and tests)")
+    g = p.add_argument_group("point-to-point planning (section 8 of the page)")
+    g.add_argument("--plan", choices=("pose", "joints"), default=None,
+                   help="plan at start from the robot's home to the goal point (pose, keeping the tool's "
+                        "orientation) or to the goal configuration (joints: the home one until its sliders move), "
+                        "then play the certified motion")
+    g.add_argument("--plan-method", default=None, metavar="NAME",
+                   help="motion planner of the Plan buttons (default rrt_connect_smooth; any of "
+                        "drake_mh.planning.available_motion_methods(); 'Next planner' cycles them)")
+    g.add_argument("--plan-timeout", type=float, default=5.0, metavar="S", help="planning limit [s] (default 5)")
+    g.add_argument("--goal", nargs=3, type=float, default=None, metavar=("X", "Y", "Z"),
+                   help="goal point of the end effector [m] (default: via point 1)")
+    g.add_argument("--goal-q", nargs="+", type=float, default=None, metavar="Q",
+                   help="goal configuration of the first robot [rad] (default: its home)")
+    g.add_argument("--plan-clearance", type=float, default=0.0, metavar="M",
+                   help="clearance to the obstacle required along planned motions [m] (default 0)")
     p.set_defaults(func=cmd_app)
 
 
@@ -83,8 +99,11 @@ def cmd_app(args: argparse.Namespace) -> int:
     config = AppConfig(robots=robots, method=args.method, points=points, n_points=args.n_points,
                        obstacle=None if args.no_obstacle else tuple(args.obstacle),
                        obstacle_radius=args.obstacle_radius, seed=args.seed, budget=args.budget, fps=args.fps,
-                       speed=args.speed, port=args.port, status_file=args.status_file)
-    return run_app(config, generate=args.generate, run=args.run, max_seconds=args.max_seconds)
+                       speed=args.speed, port=args.port, status_file=args.status_file,
+                       plan_method=args.plan_method, plan_timeout=args.plan_timeout,
+                       goal=None if args.goal is None else tuple(args.goal),
+                       goal_q=None if args.goal_q is None else tuple(args.goal_q), plan_clearance=args.plan_clearance)
+    return run_app(config, generate=args.generate, run=args.run, plan=args.plan, max_seconds=args.max_seconds)
 
 
 def _check_writable(path: str) -> None:

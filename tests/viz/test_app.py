@@ -13,7 +13,7 @@ import viz_html
 
 from drake_mh.errors import InvalidArgument, UnknownMethod
 from drake_mh.viz.app import OBSTACLE_COLOUR, AppConfig, PlannerApp
-from drake_mh.viz.app_controls import BUTTONS, SECTIONS
+from drake_mh.viz.app_controls import BUTTONS, MAX_GOAL_JOINTS, SECTIONS, joint_slider_name
 
 FAST = dict(method="pso", budget=4000, n_points=14)
 
@@ -96,7 +96,10 @@ def test_obstacle_is_translucent_red_unlike_the_robot(app, meshcat):
 
 def test_every_control_has_a_section_of_the_page(app):
     placed = [name for _, names in SECTIONS for name in names]
-    assert sorted(placed) == sorted(set(BUTTONS) | set(app.controls.slider_names))
+    joints = {joint_slider_name(i) for i in range(MAX_GOAL_JOINTS)}   # places for the goal joint sliders
+    assert len(placed) == len(set(placed))
+    assert set(placed) == set(BUTTONS) | set(app.controls.slider_names) | joints
+    assert {joint_slider_name(i) for i in range(app.robot.nq)} <= set(app.controls.slider_names)
 
 
 def test_bad_configuration_says_how_to_fix():

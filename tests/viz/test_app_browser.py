@@ -124,15 +124,19 @@ def test_app_in_headless_chromium(tmp_path):
         driver.get(match.group(1))
         _wait(lambda: _button(driver, "Generate / Regenerate solutions"), 60, "the app's controls")
         _wait(lambda: "ready" in _status_text(driver), 30, "the status box")
-        # everything of the app is above the fold of a 1400x900 window, the status box first
+        # Table 1's parts are above the fold of a 1400x900 window, the status box first; the planning
+        # section follows (the panel scrolls, the status box stays on top)
         height = driver.execute_script("return window.innerHeight")
         box = driver.find_element(By.ID, "status").rect
-        names = [n for _, group in SECTIONS for n in group]
-        for name in names:
+        for name in [n for _, group in SECTIONS[:-1] for n in group]:
             element = _button(driver, name) or _slider_field(driver, name)
             assert element is not None and element.is_displayed(), name
             assert box["y"] < element.rect["y"] and element.rect["y"] + element.rect["height"] <= height, name
-        assert driver.execute_script("return document.getElementById('panel').scrollHeight") <= height
+        plan = _button(driver, "Plan to goal pose")
+        assert plan is not None and _slider_field(driver, "Goal joint 6") is not None
+        driver.execute_script("arguments[0].scrollIntoView();", plan)
+        assert driver.find_element(By.ID, "status").rect["y"] < plan.rect["y"] <= height
+        driver.execute_script("document.getElementById('panel').scrollTop = 0;")
         # the 3-D view renders beside the panel (Meshcat's page in the iframe, WebGL)
         frame = driver.find_element(By.ID, "view")
         assert frame.rect["x"] >= box["x"] + box["width"] and frame.rect["width"] >= 900
@@ -171,6 +175,13 @@ def test_app_in_headless_chromium(tmp_path):
         target = os.environ.get("DRAKE_MH_SCREENSHOT")
         if target:
             _shrink_png(shot, Path(target))
+
+        # plan from where the arm is to the goal point: a verdict in the status, in the file and on the page
+        driver.execute_script("arguments[0].click();", _button(driver, "Plan to goal pose"))
+        planned = _wait(lambda: (s := _status(status)).get("plan") and not s["planning"] and s, 60,
+                        "a planning verdict")
+        assert planned["plan"]["goal"] == "pose" and planned["plan_method"] == "rrt_connect_smooth"
+        _wait(lambda: any(w in _status_text(driver) for w in ("goal pose", "stays where it is")), 30, "the verdict")
 
         # Ctrl-C: the app's own stop line, and the page says the app stopped
         app.send_signal(signal.SIGINT)

@@ -24,7 +24,8 @@ def test_page_lists_sections_in_order_and_points_at_meshcat():
     config = _config(html)
     assert config["meshcat_port"] == 7123
     assert [s["title"] for s in config["sections"]] == [t for t, _ in SECTIONS]
-    assert config["sections"][-1]["controls"][0] == "Obstacle X [m]"
+    assert config["sections"][3]["controls"][0] == "Obstacle X [m]"
+    assert config["sections"][-1]["controls"][0] == "Plan to goal pose"           # planning comes last
     # the status box comes before every control in the page
     assert html.index('id="status"') < html.index('id="sections"') < html.index('<iframe')
 
