@@ -33,6 +33,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "drake_mh.study.commands",  # study, report
     "drake_mh.study.demo",  # demo
     "drake_mh.viz.cli",  # app (from the visualisation issue)
+    "drake_mh.viz.plan_cli",  # plan (one motion: issue #18)
 )
 
 

@@ -1,0 +1,63 @@
+"""``drake-mh plan``: one motion from the command line, verified, printed, animated on request."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import viz_html
+
+import drake_mh
+
+GOAL_Q = [1.6, 0.3, 0.0, 0.0, 0.0, 0.0]
+
+
+def _blocking_sphere():
+    """A ball on seed000_6dof's link3 halfway along the straight joint-space line home -> GOAL_Q."""
+    robot = drake_mh.load_robot("seed000_6dof")
+    p = robot.link_poses(0.5 * (robot.home + np.array(GOAL_Q)))["link3"][:3, 3]
+    return [f"{v:.4f}" for v in (*p, 0.06)]
+
+
+def _plan(*args):
+    return subprocess.run([sys.executable, "-m", "drake_mh", "plan", "--robot", "seed000_6dof", *args],
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_plans_around_the_obstacle_prints_json_and_writes_the_animation(tmp_path):
+    page = tmp_path / "motion.html"
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--sphere", *_blocking_sphere(), "--method", "rrt_connect",
+                "--json", "--html", str(page))
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert data["success"] and data["method"] == "rrt_connect" and data["waypoints"] >= 3
+    assert data["min_clearance"] > 0 and data["obstacles"] == ["sphere0"]
+    np.testing.assert_allclose(data["path"][-1], GOAL_Q, atol=1e-9)
+    np.testing.assert_allclose(data["path"][0], data["q_start"])
+    assert "certified clearance >=" in data["caption"] and "animation written" in out.stderr
+    assert viz_html.animation(page.read_text()) is not None
+
+
+def test_an_uncertified_motion_exits_1_and_says_why():
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--sphere", *_blocking_sphere(), "--method", "straight")
+    assert out.returncode == 1, out.stdout + out.stderr
+    assert out.stdout.startswith("FAILED: straight: not certified")
+
+
+def test_bad_input_exits_2_with_one_line():
+    out = _plan("--goal-q", "1.6", "0.3")
+    assert out.returncode == 2 and "goal must be configuration(s) of 6 joints" in out.stderr
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--method", "teleport")
+    assert out.returncode == 2 and "available:" in out.stderr and "rrt_connect" in out.stderr
+    out = _plan()
+    assert out.returncode == 2 and "give the goal" in out.stderr
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--sphere", "0", "0", "0", "0.3")  # the start is inside it
+    assert out.returncode == 2 and "q_start is in collision" in out.stderr
+
+
+def test_show_plays_it_in_meshcat_until_max_seconds():
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--sphere", *_blocking_sphere(), "--show", "--max-seconds", "1")
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert lines[0].startswith("verified: rrt_connect_smooth: planned in")
+    assert lines[-1].startswith("showing the motion at http://localhost:") and "listening" not in out.stderr
