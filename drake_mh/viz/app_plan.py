@@ -3,7 +3,7 @@
 The app's section "8 · Plan a motion" (:data:`drake_mh.viz.app_controls.SECTIONS`):
 
 * "Plan to goal pose": the end effector to the point of the sliders "Goal X/Y/Z [m]" (drawn as
-  a green target with a triad), keeping the tool's current orientation: a pose goal of
+  a teal target with a triad), keeping the tool's current orientation: a pose goal of
   :class:`drake_mh.planning.MotionProblem`, whose goal configurations come from collision-free
   IK. Meshcat reports no clicks or drags in its 3-D view to Drake, so the target is dragged
   with these sliders;
@@ -38,7 +38,8 @@ __all__ = ["AppPlanner", "DEFAULT_PLAN_METHODS", "check_plan_settings", "default
 
 DEFAULT_PLAN_METHODS = ("rrt_connect_smooth", "rrt_connect")
 """The first of these that is registered is the default planner."""
-GOAL_COLOUR = (0.1, 0.75, 0.2, 0.9)
+GOAL_COLOUR = (0.0, 0.75, 0.8, 0.9)
+"""The goal point (teal, with a triad): the path's stop points are green."""
 GOAL_GHOST_COLOUR = (0.3, 0.55, 1.0, 0.25)
 PLAN_PATH_COLOUR = (0.95, 0.6, 0.05, 1.0)
 
