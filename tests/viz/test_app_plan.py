@@ -198,3 +198,19 @@ def test_cli_plans_at_start_and_plays_the_motion(tmp_path):
     assert state["plan"]["success"] and state["plan"]["method"] == "rrt_connect", state
     np.testing.assert_allclose(state["q"], GOAL_Q, atol=1e-9, err_msg=str(state))
     assert state["mode"] == "idle" and state["message"].startswith("app stopped")
+
+
+def test_a_timeout_is_told_as_such(app):
+    """The verdict's wording for a planner that ran out of time (its result, as solve_motion gives it)."""
+    from drake_mh.planning import MotionResult
+
+    start = app.view.q.copy()
+    app.planner.kind = "joints"
+    app.planner._finish(MotionResult("mh_pso", success=False, path=None, planning_time=app.planner.timeout + 0.01,
+                                     message="deadline reached"))
+    assert app.message == f"mh_pso: no path within the timeout ({app.planner.timeout:g} s); the robot stays where it is"
+    app.planner._finish(MotionResult("rrt_connect", success=False, path=None, planning_time=0.01,
+                                     message="budget exhausted"))
+    assert app.message.startswith("rrt_connect: no path found (budget exhausted)")
+    assert app.mode == "idle" and app.planner.result is None
+    np.testing.assert_array_equal(app.view.q, start)
