@@ -466,9 +466,8 @@ class PlannerApp:
     def tick(self, dt: float) -> None:
         """One frame: buttons, sliders, motion (while planning: only the status; the rest waits)."""
         if self.planner.busy:
-            return self.planner.poll()
-        for name in self.controls.clicked():
-            self.handle(name)
+            return self.planner.poll(self.controls.clicked())
+        self.planner.dispatch(self.controls.clicked(), self.handle)
         if self.planner.busy:  # the scene stays as the planner sees it
             return
         changed = self.controls.changed()

@@ -13,8 +13,9 @@ The app's section "8 · Plan a motion" (:data:`drake_mh.viz.app_controls.SECTION
   ``rrt_connect_smooth``), the slider "Plan timeout [s]" bounds planning.
 
 :func:`drake_mh.planning.solve_motion` runs in a background thread, so the page stays live and
-the status counts the seconds; meanwhile the app reads neither buttons nor sliders (they are
-answered when planning ends) and nothing else touches the robot or the scene. A verified result
+the status counts the seconds; meanwhile "Stop" cancels (the planner's answer is dropped when
+it comes), the other buttons and the sliders are answered when planning ends, and nothing else
+touches the robot or the scene. A verified result
 (the whole motion certified collision-free, the retimed trajectory certified) is then played
 along its retimed trajectory, and the status gives the method, the planning time and the
 certified minimum clearance. Anything else leaves the robot where it was and says why: no
@@ -105,6 +106,8 @@ class AppPlanner:
         self.attempts = 0
         self.goal_time = 0.0
         self.ghost = False
+        self.cancelled = False
+        self.deferred: list[str] = []
 
     def sliders(self) -> list[SliderSpec]:
         """The fixed sliders (goal point, timeout); the joint sliders follow the robot."""
@@ -207,8 +210,9 @@ class AppPlanner:
         except DrakeMhError as exc:
             self._failed(f"cannot plan to the goal {kind}: {exc}")
             return False
-        self._answer = None
+        self._answer, self.cancelled = None, False
         self._started = time.monotonic()
+        app.view.meshcat.Delete(f"{app.view.prefix}/paths/planned")  # the last motion's path
         if wait:
             self._plan(self.problem, self.method, self.timeout)
             self._thread = True
@@ -240,26 +244,49 @@ class AppPlanner:
         except Exception as exc:  # noqa: BLE001 - reported in the status; the app goes on
             self._answer = ("error", f"{type(exc).__name__}: {exc}")
 
-    def poll(self) -> None:
-        """Collects a finished planning (else updates the status with the seconds spent)."""
+    def poll(self, clicked=()) -> None:
+        """Collects a finished planning (else updates the status with the seconds spent).
+
+        Args:
+            clicked: buttons clicked meanwhile: "Stop" cancels (the planner's answer, when it
+                comes, is dropped), the others wait in :attr:`deferred` until planning ends.
+        """
         app = self.app
         if self._thread is None:
             return
+        for name in clicked:
+            if name == "Stop":
+                self.cancelled = True
+            else:
+                self.deferred.append(name)
         if isinstance(self._thread, threading.Thread):
             if self._thread.is_alive():
+                waiting = ("cancelled: the planner's answer will be dropped" if self.cancelled
+                           else "the other controls answer after")
                 app.message = (f"planning with {self.method} to the goal {self.kind}: "
-                               f"{time.monotonic() - self._started:.1f} s of {self.timeout:g} s "
-                               "(the controls answer after)")
+                               f"{time.monotonic() - self._started:.1f} s of {self.timeout:g} s ({waiting})")
                 return
             self._thread.join()
         self._thread = None
         app.mode = "idle"
         what, answer = self._answer or ("error", "planning ended without an answer")
+        if self.cancelled:
+            return self._failed("planning cancelled with Stop")
         if what == "no goal":
             return self._failed(f"no collision-free goal: {answer}")
         if what == "error":
             return self._failed(f"planning failed: {answer}")
         self._finish(answer)
+
+    def dispatch(self, clicked, handle) -> None:
+        """Runs ``handle`` on the clicks that waited, then on ``clicked``, in order; once one starts
+        planning, the rest wait for it to end (nothing may change the robot or the scene meanwhile)."""
+        queue, self.deferred = [*self.deferred, *clicked], []
+        for i, name in enumerate(queue):
+            if self.busy:
+                self.deferred = queue[i:]
+                return
+            handle(name)
 
     def _finish(self, result) -> None:
         from drake_mh.viz.motion import motion_caption
@@ -311,6 +338,7 @@ class AppPlanner:
         if self.t >= traj.duration:
             self.app.mode = "idle"
             self.app.message = f"at the goal {self.kind}: {self.last['caption']}"
+            self.draw()  # the goal point's triad: the orientation a pose goal now keeps
 
     def halt(self, why: str) -> str:
         """Stops a planned motion where the robot is; returns the message ("" if none was moving)."""

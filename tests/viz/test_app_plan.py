@@ -214,3 +214,42 @@ def test_a_timeout_is_told_as_such(app):
     assert app.message.startswith("rrt_connect: no path found (budget exhausted)")
     assert app.mode == "idle" and app.planner.result is None
     np.testing.assert_array_equal(app.view.q, start)
+
+
+def test_stop_cancels_planning_and_other_clicks_wait(app, meshcat, monkeypatch):
+    """While the planner runs, 'Stop' drops its answer; another button waits until planning ends."""
+    import threading
+
+    import drake_mh.planning
+
+    release = threading.Event()
+    real = drake_mh.planning.solve_motion
+
+    def slow(*args, **kwargs):
+        release.wait(10)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(drake_mh.planning, "solve_motion", slow)
+    start, method = app.view.q.copy(), app.planner.method
+    _set_goal_q(meshcat, app, GOAL_Q)
+    app.handle("Plan to goal joints")
+    assert app.planner.busy
+    clicks = iter([["Stop", "Next planner"]])
+    monkeypatch.setattr(app.controls, "clicked", lambda: next(clicks, []))   # two clicks while it plans
+    app.tick(0.02)
+    assert app.planner.busy and "cancelled" in app.message and app.planner.deferred == ["Next planner"]
+    assert app.planner.method == method
+    release.set()
+    app.planner._thread.join(15)
+    app.tick(0.02)                                            # the answer is dropped
+    assert app.mode == "idle" and "planning cancelled with Stop" in app.message
+    np.testing.assert_array_equal(app.view.q, start)
+    app.tick(0.02)                                            # then the waiting click is answered
+    assert app.planner.method != method and app.planner.deferred == []
+
+
+def test_clicks_after_a_plan_click_wait_for_it(app, monkeypatch):
+    """'Plan' then 'Next robot' in the same frame: the robot is not swapped under the planner."""
+    monkeypatch.setattr(app.controls, "clicked", lambda: ["Plan to goal joints", "Next robot"])
+    app.tick(0.02)
+    assert app.planner.deferred == ["Next robot"] and app.robot_name == "seed000_6dof"
