@@ -107,3 +107,29 @@ def test_unknown_option():
         solve_motion(ball_problem(), "ompl_rrtconnect", range=0.1)
     with pytest.raises(InvalidArgument, match="motion"):
         solve_motion(ball_problem(), "ompl_rrtconnect", motion="exact")
+
+
+def test_certified_motion_validator_remembers_and_refuses_past_the_deadline():
+    """Past the deadline no motion is checked (OMPL looks at its clock only between rounds);
+    motions certified before are remembered, both ways (the simplification re-asks them)."""
+    _needs_ompl()
+    import ompl.base as ob
+
+    from drake_mh.planning.ompl_peer.planners import _CertifiedMotion, _state
+
+    problem = ball_problem()
+    space = ob.RealVectorStateSpace(PANDA.nq)
+    bounds = ob.RealVectorBounds(PANDA.nq)
+    for j in range(PANDA.nq):
+        bounds.setLow(j, float(PANDA.lower[j]))
+        bounds.setHigh(j, float(PANDA.upper[j]))
+    space.setBounds(bounds)
+    validator = _CertifiedMotion(ob.SpaceInformation(space), problem)
+    q_a, q_b, q_c = PANDA.home, PANDA.home + 0.05, PANDA.home - 0.05
+    a, b, c = (_state(space, q) for q in (q_a, q_b, q_c))
+    assert validator.checkMotion(a, b) and validator.calls == 1
+    assert validator.checkMotion(b, a) and validator.calls == 1  # remembered, both ways
+    assert validator.all_certified(np.stack([q_a, q_b, q_a])) and not validator.all_certified(np.stack([q_a, q_c]))
+    validator.end = 0.0  # the deadline has passed
+    assert not validator.checkMotion(a, c) and validator.refused == 1 and validator.calls == 1
+    assert validator.checkMotion(a, b)  # what was certified stays certified
