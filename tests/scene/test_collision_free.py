@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import drake_mh
-from drake_mh.errors import SceneError
+from drake_mh.errors import InvalidConfiguration, SceneError
 from drake_mh.scene import Box, Capsule, Cylinder, Scene, Sphere
 from sphere_fixtures import no_geometry_urdf
 
@@ -112,3 +112,23 @@ def test_no_geometry_is_a_scene_error():
     scene = Scene(drake_mh.Robot(no_geometry_urdf()))
     with pytest.raises(SceneError, match="no collision geometry"):
         scene.collision_free(np.zeros(scene.robot.nq))
+
+
+@pytest.mark.parametrize("self_collision", [False, True])
+def test_one_configuration_path_matches_the_batch(self_collision):
+    """Scene.collision_free(q) takes a scalar compiled path (collision_free_one) once the scene
+    is bound; it answers as the batch kernel does, for any strides of q."""
+    scene = cluttered(6, self_collision=self_collision)
+    Q = np.random.default_rng(6).uniform(PANDA.lower, PANDA.upper, (400, PANDA.nq))
+    for clearance in (0.0, 0.02):
+        batch = scene.collision_free(Q, clearance, clearance)
+        one = [scene.collision_free(q, clearance, clearance) for q in Q]
+        assert all(type(v) is bool for v in one)
+        np.testing.assert_array_equal(one, batch)
+        assert 0 < batch.sum() < len(Q)
+    strided = np.asfortranarray(Q)  # rows with stride N * 8
+    assert [scene.collision_free(q) for q in strided[:50]] == scene.collision_free(Q[:50]).tolist()
+    bad = Q[0].copy()
+    bad[3] = np.nan
+    with pytest.raises(InvalidConfiguration, match="NaN or inf"):
+        scene.collision_free(bad)

@@ -19,9 +19,10 @@ via Vectorized Sampling-Based Planning", ICRA 2024):
   numba without Python in the loop; the deadline is read inside the kernel from the
   monotonic clock (:mod:`._clock`), the budget counts tree nodes; randomness is splitmix64
   seeded from the caller's generator (same seed, same path);
-* **batched motion checks with early exit** (:mod:`._states`): the interpolated states of a
-  motion go through the scene's sphere model in SIMD blocks, the first block spread over the
-  whole motion ("rake" order), and a block stops at the first sphere found in collision;
+* **batched motion checks with early exit** (the scene's
+  :func:`drake_mh.scene._state_kernels.check_states`): the interpolated states of a motion go
+  through the scene's sphere model in SIMD blocks, the first block spread over the whole
+  motion ("rake" order), and a block stops at the first sphere found in collision;
 * **every edge certified** (:func:`._kernels._motion`): each constraint row (a link against
   the obstacles, a checked link pair) changes along a motion no faster than
   ``Λ_c = Σ_j reach[c, j] |Δq_j|`` (the Lipschitz bound of

@@ -3,8 +3,9 @@
 Everything from the first sample to the shortcut path runs in one numba call
 (:func:`plan_kernel`); the only Python is the call itself. Every motion (tree edge, direct
 connection, shortcut) goes through :func:`_motion`: its interpolated states in batched calls
-with early exit (:mod:`._states`, VAMP's design: Thomason, Kingston, Kavraki, "Motions in
-Microseconds via Vectorized Sampling-Based Planning", ICRA 2024), at clearances raised by a
+with early exit (the scene's :func:`drake_mh.scene._state_kernels.check_states`, VAMP's
+design: Thomason, Kingston, Kavraki, "Motions in Microseconds via Vectorized Sampling-Based
+Planning", ICRA 2024), at clearances raised by a
 margin that certifies the motion between the states (the Lipschitz bound of
 :mod:`drake_mh.scene._segment_kernel`), refined by bisection only where a state is within the
 margin.
@@ -22,10 +23,10 @@ import numba
 import numpy as np
 
 from drake_mh.planning.rrt_connect._clock import now
-from drake_mh.planning.rrt_connect._states import CLEAR, COLLISION, NEAR, block_check, make_workspace
 from drake_mh.scene._collision_kernels import _unpack
 from drake_mh.scene._segment_kernel import CERTIFIED
 from drake_mh.scene._segment_kernel import certify_segments as _certify_segments
+from drake_mh.scene._state_kernels import CLEAR, COLLISION, NEAR, check_states, state_workspace
 
 FOUND, BUDGET, TIMEOUT = 0, 1, 2
 """Outcomes of :func:`plan_kernel`."""
@@ -99,8 +100,8 @@ def _steer(qa, qb, step, out):
 
 @numba.njit(cache=True)
 def _check(QT, n, lanes, margins, plain, arrays, ws, out):
-    """Columns ``0 .. n-1`` of ``QT`` in blocks (:func:`._states.block_check`): the first of
-    ``lanes[0]`` columns, the others of ``lanes[1]``.
+    """Columns ``0 .. n-1`` of ``QT`` in blocks (:func:`drake_mh.scene._state_kernels.check_states`):
+    the first of ``lanes[0]`` columns, the others of ``lanes[1]``.
 
     ``margins``, ``plain``: ``(link clearances (G,), pair clearances (P,))``.
 
@@ -112,7 +113,7 @@ def _check(QT, n, lanes, margins, plain, arrays, ws, out):
     n0 = 0
     while n0 < n:
         m = min(lanes[0] if n0 == 0 else lanes[1], n - n0)
-        r = block_check(QT, n0, m, margins[0], margins[1], plain[0], plain[1], arrays, ws, out)
+        r = check_states(QT, n0, m, margins[0], margins[1], plain[0], plain[1], arrays, ws, out)
         if r == COLLISION:
             return COLLISION, n0 + m
         if r == NEAR:
@@ -241,8 +242,9 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
     1. ``n`` pieces, ``n >= resolution · |qb - qa|`` and ``n >= max_c Λ_c / (2 max_margin)``;
        the ``n + 1`` states ``t = i / n`` (ends included), in VAMP's "rake" order (``lanes[0]``
        states spread over the whole motion first, so that a collision is found early, then
-       blocks of ``lanes[1]``), are checked block by block (:func:`._states.block_check`), each row at its clearance
-       raised by the margin ``Λ_c / (2 n)`` and, where a sphere is below that, at the plain
+       blocks of ``lanes[1]``), are checked block by block
+       (:func:`drake_mh.scene._state_kernels.check_states`), each row at its clearance raised
+       by the margin ``Λ_c / (2 n)`` and, where a sphere is below that, at the plain
        clearance. A state below the plain clearance rejects the motion at once (early exit).
        If every state keeps the margins, every piece is certified, since
        ``V_c(t) >= (V0 + V1 - Λ_c / n) / 2 >= clearance`` on it: most motions that are not
@@ -458,7 +460,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     start = now(clock, buf)
     arrays = _unpack(ints, floats)
     lanes = (first_lanes, block_lanes)
-    ws = make_workspace(arrays[0].shape[0], arrays[6].shape[0], max(first_lanes, block_lanes))
+    ws = state_workspace(arrays[0].shape[0], arrays[6].shape[0], max(first_lanes, block_lanes))
     nq, G = q_start.shape[0], goals.shape[0]
     rng = seed
     empty = np.empty((0, nq))
@@ -589,7 +591,7 @@ def certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance
     buf = np.zeros(2, np.int64)
     arrays = _unpack(ints, floats)
     lanes = (first_lanes, block_lanes)
-    ws = make_workspace(arrays[0].shape[0], arrays[6].shape[0], max(first_lanes, block_lanes))
+    ws = state_workspace(arrays[0].shape[0], arrays[6].shape[0], max(first_lanes, block_lanes))
     out = np.empty(QA.shape[0], np.bool_)
     for i in range(QA.shape[0]):
         out[i] = _motion(QA[i], QB[i], arrays, ws, lanes, v_WO, reach, clearance, self_clearance, resolution, margin,

@@ -1,0 +1,149 @@
+"""Early-exit state check at two clearances: the batched check that motion planners call.
+
+:func:`check_states` answers, for a block of configurations, one of
+
+* ``COLLISION`` — some sphere of the model is below its *plain* clearance in some lane; it
+  returns at the first one found (VAMP's early exit: Thomason, Kingston, Kavraki, "Motions in
+  Microseconds via Vectorized Sampling-Based Planning", ICRA 2024);
+* ``NEAR`` — no collision, but some configuration is below a *margin* clearance (``out[n]``
+  tells which configurations kept every margin);
+* ``CLEAR`` — every sphere of every configuration keeps its link's margin from every obstacle
+  and every checked link pair keeps its pair's margin.
+
+It differs from :func:`drake_mh.scene._collision_kernels.collision_free` (one boolean per
+configuration at one clearance, a block stopping only when *all* of its configurations
+collide) in both respects. The margins are per constraint row (a link against the obstacles,
+a checked link pair), so a caller can ask each row for the extra clearance that certifies the
+motion between the configurations: ``rrt_connect`` asks ``Λ_c / 2n`` (the Lipschitz bound of
+:mod:`drake_mh.scene.segments`), and a ``CLEAR`` answer certifies a whole motion in one pass.
+
+The geometry is :mod:`._collision_kernels`' (same sphere model, bounding spheres, closed-form
+obstacle tests, squared distances, so the same conservative guarantee): forward kinematics of
+the block with the lane index innermost (SIMD), each link's bounding sphere against each
+obstacle's bounding sphere and then its shape over all lanes, and the link's spheres only for
+the few lanes still near, scalar per lane and sphere (first collision returns).
+
+Typical use (compiled code; the workspace is allocated once per plan)::
+
+    arrays = _collision_kernels._unpack(ints, floats)        # a scene's packed arrays
+    ws = state_workspace(F, G, lanes)
+    answer = check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, arrays, ws, out)
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from drake_mh._kernels import _frames_block
+from drake_mh.scene._collision_kernels import (FASTMATH, _centre_block, _lane_point, _obstacle_free, _pair_min,
+                                               _point_free)
+
+CLEAR, NEAR, COLLISION = 0, 1, 2
+"""Answers of :func:`check_states`."""
+
+
+@numba.njit(cache=True)
+def state_workspace(F, G, lanes):
+    """Arrays :func:`check_states` writes into, for ``F`` moving frames, ``G`` links and at most
+    ``lanes`` configurations per call (allocate once, reuse for every call)."""
+    L = lanes
+    return (np.empty((F, 3, 3, L)), np.empty((F, 3, L)), np.empty(L), np.empty(L), np.empty((G, L)),
+            np.empty((G, L)), np.empty((G, L)), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_),
+            np.empty(L, np.bool_), np.empty(L, np.int64))
+
+
+@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
+def _spheres_state(b, a, s0, s1, s_offset, s_radius, margin, plain, R, p, k, kinds, R_WO, p_WO, dims):
+    """Spheres ``s0 .. s1-1`` (fixed in frame ``a``) of lane ``b`` against obstacle k: CLEAR (all
+    at least ``margin``), NEAR (some below ``margin``, none below ``plain``) or COLLISION (one
+    below ``plain``: returned at once)."""
+    answer = CLEAR
+    for s in range(s0, s1):
+        x, y, z = _lane_point(a, s_offset[s], R, p, b)
+        if not _point_free(k, kinds, R_WO, p_WO, dims, margin + s_radius[s], x, y, z):
+            if not _point_free(k, kinds, R_WO, p_WO, dims, plain + s_radius[s], x, y, z):
+                return COLLISION
+            answer = NEAR
+    return answer
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, arrays, ws, out):
+    """Check configurations ``QT[:, n0:n0+m]`` at two clearance levels in one pass.
+
+    Args:
+        QT: ``(nq, N)`` configurations, one per column.
+        n0, m: the first column and how many (``m`` at most the workspace's lanes).
+        link_margin, pair_margin: ``(G,)`` / ``(P,)`` clearances [m] each link must keep from
+            every obstacle and each checked link pair between its links, with a margin.
+        link_plain, pair_plain: the same without the margin (each at most its margin value;
+            all > 0: the tests compare squares, so pass 1e-12 for "touching collides").
+        arrays: the scene's unpacked arrays (:func:`drake_mh.scene._collision_kernels._unpack`
+            of :func:`~drake_mh.scene._collision_kernels.pack`'s buffers).
+        ws: :func:`state_workspace`.
+        out: ``(N,)`` bool; ``out[n0 + b]`` is set to whether configuration ``n0 + b`` keeps
+            every margin (unless the answer is COLLISION: then ``out`` is not written).
+
+    Returns:
+        COLLISION at the first sphere found below its plain clearance (early exit), else NEAR
+        if some configuration is below a margin, else CLEAR. The answer and ``out`` depend on
+        the inputs only (not on the order of the tests), so results are deterministic.
+    """
+    (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
+     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b) = arrays
+    R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx = ws
+    G, K = g_anchor.shape[0], kinds.shape[0]
+    _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
+    for b in range(m):
+        keep[b] = True
+    for g in range(G):
+        a = g_anchor[g]
+        margin, plain = link_margin[g], link_plain[g]
+        _centre_block(m, a, g_offset[g], R, p, cx, cy, cz)
+        for b in range(m):
+            Gx[g, b], Gy[g, b], Gz[g, b] = cx[b], cy[b], cz[b]
+        for k in range(K):
+            lim = margin + g_radius[g] + o_radius[k]  # bounding sphere vs bounding sphere
+            lim *= lim
+            px, py, pz = p_WO[k, 0], p_WO[k, 1], p_WO[k, 2]
+            close = False
+            for b in range(m):
+                dx, dy, dz = cx[b] - px, cy[b] - py, cz[b] - pz
+                close |= dx * dx + dy * dy + dz * dz < lim
+            if not close:
+                continue
+            for b in range(m):  # the link's bounding sphere vs the obstacle's shape
+                near[b] = True
+            _obstacle_free(m, k, kinds, R_WO, p_WO, dims, margin + g_radius[g], cx, cy, cz, near)
+            for b in range(m):  # the link's spheres, for the lanes still near only
+                if not near[b]:
+                    state = _spheres_state(b, a, g_start[g], g_start[g + 1], s_offset, s_radius, margin, plain, R, p,
+                                           k, kinds, R_WO, p_WO, dims)
+                    if state == COLLISION:
+                        return COLLISION
+                    if state == NEAR:
+                        keep[b] = False
+    for i in range(pair_a.shape[0]):
+        ga, gb = pair_a[i], pair_b[i]
+        lim = pair_margin[i] + g_radius[ga] + g_radius[gb]
+        c = 0
+        for b in range(m):
+            dx, dy, dz = Gx[ga, b] - Gx[gb, b], Gy[ga, b] - Gy[gb, b], Gz[ga, b] - Gz[gb, b]
+            if dx * dx + dy * dy + dz * dz < lim * lim:
+                idx[c] = b
+                c += 1
+        for j in range(c):  # the lanes whose bounding spheres are near: every sphere pair, once
+            b = idx[j]
+            value = _pair_min(b, g_anchor[ga], g_anchor[gb], g_start[ga], g_start[ga + 1], g_start[gb],
+                              g_start[gb + 1], s_offset, s_radius, R, p)
+            if value < pair_plain[i]:
+                return COLLISION
+            if value < pair_margin[i]:
+                keep[b] = False
+    answer = CLEAR
+    for b in range(m):
+        out[n0 + b] = keep[b]
+        if not keep[b]:
+            answer = NEAR
+    return answer
