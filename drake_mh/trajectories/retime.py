@@ -99,7 +99,7 @@ def retime(path, robot, method: str = "toppra", *, limits=None, gridpoints: int 
         method: ``"toppra"``, ``"drake-toppra"`` or ``"ruckig"``.
         limits: quantities to enforce besides position (always enforced); default
             velocity/acceleration/torque for the toppra methods and velocity/acceleration/jerk
-            for ruckig. toppra trajectories have piecewise-constant ``s̈``: their jerk is not
+            for ruckig, torque and jerk only where the robot declares them. toppra trajectories have piecewise-constant ``s̈``: their jerk is not
             limited. ruckig enforces torque by certification only (limits scaled on failure).
         gridpoints: toppra gridpoints (spline knots are always added); ``None`` chooses them
             with toppra's ``propose_gridpoints`` (interpolation error <= 1e-3, >= 100 points).
@@ -118,21 +118,28 @@ def retime(path, robot, method: str = "toppra", *, limits=None, gridpoints: int 
     Raises:
         UnknownMethod: ``method`` not in ``RETIMERS``.
         InvalidArgument: bad waypoints, unsupported limit for the method, bad ``scale``.
+        MissingLimits: an enforced velocity or acceleration limit undeclared on some joint, or
+            an asked-for jerk or torque limit declared on none (the message names the joints and
+            how to supply the limits).
         InfeasibleTrajectory: no parameterization exists (e.g. gravity alone exceeds an effort
             limit on the path, a waypoint outside the position limits).
         LimitViolation: still violating after ``max_attempts`` tightened solves.
     """
     if method not in RETIMERS:
         raise UnknownMethod(method, RETIMERS, what="retime method")
-    limits = tuple(_DEFAULT_LIMITS[method] if limits is None else limits)
+    if limits is None:  # the method's quantities; jerk and torque where the robot declares them
+        limits = tuple(q for q in _DEFAULT_LIMITS[method]
+                       if q in _REQUIRED or np.any(np.isfinite(_limit(robot, q))))
+    limits = tuple(limits)
     bad = [q for q in limits if q not in _SUPPORTED[method]]
     if bad:
         raise InvalidArgument(f"{method} cannot enforce {bad}; it supports {sorted(_SUPPORTED[method])}"
                               + ("; use method='ruckig' for jerk limits" if "jerk" in bad else ""))
     _check_options(scale, tol, max_attempts, gridpoints, check_points, bc_type)
-    missing = [q for q in limits if not np.any(np.isfinite(_limit(robot, q)))]
-    if missing:
-        raise InvalidArgument(f"robot {robot.name} declares no {missing} limits; leave them out of `limits`")
+    for q in limits:
+        lacking = [n for n, v in zip(robot.joint_names, _limit(robot, q)) if not np.isfinite(v)]
+        if lacking and (q in _REQUIRED or len(lacking) == robot.nq):
+            raise missing_limits(robot, q, lacking, method)
     W = check_waypoints(path, robot, method)
     factors = {q: float(scale) for q in limits}
     if method == "ruckig" and "torque" in limits:
@@ -177,6 +184,31 @@ def retime(path, robot, method: str = "toppra", *, limits=None, gridpoints: int 
                 factors["acceleration"] = factors.get("acceleration", 1.0) * (1.0 - 1e-3) / r
             else:
                 factors[q] *= (1.0 - 1e-3) / r
+
+
+_REQUIRED = ("velocity", "acceleration")
+"""Quantities every joint must declare when they are enforced (the time law is not bounded
+otherwise); jerk and torque may be declared on some joints only."""
+
+_HOW = {"velocity": ("velocity_limits", "rad/s", 'velocity="…"'),
+        "acceleration": ("acceleration_limits", "rad/s²", 'drake:acceleration="…" (xmlns:drake="http://drake.mit.edu")'),
+        "jerk": ("jerk_limits", "rad/s³", 'drake_mh:jerk="…" (xmlns:drake_mh="https://github.com/drake-mh/ns")'),
+        "torque": ("effort_limits", "N·m", 'effort="…"')}
+
+
+def missing_limits(robot, quantity: str, joints, method: str = "retime"):
+    """The :class:`~drake_mh.errors.MissingLimits` for ``quantity`` undeclared on ``joints``:
+    names the robot and the joints and says how to supply the limits."""
+    from drake_mh.errors import MissingLimits
+
+    attr, unit, urdf = _HOW[quantity]
+    return MissingLimits(
+        f"robot {robot.name!r} declares no {quantity} limits for joint(s) {list(joints)}, and {method} needs "
+        f"them to time a path (no motion can be retimed or verified without them). Supply them [{unit}], one per "
+        f"joint in robot.joint_names order: `robot.{attr} = np.array([...])` before retiming, or in the URDF's "
+        f"<limit {urdf} .../> of each joint (example-robot-data's UR5 and Panda declare no acceleration: "
+        f"drake_mh.planning.problems.load_problem_robot('ur5') / ('panda_hand') load copies that do); or "
+        f"leave {quantity!r} out of `limits=`")
 
 
 def _check_options(scale, tol, max_attempts, gridpoints, check_points, bc_type) -> None:

@@ -110,8 +110,44 @@ def test_mesh_robot_problems(robot):
     if robot == "panda_hand":  # Franka's acceleration limits added: motions can be retimed
         assert np.allclose(problem.robot.acceleration_limits, [15, 7.5, 10, 12.5, 15, 20, 20])
         assert problem.robot.locked_joints == {"panda_finger_joint1": 0.04, "panda_finger_joint2": 0.04}
+    else:  # UR5: assumed acceleration limits (UR's MoveIt configuration): motions verify
+        from drake_mh.planning.problems import UR5_ACCELERATION
+
+        assert np.allclose(problem.robot.acceleration_limits, UR5_ACCELERATION)
     for q in (problem.q_start, problem.goal_configurations[0]):
         assert problem.scene.collision_free(q, MARGIN, MARGIN) and problem.scene.min_distance(q) > 0.0
+    from drake_mh.planning import solve_motion
+
+    result = solve_motion(problem, "rrt_connect", seed=0, timeout=30)
+    assert result.success and result.trajectory is not None and result.duration > 0, result.message
+
+
+def test_missing_acceleration_limits_say_which_robot_joints_and_how():
+    """example-robot-data's UR5 declares no acceleration limits: its motions cannot be retimed.
+    The error names the robot, the joints and how to supply them (issue #18)."""
+    from drake_mh.errors import MissingLimits
+    from drake_mh.planning import MotionProblem, solve_motion
+    from drake_mh.scene import Scene
+    from drake_mh.trajectories import retime
+
+    arm = drake_mh.Robot.from_dh([0.3, 0.3], [0.0, 0.0], [0.0, 0.0])  # velocity, no acceleration limits
+    assert not np.any(np.isfinite(arm.acceleration_limits))
+    W = np.array([[0.0, 0.0], [0.5, 0.5]])
+    for method in ("toppra", "ruckig"):
+        with pytest.raises(MissingLimits) as err:
+            retime(W, arm, method)
+        text = str(err.value)
+        assert repr(arm.name) in text and "joint1" in text and "robot.acceleration_limits" in text
+        assert "drake:acceleration" in text
+    partial = drake_mh.Robot.from_dh([0.3, 0.3], [0.0, 0.0], [0.0, 0.0])
+    partial.acceleration_limits = np.array([5.0, np.inf])
+    with pytest.raises(MissingLimits, match=r"\['joint2'\]"):
+        retime(W, partial, "toppra")
+    arm.acceleration_limits = np.array([5.0, 5.0])  # supplied as the message says: it retimes
+    assert retime(W, arm, "toppra").duration > 0
+    bare = drake_mh.Robot.from_dh([0.3, 0.3], [0.0, 0.0], [0.0, 0.0])
+    result = solve_motion(MotionProblem(bare, Scene(bare), W[0], W[1]), "straight")
+    assert not result.success and "declares no acceleration limits" in result.message
 
 
 # --- MotionBenchMaker archives --------------------------------------------------------------------

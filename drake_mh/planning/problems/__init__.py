@@ -11,7 +11,8 @@
 
 Robots: a :class:`drake_mh.robot.Robot`, or a name of :data:`PROBLEM_ROBOTS` — ``"panda"``
 (bundled, capsules, no hand), ``"panda_hand"`` (example-robot-data's Panda with its hand,
-meshes, fingers locked open), ``"ur5"`` (example-robot-data, meshes) — or any name or path
+meshes, fingers locked open, Franka's acceleration and jerk limits), ``"ur5"`` (example-robot-data,
+meshes, assumed acceleration limits: :data:`UR5_ACCELERATION`) — or any name or path
 :func:`drake_mh.load_robot` takes.
 
 This package is not a planner: :mod:`drake_mh.planning.solve` skips it when it loads the methods.
@@ -31,7 +32,8 @@ from drake_mh.planning.problems.mbm import MBM_SETS, read_motionbenchmaker, to_m
 logger = logging.getLogger(__name__)
 
 __all__ = ["ProblemSet", "problem_set", "available_problem_sets", "motionbenchmaker_set", "load_problem_robot",
-           "read_motionbenchmaker", "PROBLEM_ROBOTS", "MBM_SETS", "ready_configuration", "tool_transform"]
+           "read_motionbenchmaker", "PROBLEM_ROBOTS", "MBM_SETS", "ready_configuration", "tool_transform",
+           "UR5_ACCELERATION"]
 
 #: robot names the problem sets know besides drake_mh.load_robot's
 PROBLEM_ROBOTS = {
@@ -40,7 +42,8 @@ PROBLEM_ROBOTS = {
                   "acceleration and jerk limits added",
     "panda_hand_mbm": "the same with MotionBenchMaker's fingers: 6.5 cm out from the hand's axis (past the real "
                       "4 cm stroke, as in MotionBenchMaker's model)",
-    "ur5": "example-robot-data's UR5 (meshes), no tool",
+    "ur5": "example-robot-data's UR5 (meshes), no tool, assumed acceleration limits added (5 rad/s², UR's "
+           "MoveIt configuration)",
 }
 
 #: stable code of each set in the random streams (problem i of a set depends on seed, code, i)
@@ -108,9 +111,7 @@ def load_problem_robot(robot="panda"):
         if robot in ("panda_hand", "panda_hand_mbm"):
             _ROBOTS[robot] = _panda_hand(0.04 if robot == "panda_hand" else MBM_FINGER)
         elif robot == "ur5":
-            from drake_mh.example_arms import load_example_arm
-
-            _ROBOTS[robot] = load_example_arm("ur5")
+            _ROBOTS[robot] = _ur5()
         else:
             import drake_mh
 
@@ -129,14 +130,26 @@ FRANKA_ACCELERATION = (15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0)
 FRANKA_JERK = (7500.0, 3750.0, 5000.0, 6250.0, 7500.0, 10000.0, 10000.0)
 
 
-def _panda_hand(finger: float):
-    """example-robot-data's Panda with its hand, both fingers locked ``finger`` [m] out, loaded
-    from a copy of its URDF (in the cache folder) that adds Franka's published acceleration and
-    jerk limits to the arm's joints and, past the 4 cm stroke, widens the fingers' limit."""
+UR5_ACCELERATION = 5.0
+"""[rad/s²] assumed acceleration limit of every UR5 joint. Universal Robots publishes none for
+the arm (its limits are on joint torque); 5 rad/s² is the value of Universal Robots' own MoveIt
+configuration (``Universal_Robots_ROS2_Driver``, ``ur_moveit_config/config/joint_limits.yaml``:
+"While the robot does not inherently have any limits on joint accelerations (only on torques),
+MoveIt needs them for time parametrization. They were chosen conservatively"). An assumption,
+not a hardware figure; no jerk limit is assumed (ruckig then runs unlimited in jerk)."""
+
+UR5_JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
+              "wrist_3_joint")
+
+
+def _example_copy(name: str, limits: dict, edit=None, tag: str = ""):
+    """example-robot-data's ``name`` loaded from a copy of its URDF (in the cache folder) whose
+    joints get extra ``<limit>`` attributes: ``limits = {joint: 'drake:acceleration="…" …'}``;
+    ``edit(text) -> text`` changes more. Returns the URDF path, the end-effector frame and the
+    package root."""
     import re
     from pathlib import Path
 
-    import drake_mh
     from drake_mh.cache import atomic_write_bytes, cache_dir, content_hash
     from drake_mh.errors import MeshNotFound
     from drake_mh.example_arms import EXAMPLE_ARMS, example_robot_data_root
@@ -146,25 +159,54 @@ def _panda_hand(finger: float):
     if root is None:
         raise MeshNotFound("example-robot-data", ["this Python's prefixes"],
                            hint="pip install example-robot-data (in the test extra: pip install -e '.[test]')")
-    rel, ee = EXAMPLE_ARMS["panda_hand"]
+    rel, ee = EXAMPLE_ARMS[name]
     path = Path(root) / rel
     text = path.read_text(encoding="utf-8")
     edited = re.sub(r"<robot ", f'<robot xmlns:drake="http://drake.mit.edu" xmlns:drake_mh="{DRAKE_MH_NS}" ', text,
                     count=1)
-    for k, (a, j) in enumerate(zip(FRANKA_ACCELERATION, FRANKA_JERK), start=1):
-        edited, n = re.subn(rf'(<joint name="panda_joint{k}".*?<limit )', rf'\g<1>drake:acceleration="{a}" '
-                            rf'drake_mh:jerk="{j}" ', edited, count=1, flags=re.S)
+    for joint, attributes in limits.items():
+        edited, n = re.subn(rf'(<joint name="{joint}".*?<limit )', rf"\g<1>{attributes} ", edited, count=1,
+                            flags=re.S)
         if n != 1:
-            raise InvalidArgument(f"{path}: no <limit> of panda_joint{k} to add Franka's acceleration limit to")
-    if finger > 0.04:
-        edited, n = re.subn(r'(<joint name="panda_finger_joint[12]".*?upper=")0\.04(")', rf"\g<1>{finger}\g<2>",
-                            edited, flags=re.S)
-        if n != 2:
-            raise InvalidArgument(f"{path}: no finger joint limits of 0.04 to widen for MotionBenchMaker's fingers")
-    copy = cache_dir("robots") / f"panda_hand_{content_hash(edited)[:16]}" / "panda.urdf"
+            raise InvalidArgument(f"{path}: no <limit> of {joint} to add {attributes} to")
+    if edit is not None:
+        edited = edit(edited)
+    copy = cache_dir("robots") / f"{tag or name}_{content_hash(edited)[:16]}" / path.name
     if not copy.is_file():
         copy.parent.mkdir(parents=True, exist_ok=True)
         atomic_write_bytes(copy, edited.encode("utf-8"))
+    return copy, ee, root
+
+
+def _ur5():
+    """example-robot-data's UR5 from a copy of its URDF with :data:`UR5_ACCELERATION` on every
+    joint (without acceleration limits no motion can be retimed, hence none verified)."""
+    import drake_mh
+
+    copy, ee, root = _example_copy("ur5", {j: f'drake:acceleration="{UR5_ACCELERATION}"' for j in UR5_JOINTS})
+    return drake_mh.load_robot(copy, ee_frame=ee, packages={"example-robot-data": str(root)})
+
+
+def _panda_hand(finger: float):
+    """example-robot-data's Panda with its hand, both fingers locked ``finger`` [m] out, loaded
+    from a copy of its URDF (in the cache folder) that adds Franka's published acceleration and
+    jerk limits to the arm's joints and, past the 4 cm stroke, widens the fingers' limit."""
+    import re
+
+    import drake_mh
+
+    def widen(text: str) -> str:
+        if finger <= 0.04:
+            return text
+        text, n = re.subn(r'(<joint name="panda_finger_joint[12]".*?upper=")0\.04(")', rf"\g<1>{finger}\g<2>",
+                          text, flags=re.S)
+        if n != 2:
+            raise InvalidArgument("no finger joint limits of 0.04 to widen for MotionBenchMaker's fingers")
+        return text
+
+    limits = {f"panda_joint{k}": f'drake:acceleration="{a}" drake_mh:jerk="{j}"'
+              for k, (a, j) in enumerate(zip(FRANKA_ACCELERATION, FRANKA_JERK), start=1)}
+    copy, ee, root = _example_copy("panda_hand", limits, widen, tag="panda_hand")
     locked = {"panda_finger_joint1": finger, "panda_finger_joint2": finger}
     return drake_mh.load_robot(copy, ee_frame=ee, locked=locked, packages={"example-robot-data": str(root)})
 
