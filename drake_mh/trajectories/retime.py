@@ -99,8 +99,9 @@ def retime(path, robot, method: str = "toppra", *, limits=None, gridpoints: int 
         method: ``"toppra"``, ``"drake-toppra"`` or ``"ruckig"``.
         limits: quantities to enforce besides position (always enforced); default
             velocity/acceleration/torque for the toppra methods and velocity/acceleration/jerk
-            for ruckig, torque and jerk only where the robot declares them. toppra trajectories have piecewise-constant ``s̈``: their jerk is not
-            limited. ruckig enforces torque by certification only (limits scaled on failure).
+            for ruckig, torque and jerk only where the robot declares them. toppra
+            trajectories have piecewise-constant ``s̈``: their jerk is not limited. ruckig
+            enforces torque by certification only (limits scaled on failure).
         gridpoints: toppra gridpoints (spline knots are always added); ``None`` chooses them
             with toppra's ``propose_gridpoints`` (interpolation error <= 1e-3, >= 100 points).
         scale: fraction of every limit to use, in ``(0, 1]`` (a safety margin).
@@ -191,7 +192,8 @@ _REQUIRED = ("velocity", "acceleration")
 otherwise); jerk and torque may be declared on some joints only."""
 
 _HOW = {"velocity": ("velocity_limits", "rad/s", 'velocity="…"'),
-        "acceleration": ("acceleration_limits", "rad/s²", 'drake:acceleration="…" (xmlns:drake="http://drake.mit.edu")'),
+        "acceleration": ("acceleration_limits", "rad/s²",
+                         'drake:acceleration="…" (xmlns:drake="http://drake.mit.edu")'),
         "jerk": ("jerk_limits", "rad/s³", 'drake_mh:jerk="…" (xmlns:drake_mh="https://github.com/drake-mh/ns")'),
         "torque": ("effort_limits", "N·m", 'effort="…"')}
 
