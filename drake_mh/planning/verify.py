@@ -161,7 +161,7 @@ def _retime(problem, P: np.ndarray, cert) -> tuple[object, str]:
             reasons.append(f"{method}: {exc}")
             continue
         clearance, why = trajectory_clearance(problem, trajectory)
-        if np.isfinite(clearance):
+        if not np.isnan(clearance):  # +inf: a scene without obstacles or checked self pairs
             trajectory.info["certified_clearance"] = clearance
             return trajectory, ""
         reasons.append(why)

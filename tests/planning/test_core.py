@@ -29,6 +29,14 @@ def test_straight_line_is_verified_and_retimed():
     assert "straight" in available_motion_methods()
 
 
+def test_empty_scene_motion_is_verified_with_infinite_clearance():
+    q_goal = PANDA.home.copy()
+    q_goal[0] += 1.0
+    result = solve_motion(MotionProblem(PANDA, Scene(PANDA), PANDA.home, q_goal), "straight")
+    assert result.success, result.message
+    assert result.trajectory is not None and result.min_clearance == np.inf
+
+
 def test_straight_line_through_an_obstacle_fails_honestly():
     scene = Scene(PANDA)
     q_goal = PANDA.home.copy()
