@@ -16,7 +16,11 @@ loaded and every kernel compiled before any clock starts):
   (joint steps of σ = 0.1 rad) and long (σ = 0.5 rad): µs per segment and configurations
   evaluated.
 
-Batched figures are per configuration at ``N = 1024`` and, from Python, per call at ``N = 1``.
+Batched figures are per configuration at ``N = 1024`` and, from Python, per call at ``N = 1``
+(one ``(nq,)`` array: the scalar one-configuration kernel, ``collision_free_one``, through its
+compiled entry point). The batch figure times single calls interleaved with the other methods
+(cold caches): repeated warm calls of the kernel measure less (docs/collision.md, "Speed against
+the targets of issue #16", which also holds the last run of this study beside the code before).
 Each figure is the median of rounds; CPU time beside wall time; the CPU model and the 1-minute
 load average are recorded (shared machines: ratios hold better than absolute times).
 Correctness is checked in the same run: every configuration ``collision_free`` accepts is

@@ -111,10 +111,11 @@ class CollisionModel:
         ``QT`` is not finite): :func:`._collision_kernels.collision_free` with every array packed
         and bound once (a call from Python then costs the kernel plus about a microsecond).
 
-        ``f.one(q (nq,) float64, clearance, self_clearance) -> 1 / 0 / -1`` (free / not / not
-        finite) checks one configuration (:func:`._collision_kernels.collision_free_one`) through
-        the compiled entry point of its one signature: no type dispatch, no allocation (about
-        0.3 µs in the kernel and 0.2 µs of call). ``q`` must be a float64 array of shape
+        ``f.make_one()`` returns ``one(q (nq,) float64, clearance, self_clearance) -> 1 / 0 / -1``
+        (free / not / not finite), which checks one configuration
+        (:func:`._collision_kernels.collision_free_one`) through the compiled entry point of its
+        one signature: no type dispatch, no allocation (about 0.3 µs in the kernel and 0.2 µs of
+        call). ``q`` must be a float64 array of shape
         ``(nq,)`` (any strides), the clearances Python floats >= 0: the caller checks them.
         """
         kinds, R_WO, p_WO, _, dims = obstacles
@@ -129,12 +130,15 @@ class CollisionModel:
                 return None  # a NaN or an infinity in QT
             return out
 
-        entry, work = K.one_entry_point(), K.one_workspace(ints)
+        def make_one():  # compiled on first need (about 7 s from an empty numba cache)
+            entry, work = K.one_entry_point(), K.one_workspace(ints)
 
-        def one(q, clearance, self_clearance):
-            return entry(q, clearance, self_clearance, ints, floats, work)
+            def one(q, clearance, self_clearance):
+                return entry(q, clearance, self_clearance, ints, floats, work)
 
-        free.one = one
+            return one
+
+        free.make_one = make_one
         return free
 
     def free(self, QT: np.ndarray, obstacles: tuple, clearance: float, self_clearance: float) -> np.ndarray:

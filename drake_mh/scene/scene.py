@@ -432,7 +432,6 @@ class Scene:
         arrays = self.obstacle_arrays
         if self._free_function is None:
             self._free_function = self.collision_model.free_function(arrays)
-            self._free_one = self._free_function.one
         return self._free_function
 
     def collision_free(self, Q, clearance: float = 0.0, self_clearance: float = 0.0):
@@ -471,6 +470,8 @@ class Scene:
             self_clearance = check_clearance(self_clearance, "self_clearance")
         free = self._free()
         if type(Q) is np.ndarray and Q.dtype == np.float64 and Q.shape == self._q_shape:
+            if self._free_one is None:  # the next one-configuration calls take the path above
+                self._free_one = free.make_one()
             out = free(Q.reshape(-1, 1), clearance, self_clearance)  # one configuration: no copy
             if out is not None:
                 return bool(out[0])

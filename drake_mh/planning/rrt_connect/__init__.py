@@ -56,16 +56,23 @@ planning time is ``solve_motion``'s, which here includes certifying every edge):
 
 * the MotionBenchMaker-like sets of :mod:`drake_mh.planning.problems` (table pick, table under
   pick, bookshelf small / tall / thin, box, cage; 15 problems each, 2 seeds): 100 % verified,
-  median 0.98 ms CPU (1.08 wall), p95 3.5 ms CPU, without self-collision; 1.25 ms with the
-  link pairs of MoveIt's Panda SRDF ignored; 4.9 ms with every pair Drake's filter keeps
-  (there link1-link3 and link5-link7 are 1-3 mm apart in every configuration under the
-  sphere model, so every motion needs the bisection). Median path 5.9 rad (7.1 unshortcut).
+  median 0.98 ms CPU (1.08 wall), p95 3.5 ms CPU, without self-collision (load 2.6-4);
+  re-measured at load 1.5 with the scene's public state check
+  (:func:`drake_mh.scene._state_kernels.check_states`) and with the kernel before it, run after
+  run on the same 105 problems x 2 seeds (identical paths): median 0.50-0.52 ms CPU both, p95
+  3.1-3.5 ms. With self-collision (load 2.6-4): 1.25 ms with the link pairs of MoveIt's Panda
+  SRDF ignored; 4.9 ms with every pair Drake's filter keeps (there link1-link3 and link5-link7
+  are 1-3 mm apart in every configuration under the sphere model, so every motion needs the
+  bisection). Median path 5.9 rad (7.1 unshortcut).
 * where the time goes (profiled, MotionBenchMaker-like, mean): batched checks 76 %,
   certification of motions within their margins 13 %, shortcutting 11 % (its checks
   included in those), nearest neighbours 1.4 %, sampling 0.4 %; 90 % of the motions checked
   are rejected (a collision), at about 700 ns per state checked including the per-motion
-  costs. The target of the issue (median 0.5 ms) is missed by about 2x: the batched check
-  costs 300-400 ns per Panda state against these 7-12 obstacles (VAMP: 60-130 ns).
+  costs. The target of the issue (median 0.5 ms) is at the edge at low load (0.50-0.52 ms) and
+  missed under load: the batched check costs 300-400 ns per Panda state against these 7-12
+  obstacles (VAMP: 60-130 ns).
+* cold compilation (empty numba cache): :func:`prepare` takes about 1 minute of CPU time
+  (``plan_kernel`` and its callees; ``check_states`` alone 5 s).
 * the independent verification (:func:`drake_mh.planning.verify_motion` without retiming)
   takes 3-17 ms per path, 6.7 ms median, of which 0.24 ms is the certificate and the rest the
   1 mm refinement of the reported clearance.
