@@ -215,8 +215,13 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
     cx, cy, cz = np.empty(L), np.empty(L), np.empty(L)
     alive, near = np.empty(L, np.bool_), np.empty(L, np.bool_)
     idx = np.empty(L, np.int64)
+    hit = np.zeros(8 * ((L + 7) // 8), np.uint8)
+    words = hit.view(np.uint64)
     for n0 in range(0, N, LANES):
         m = used = min(LANES, N - n0)
+        nw = (m + 7) // 8
+        for b in range(m, 8 * nw):  # lanes past m read 0
+            hit[b] = 0
         _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
         for b in range(m):
             alive[b] = True
@@ -239,10 +244,14 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
                 for b in range(m):  # the link's bounding sphere vs the obstacle's shape
                     near[b] = True
                 _obstacle_free(m, k, kinds, R_WO, p_WO, dims, clearance + g_radius[g], cx, cy, cz, near)
-                for b in range(m):  # the link's spheres, for the lanes still near only
-                    if alive[b] and not near[b]:
-                        alive[b] = _spheres_free(b, a, g_start[g], g_start[g + 1], s_offset, s_radius, clearance,
-                                                 R, p, k, kinds, R_WO, p_WO, dims)
+                for b in range(m):  # the lanes still near, as bytes read 8 at a time (few are set)
+                    hit[b] = alive[b] > near[b]
+                for w in range(nw):
+                    if words[w] != 0:
+                        for b in range(8 * w, 8 * w + 8):
+                            if hit[b]:  # the link's spheres
+                                alive[b] = _spheres_free(b, a, g_start[g], g_start[g + 1], s_offset, s_radius,
+                                                         clearance, R, p, k, kinds, R_WO, p_WO, dims)
             any_alive = False
             for b in range(m):
                 any_alive |= alive[b]

@@ -48,9 +48,10 @@ def state_workspace(F, G, lanes):
     """Arrays :func:`check_states` writes into, for ``F`` moving frames, ``G`` links and at most
     ``lanes`` configurations per call (allocate once, reuse for every call)."""
     L = lanes
+    hit = np.zeros(8 * ((L + 7) // 8), np.uint8)
     return (np.empty((F, 3, 3, L)), np.empty((F, 3, L)), np.empty(L), np.empty(L), np.empty((G, L)),
             np.empty((G, L)), np.empty((G, L)), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_),
-            np.empty(L, np.bool_), np.empty(L, np.int64))
+            np.empty(L, np.bool_), np.empty(L, np.int64), hit, hit.view(np.uint64))
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -92,8 +93,11 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b) = arrays
-    R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx = ws
+    R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words = ws
     G, K = g_anchor.shape[0], kinds.shape[0]
+    nw = (m + 7) // 8
+    for b in range(m, 8 * nw):  # lanes past m read 0
+        hit[b] = 0
     _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
     for b in range(m):
         keep[b] = True
@@ -116,14 +120,19 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
             for b in range(m):  # the link's bounding sphere vs the obstacle's shape
                 near[b] = True
             _obstacle_free(m, k, kinds, R_WO, p_WO, dims, margin + g_radius[g], cx, cy, cz, near)
-            for b in range(m):  # the link's spheres, for the lanes still near only
-                if not near[b]:
-                    state = _spheres_state(b, a, g_start[g], g_start[g + 1], s_offset, s_radius, margin, plain, R, p,
-                                           k, kinds, R_WO, p_WO, dims)
-                    if state == COLLISION:
-                        return COLLISION
-                    if state == NEAR:
-                        keep[b] = False
+            for b in range(m):  # the lanes still near, as bytes read 8 at a time (few are set)
+                hit[b] = not near[b]
+            for w in range(nw):
+                if words[w] == 0:
+                    continue
+                for b in range(8 * w, 8 * w + 8):
+                    if hit[b]:  # the link's spheres
+                        state = _spheres_state(b, a, g_start[g], g_start[g + 1], s_offset, s_radius, margin, plain,
+                                               R, p, k, kinds, R_WO, p_WO, dims)
+                        if state == COLLISION:
+                            return COLLISION
+                        if state == NEAR:
+                            keep[b] = False
     for i in range(pair_a.shape[0]):
         ga, gb = pair_a[i], pair_b[i]
         lim = pair_margin[i] + g_radius[ga] + g_radius[gb]
