@@ -57,10 +57,10 @@ planning time is ``solve_motion``'s, which here includes certifying every edge):
 * the MotionBenchMaker-like sets of :mod:`drake_mh.planning.problems` (table pick, table under
   pick, bookshelf small / tall / thin, box, cage; 15 problems each, 2 seeds): 100 % verified,
   median 0.98 ms CPU (1.08 wall), p95 3.5 ms CPU, without self-collision (load 2.6-4);
-  re-measured at load 1.5 with the scene's public state check
+  re-measured with the scene's public state check
   (:func:`drake_mh.scene._state_kernels.check_states`) and with the kernel before it, run after
-  run on the same 105 problems x 2 seeds (identical paths): median 0.50-0.52 ms CPU both, p95
-  3.1-3.5 ms. With self-collision (load 2.6-4): 1.25 ms with the link pairs of MoveIt's Panda
+  run on the same 105 problems x 2 seeds (identical paths): at load 2.0, median 0.43-0.45 ms
+  CPU (before: 0.44-0.46), p95 3.0-3.1 ms (before: 3.4); at load 1.5 both 0.50-0.52 ms. With self-collision (load 2.6-4): 1.25 ms with the link pairs of MoveIt's Panda
   SRDF ignored; 4.9 ms with every pair Drake's filter keeps (there link1-link3 and link5-link7
   are 1-3 mm apart in every configuration under the sphere model, so every motion needs the
   bisection). Median path 5.9 rad (7.1 unshortcut).
@@ -68,8 +68,8 @@ planning time is ``solve_motion``'s, which here includes certifying every edge):
   certification of motions within their margins 13 %, shortcutting 11 % (its checks
   included in those), nearest neighbours 1.4 %, sampling 0.4 %; 90 % of the motions checked
   are rejected (a collision), at about 700 ns per state checked including the per-motion
-  costs. The target of the issue (median 0.5 ms) is at the edge at low load (0.50-0.52 ms) and
-  missed under load: the batched check costs 300-400 ns per Panda state against these 7-12
+  costs. The target of the issue (median 0.5 ms) is met at load 2 (0.43-0.45 ms), at the edge
+  at load 1.5 (0.50-0.52 ms, machine state varies) and missed under heavier load: the batched check costs 300-400 ns per Panda state against these 7-12
   obstacles (VAMP: 60-130 ns).
 * cold compilation (empty numba cache): :func:`prepare` takes about 1 minute of CPU time
   (``plan_kernel`` and its callees; ``check_states`` alone 5 s).
