@@ -26,10 +26,11 @@ logger = logging.getLogger(__name__)
 
 #: studies the demo runs (quick grid), in order; the IK comparison joins when it exists
 DEMO_STUDIES: tuple[str, ...] = ("bench_kinematics", "fk_accuracy", "retime_benchmark")
-#: optional studies added to the demo when their script exists. Not motion_benchmark yet: from an
-#: empty numba cache its planners' kernels took the demo to 2 min 40 s (limit 3 min); measured
-#: 23 s warm. It joins when the kernels compile faster or ship precompiled.
-OPTIONAL_DEMO_STUDIES: tuple[str, ...] = ("ik_comparison",)
+#: optional studies added to the demo when their script exists. motion_benchmark's quick form (one
+#: table problem, five planners, 1 s each) is the slowest part from an empty numba cache: 92 s of a
+#: 141 s demo (2.2 min wall, 2.3 min CPU, load 1-2, AMD EPYC, 2 cores), mostly compiling
+#: rrt_connect's kernel once (about 1 min); the whole demo takes 18 s when the cache is warm.
+OPTIONAL_DEMO_STUDIES: tuple[str, ...] = ("ik_comparison", "motion_benchmark")
 #: figures of a study report shown on the demo page, in order of preference (at most two)
 KEY_FIGURES: tuple[str, ...] = ("boxplots", "convergence")
 #: the demo page's 3-D animation: (study, robot, first method name prefix, title)
