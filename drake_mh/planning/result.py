@@ -30,7 +30,11 @@ class MotionResult:
         path_length: ``Σ ||q_{i+1} - q_i||`` [rad].
         trajectory: the retimed :class:`drake_mh.trajectories.Trajectory` (``None`` if none).
         duration: its duration [s] (NaN if none).
-        max_jerk: largest joint jerk along it [rad/s³] (sampled; NaN if none).
+        max_jerk: largest joint jerk along it [rad/s³] (sampled; ``inf`` for toppra's
+            acceleration steps on a robot with jerk limits; NaN if no trajectory).
+        jerk_limited: whether the trajectory is certified within the robot's declared jerk
+            limits (``None``: no trajectory, or the robot declares none). toppra's are not;
+            ``retime="ruckig"`` gives jerk-limited ones.
         goal_index: which goal configuration the path reaches (pose goals: of the IK answers).
         goal_time: seconds spent on the goal configurations of a pose goal (0 when cached
             from an earlier method on the same problem, or for configuration goals).
@@ -50,6 +54,7 @@ class MotionResult:
     trajectory: object = None
     duration: float = float("nan")
     max_jerk: float = float("nan")
+    jerk_limited: bool | None = None
     goal_index: int | None = None
     goal_time: float = 0.0
     seed: object = None
@@ -60,6 +65,7 @@ class MotionResult:
         return {"method": self.method, "success": bool(self.success), "planning_time": self.planning_time,
                 "cpu_time": self.cpu_time, "verify_time": self.verify_time, "min_clearance": self.min_clearance,
                 "path_length": self.path_length, "duration": self.duration, "max_jerk": self.max_jerk,
+                "jerk_limited": self.jerk_limited,
                 "waypoints": 0 if self.path is None else int(len(self.path)), "message": self.message}
 
     def __repr__(self) -> str:

@@ -25,7 +25,7 @@ import numpy as np
 from drake_mh.errors import InvalidArgument, InvalidMotionProblem, UnknownMethod
 from drake_mh.planning.problem import MotionProblem
 from drake_mh.planning.result import MotionResult
-from drake_mh.planning.verify import verify_motion
+from drake_mh.planning.verify import check_retime, verify_motion
 
 _METHODS: dict = {}
 _LOADED = False
@@ -145,7 +145,7 @@ def goal_configurations(problem: MotionProblem, count: int = 4, timeout: float |
 
 
 def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, timeout: float | None = 10.0,
-                 budget: int | None = None, retime: bool = True, **options) -> MotionResult:
+                 budget: int | None = None, retime: bool | str = True, **options) -> MotionResult:
     """Plan a motion with any registered method; the answer is verified the same way for all.
 
     Args:
@@ -155,7 +155,9 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
             success or budget rather than by the timeout).
         timeout: [s] wall-clock limit of planning (``None``: none).
         budget: the method's own unit (tree nodes, evaluations, solver iterations).
-        retime: also retime and certify a trajectory (toppra, else ruckig).
+        retime: also retime and certify a trajectory: ``True`` toppra, else ruckig; ``"toppra"``;
+            ``"ruckig"`` (jerk-limited, on the straight segments, at rest at each waypoint);
+            ``False`` none (:func:`~drake_mh.planning.verify_motion`).
         **options: the method's options.
 
     Returns:
@@ -174,6 +176,7 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
         raise InvalidArgument(f"timeout must be a number of seconds > 0 or None, got {timeout!r}")
     if budget is not None and (isinstance(budget, bool) or not isinstance(budget, numbers.Integral) or budget < 1):
         raise InvalidArgument(f"budget must be an integer >= 1 or None, got {budget!r}")
+    check_retime(retime)
     function, _ = _METHODS[method]
     rng = np.random.default_rng(seed)
     goal_start = time.perf_counter()

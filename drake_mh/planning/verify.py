@@ -8,8 +8,8 @@ A path ``(M, nq)`` succeeds when
    problem's clearances (:func:`drake_mh.scene.segments.certify_path`: every configuration on
    every segment, not only the waypoints);
 3. it retimes into a trajectory certified against the robot's velocity, acceleration and torque
-   limits (:func:`drake_mh.trajectories.retime`: toppra, else ruckig) whose *executed* motion is
-   certified too. toppra's cubic spline leaves the chords (ruckig's motion stays on them, to
+   limits (:func:`drake_mh.trajectories.retime`: toppra, else ruckig; or the one method asked for
+   with ``retime="toppra"`` / ``"ruckig"``) whose *executed* motion is certified too. toppra's cubic spline leaves the chords (ruckig's motion stays on them, to
    rounding, but is certified the same way), so the trajectory itself is certified: sampled
    every ``Δt``, the straight segments between the
    samples are certified, and between two samples a joint deviates from that segment by at most
@@ -18,6 +18,14 @@ A path ``(M, nq)`` succeeds when
    ``max_c Σ_j reach[c, j] δ_j`` (:attr:`~drake_mh.scene.batch.CollisionModel.reach`) from the
    certified segments; ``Δt`` is chosen so that this is :data:`TRAJECTORY_SHIFTS` (1 mm, finer if needed), and the
    trajectory's certified clearance is the segments' minus it.
+
+Jerk: toppra's time law has piecewise-constant ``s̈``, so its acceleration steps at every
+gridpoint and its jerk is unbounded there. On a robot that declares jerk limits (the Panda:
+Franka's 3,750-10,000 rad/s³) such a trajectory is certified against velocity, acceleration and
+torque but **not** against jerk: :attr:`MotionResult.jerk_limited` is then False and
+``max_jerk`` is ``inf``. ``retime="ruckig"`` gives jerk-limited motions (exactly on the
+certified straight segments, at rest at every waypoint, so longer for paths with many
+waypoints).
 """
 
 from __future__ import annotations
@@ -53,7 +61,34 @@ def _reaches_goal(problem, q_end: np.ndarray) -> tuple[int | None, str]:
     return None, f"the path ends {position * 1e3:.2f} mm / {angle:.4f} rad from the goal pose (Drake FK)"
 
 
+RETIME_CHOICES = {True: ("toppra", "ruckig"), "toppra": ("toppra",), "ruckig": ("ruckig",)}
+"""``retime`` argument -> retimers tried in order (``False``: no trajectory)."""
+
+
+def check_retime(retime) -> None:
+    """Raise :class:`~drake_mh.errors.InvalidArgument` unless ``retime`` is a key of
+    :data:`RETIME_CHOICES` or ``False``."""
+    from drake_mh.errors import InvalidArgument
+
+    if retime is not False and (not isinstance(retime, (bool, str)) or retime not in RETIME_CHOICES):
+        raise InvalidArgument(f"retime must be True, False, 'toppra' or 'ruckig', got {retime!r}")
+
+
+def _jerk_limited(trajectory) -> bool | None:
+    """Whether the trajectory is certified within the robot's declared jerk limits (None: the
+    robot declares none)."""
+    cert = trajectory.info.get("certificate")
+    if cert is None or "jerk" not in cert.ratios:
+        return None
+    return bool(cert.ok(("jerk",)))
+
+
 def _max_jerk(trajectory) -> float:
+    """Largest joint jerk [rad/s³]: ``inf`` where the certificate found acceleration steps (toppra
+    on a jerk-limited robot), else the largest of 2,001 samples."""
+    cert = trajectory.info.get("certificate")
+    if cert is not None and "jerk" in cert.ratios and not np.all(np.isfinite(cert.ratios["jerk"])):
+        return float("inf")
     t = np.linspace(trajectory.start_time, trajectory.end_time, 2001)
     try:
         return float(np.max(np.abs(trajectory.jerk(t))))
@@ -61,9 +96,20 @@ def _max_jerk(trajectory) -> float:
         return float("nan")
 
 
-def verify_motion(problem, path, method: str, result: MotionResult | None = None, retime: bool = True) -> MotionResult:
-    """Verify ``path`` for ``problem`` and fill a :class:`MotionResult` (see module docstring)."""
+def verify_motion(problem, path, method: str, result: MotionResult | None = None,
+                  retime: bool | str = True) -> MotionResult:
+    """Verify ``path`` for ``problem`` and fill a :class:`MotionResult` (see module docstring).
+
+    Args:
+        retime: ``True`` (toppra, else ruckig), ``"toppra"``, ``"ruckig"`` (jerk-limited), or
+            ``False`` (the path only, no trajectory).
+
+    Raises:
+        InvalidArgument: another ``retime``.
+    """
     import time
+
+    check_retime(retime)
 
     start = time.perf_counter()
     result = result or MotionResult(method)
@@ -103,12 +149,13 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
     result.min_clearance = cert.min_clearance
     result.success, result.message = True, "certified"
     if retime:
-        trajectory, message = _retime(problem, P, cert)
+        trajectory, message = _retime(problem, P, RETIME_CHOICES[retime])
         if trajectory is None:
             result.success, result.message = False, message
         else:
             result.trajectory, result.duration = trajectory, float(trajectory.end_time - trajectory.start_time)
             result.max_jerk = _max_jerk(trajectory)
+            result.jerk_limited = _jerk_limited(trajectory)
             result.min_clearance = trajectory.info.get("certified_clearance", result.min_clearance)
             result.message = f"certified; retimed with {trajectory.method}"
     result.verify_time = time.perf_counter() - start
@@ -143,8 +190,9 @@ def trajectory_clearance(problem, trajectory) -> tuple[float, str]:
     return float("nan"), why
 
 
-def _retime(problem, P: np.ndarray, cert) -> tuple[object, str]:
-    """toppra, else ruckig; the executed motion certified (:func:`trajectory_clearance`)."""
+def _retime(problem, P: np.ndarray, methods: tuple) -> tuple[object, str]:
+    """The first of ``methods`` that retimes ``P``; the executed motion certified
+    (:func:`trajectory_clearance`)."""
     from drake_mh.errors import DrakeMhError
     from drake_mh.trajectories import retime
 
@@ -154,7 +202,7 @@ def _retime(problem, P: np.ndarray, cert) -> tuple[object, str]:
     if len(W) < 2:
         return None, "the path does not move: nothing to retime"
     reasons = []
-    for method in ("toppra", "ruckig"):
+    for method in methods:
         try:
             trajectory = retime(W, robot, method)
         except DrakeMhError as exc:

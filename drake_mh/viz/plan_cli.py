@@ -66,6 +66,9 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
     p.add_argument("--method", default=None, help="planner (default rrt_connect_smooth)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--timeout", type=float, default=10.0, help="planning limit [s] (default 10)")
+    p.add_argument("--retime", choices=("auto", "toppra", "ruckig"), default="auto",
+                   help="time law: auto (toppra, else ruckig), toppra (fastest; jerk not limited), ruckig "
+                        "(jerk-limited, on the straight segments, at rest at each waypoint)")
     p.add_argument("--json", action="store_true", help="print the result as one JSON object")
     p.add_argument("--html", default=None, metavar="PATH", help="write the animation page (opens offline)")
     p.add_argument("--show", action="store_true", help="play it in Meshcat (localhost) until Ctrl-C")
@@ -126,7 +129,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if args.max_seconds is not None and not args.max_seconds > 0:
         raise InvalidArgument(f"--max-seconds must be > 0, got {args.max_seconds}")
     problem = _problem(args)
-    result = solve_motion(problem, method, seed=args.seed, timeout=args.timeout)
+    result = solve_motion(problem, method, seed=args.seed, timeout=args.timeout,
+                          retime=True if args.retime == "auto" else args.retime)
     _print(problem, result, args.json)
     if result.success and args.html:
         from pathlib import Path
@@ -159,7 +163,9 @@ def _print(problem, result, as_json: bool) -> None:
     state = "verified" if result.success else "FAILED"
     print(f"{state}: {motion_caption(result)} ({robot.name}, {len(problem.scene.obstacles)} obstacles)")
     if result.success:
-        print(f"  path {result.path_length:.3f} rad, max jerk {result.max_jerk:.3g} rad/s^3, goal IK "
+        jerk = ("jerk not limited (toppra's acceleration steps; --retime ruckig limits it)"
+                if result.jerk_limited is False else f"max jerk {result.max_jerk:.3g} rad/s^3")
+        print(f"  path {result.path_length:.3f} rad, {jerk}, goal IK "
               f"{result.goal_time:.2f} s, verification {result.verify_time * 1e3:.1f} ms")
         print(f"  goal q = [{', '.join(f'{v:.4f}' for v in result.path[-1])}]")
 

@@ -37,6 +37,20 @@ def test_empty_scene_motion_is_verified_with_infinite_clearance():
     assert result.trajectory is not None and result.min_clearance == np.inf
 
 
+def test_jerk_is_reported_honestly_and_ruckig_limits_it():
+    q_goal = PANDA.home.copy()
+    q_goal[0] += 1.0
+    problem = MotionProblem(PANDA, ball_scene(), PANDA.home, q_goal)
+    toppra = solve_motion(problem, "straight")  # the Panda declares jerk limits; toppra's steps break them
+    assert toppra.success and toppra.jerk_limited is False and toppra.max_jerk == np.inf
+    assert toppra.record()["jerk_limited"] is False
+    ruckig = solve_motion(problem, "straight", retime="ruckig")
+    assert ruckig.success and ruckig.jerk_limited is True and "ruckig" in ruckig.message
+    assert 0 < ruckig.max_jerk <= np.max(PANDA.jerk_limits) * (1 + 1e-6)
+    with pytest.raises(InvalidArgument, match="retime"):
+        solve_motion(problem, "straight", retime="spline")
+
+
 def test_straight_line_through_an_obstacle_fails_honestly():
     scene = Scene(PANDA)
     q_goal = PANDA.home.copy()

@@ -61,3 +61,14 @@ def test_show_plays_it_in_meshcat_until_max_seconds():
     lines = out.stdout.splitlines()
     assert lines[0].startswith("verified: rrt_connect_smooth: planned in")
     assert lines[-1].startswith("showing the motion at http://localhost:") and "listening" not in out.stderr
+
+
+def test_retime_ruckig_limits_the_jerk_toppra_says_it_does_not():
+    base = [sys.executable, "-m", "drake_mh", "plan", "--goal-q", "1", "0", "0", "-2", "0", "2", "0.5",
+            "--sphere", "0.5", "0.3", "0.3", "0.1"]
+    toppra = subprocess.run(base, capture_output=True, text=True, timeout=300)
+    ruckig = subprocess.run(base + ["--retime", "ruckig", "--json"], capture_output=True, text=True, timeout=300)
+    assert toppra.returncode == 0 and "jerk not limited" in toppra.stdout, toppra.stderr
+    assert ruckig.returncode == 0, ruckig.stderr
+    data = json.loads(ruckig.stdout)
+    assert data["jerk_limited"] is True and 0 < data["max_jerk"] <= 10000 * (1 + 1e-6)
