@@ -253,6 +253,27 @@ def test_converter_builds_problems_and_skips_invalid_ones(tmp_path):
     assert len(motionbenchmaker_set(path, "cage", robot="panda", count=1)) == 1
 
 
+def test_sphere_tolerance_reaches_the_scenes(tmp_path):
+    """``sphere_tolerance`` is the covering tolerance of every scene's sphere model (generated and
+    archive problems); the default stays 1 cm; a non-positive one is refused up front."""
+    from drake_mh.spheres import DEFAULT_TOLERANCE
+
+    coarse = problem_set("cage", PANDA, count=1, seed=5, sphere_tolerance=0.02)
+    default = problem_set("cage", PANDA, count=1, seed=5)
+    assert coarse[0].scene.sphere_model.tolerance == 0.02
+    assert default[0].scene.sphere_model.tolerance == DEFAULT_TOLERANCE == 0.01
+    assert len(coarse[0].scene.sphere_model.radii) <= len(default[0].scene.sphere_model.radii)
+    path = _archive(tmp_path / "problems.tar.bz2")
+    archive = motionbenchmaker_set(path, "cage", robot="panda", sphere_tolerance=0.02)
+    assert len(archive) == 1 and archive[0].scene.sphere_model.tolerance == 0.02
+    assert motionbenchmaker_set(path, "cage", robot="panda")[0].scene.sphere_model.tolerance == DEFAULT_TOLERANCE
+    for bad in (0.0, -0.01, float("nan"), "fine", True):
+        with pytest.raises(InvalidArgument, match="sphere_tolerance"):
+            problem_set("cage", PANDA, count=1, sphere_tolerance=bad)
+        with pytest.raises(InvalidArgument, match="sphere_tolerance"):
+            motionbenchmaker_set(path, "cage", robot="panda", sphere_tolerance=bad)
+
+
 def test_converter_reads_the_sdist_and_folders(tmp_path):
     inner = _archive(tmp_path / "problems.tar.bz2").read_bytes()
     sdist = tmp_path / "vamp_planner-0.0.0.tar.gz"

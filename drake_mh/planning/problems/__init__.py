@@ -26,8 +26,10 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument, UnknownMethod
 from drake_mh.planning.problems.fixtures import FIXTURES
-from drake_mh.planning.problems.generate import generate_problem, ready_configuration, tool_transform
+from drake_mh.planning.problems.generate import (check_sphere_tolerance, generate_problem, ready_configuration,
+                                                  tool_transform)
 from drake_mh.planning.problems.mbm import MBM_SETS, read_motionbenchmaker, to_motion_problem
+from drake_mh.spheres import DEFAULT_TOLERANCE
 
 logger = logging.getLogger(__name__)
 
@@ -218,7 +220,8 @@ def _check_count(count) -> int:
 
 
 def problem_set(name: str, robot="panda", count: int = 10, seed: int = 0, clearance: float = 0.0,
-                self_clearance: float = 0.0, self_collision: bool = True, first: int = 0) -> ProblemSet:
+                self_clearance: float = 0.0, self_collision: bool = True, first: int = 0,
+                sphere_tolerance: float = DEFAULT_TOLERANCE) -> ProblemSet:
     """``count`` motion problems of a generated set (:mod:`.generate`), deterministic per seed.
 
     Args:
@@ -231,31 +234,41 @@ def problem_set(name: str, robot="panda", count: int = 10, seed: int = 0, cleara
             free with them.
         self_collision: check the robot's links against each other too (as MotionBenchMaker does).
         first: index of the first problem (``first=5, count=2``: problems 5 and 6).
+        sphere_tolerance: covering tolerance [m] of the scenes' sphere model
+            (:class:`drake_mh.spheres.SphereModel`, default 1 cm), what start and goal are
+            certified with and planners check against. Coarser is fewer spheres, so faster
+            checks, but more pessimistic: configurations near obstacles are no longer certified
+            free, narrow passages close (docs/planning.md, "Sphere tolerance: speed against
+            pessimism"). Problem ``i`` may differ between tolerances (a draw certified at one may
+            not be at another).
 
     Returns:
         A :class:`ProblemSet` (a list of :class:`~drake_mh.planning.MotionProblem`).
 
     Raises:
         UnknownMethod: an unknown set name (the message lists them).
+        InvalidArgument: a negative ``count`` or a non-positive ``sphere_tolerance``.
         InvalidMotionProblem: no certified-free pair found for a problem (the robot cannot
             reach into this fixture).
     """
     if name not in FIXTURES:
         raise UnknownMethod(name, list(FIXTURES), what="problem set")
     count = _check_count(count)
+    sphere_tolerance = check_sphere_tolerance(sphere_tolerance)
     robot = load_problem_robot(robot)
     problems, info = [], []
     for index in range(int(first), int(first) + count):
         problem, data = generate_problem(name, robot, index, seed=int(seed), clearance=clearance,
                                          self_clearance=self_clearance, self_collision=self_collision,
-                                         code=SET_CODES[name])
+                                         code=SET_CODES[name], sphere_tolerance=sphere_tolerance)
         problems.append(problem)
         info.append(data)
     return ProblemSet(problems, name=name, robot=robot, seed=int(seed), info=info)
 
 
 def motionbenchmaker_set(path, name: str, robot="panda_hand_mbm", count: int | None = None, clearance: float = 0.0,
-                         self_clearance: float = 0.0, self_collision: bool = True) -> ProblemSet:
+                         self_clearance: float = 0.0, self_collision: bool = True,
+                         sphere_tolerance: float = DEFAULT_TOLERANCE) -> ProblemSet:
     """The original MotionBenchMaker problems of one set, from a downloaded archive (:mod:`.mbm`).
 
     Args:
@@ -265,16 +278,23 @@ def motionbenchmaker_set(path, name: str, robot="panda_hand_mbm", count: int | N
             for (fingers 6.5 cm out, :data:`MBM_FINGER`); the bundled ``"panda"`` (no hand) makes
             them easier, which :attr:`ProblemSet.note` says.
         count: the first ``count`` problems by index (default all).
-        clearance, self_clearance, self_collision: as for :func:`problem_set`.
+        clearance, self_clearance, self_collision, sphere_tolerance: as for :func:`problem_set`
+            (a coarser ``sphere_tolerance`` leaves more problems out: their start or goal is no
+            longer certified free).
 
     Returns:
         A :class:`ProblemSet`; problems whose start or goal is not certified free for this robot
         are left out and listed in ``skipped``.
+
+    Raises:
+        UnknownMethod: an unknown set name.
+        InvalidArgument: a negative ``count`` or a non-positive ``sphere_tolerance``.
     """
     from drake_mh.errors import InvalidMotionProblem
 
     if name not in MBM_SETS:
         raise UnknownMethod(name, list(MBM_SETS), what="MotionBenchMaker set")
+    sphere_tolerance = check_sphere_tolerance(sphere_tolerance)
     robot = load_problem_robot(robot)
     archive = read_motionbenchmaker(path, sets=[name]).get(name, [])
     if count is not None:
@@ -287,7 +307,7 @@ def motionbenchmaker_set(path, name: str, robot="panda_hand_mbm", count: int | N
     problems, info, skipped = [], [], []
     for item in archive:
         try:
-            problem = to_motion_problem(item, robot, clearance, self_clearance, self_collision)
+            problem = to_motion_problem(item, robot, clearance, self_clearance, self_collision, sphere_tolerance)
         except InvalidMotionProblem as exc:
             skipped.append((item.index, str(exc).split(";")[0]))
             continue

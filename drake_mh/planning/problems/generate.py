@@ -26,8 +26,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_mh.errors import InvalidMotionProblem
+from drake_mh.errors import InvalidArgument, InvalidMotionProblem
 from drake_mh.planning.problems.fixtures import FIXTURES
+from drake_mh.spheres import DEFAULT_TOLERANCE
 
 MAX_DRAWS = 12
 """Fixtures drawn per problem before giving up (a draw fails when no grasp is reachable)."""
@@ -196,12 +197,32 @@ def always_close_pairs(robot) -> tuple:
     return Scene(robot, self_collision=True).always_close_pairs
 
 
-def new_scene(robot, self_collision: bool = True):
+def check_sphere_tolerance(sphere_tolerance) -> float:
+    """``sphere_tolerance`` as a float [m], or :class:`~drake_mh.errors.InvalidArgument` when it
+    is not a finite positive number."""
+    try:
+        value = float(sphere_tolerance)
+    except (TypeError, ValueError):
+        raise InvalidArgument(f"sphere_tolerance must be a positive length in metres, got {sphere_tolerance!r}") \
+            from None
+    if isinstance(sphere_tolerance, bool) or not np.isfinite(value) or value <= 0.0:
+        raise InvalidArgument(f"sphere_tolerance must be a positive length in metres, got {sphere_tolerance!r}")
+    return value
+
+
+def new_scene(robot, self_collision: bool = True, sphere_tolerance: float = DEFAULT_TOLERANCE):
     """An empty :class:`drake_mh.scene.Scene`, self-collision with the default rule: the robot's
-    always-close link pairs left out (:func:`always_close_pairs`)."""
+    always-close link pairs left out (:func:`always_close_pairs`, found under this scene's sphere
+    model). ``sphere_tolerance`` [m] is the covering tolerance of the scene's sphere model
+    (:class:`drake_mh.spheres.SphereModel`; default 1 cm): coarser is fewer spheres, so faster
+    checks, but more pessimistic (docs/planning.md, "Sphere tolerance: speed against pessimism").
+
+    Raises:
+        InvalidArgument: a ``sphere_tolerance`` that is not a positive number.
+    """
     from drake_mh.scene import Scene
 
-    return Scene(robot, self_collision=bool(self_collision))
+    return Scene(robot, self_collision=bool(self_collision), sphere_tolerance=check_sphere_tolerance(sphere_tolerance))
 
 
 def certified_with_margin(scene, q, clearance: float, self_clearance: float) -> bool:
@@ -209,17 +230,19 @@ def certified_with_margin(scene, q, clearance: float, self_clearance: float) -> 
     return bool(scene.collision_free(q, clearance + MARGIN, self_clearance + MARGIN))
 
 
-def build_scene(robot, fixture, self_collision: bool = True):
+def build_scene(robot, fixture, self_collision: bool = True, sphere_tolerance: float = DEFAULT_TOLERANCE):
     """A :class:`drake_mh.scene.Scene` of ``robot`` (:func:`new_scene`) with the fixture's obstacles."""
-    scene = new_scene(robot, self_collision)
+    scene = new_scene(robot, self_collision, sphere_tolerance)
     for name, shape, p_W, rpy in fixture.obstacles:
         scene.add(name, shape, p_W, rpy)
     return scene
 
 
 def generate_problem(name: str, robot, index: int, seed: int = 0, clearance: float = 0.0,
-                     self_clearance: float = 0.0, self_collision: bool = True, code: int = 0):
-    """Problem ``index`` of set ``name`` for ``robot`` (module docstring).
+                     self_clearance: float = 0.0, self_collision: bool = True, code: int = 0,
+                     sphere_tolerance: float = DEFAULT_TOLERANCE):
+    """Problem ``index`` of set ``name`` for ``robot`` (module docstring); its scene's sphere model
+    has covering tolerance ``sphere_tolerance`` [m] (:func:`new_scene`).
 
     Returns:
         ``(MotionProblem, info)``; ``info`` has the fixture, the goal's grasp pose ``X_WT``, the
@@ -235,7 +258,7 @@ def generate_problem(name: str, robot, index: int, seed: int = 0, clearance: flo
     ready = ready_configuration(robot)
     for draw in range(1, MAX_DRAWS + 1):
         fixture = draw_fixture(name, rng)
-        scene = build_scene(robot, fixture, self_collision)
+        scene = build_scene(robot, fixture, self_collision, sphere_tolerance)
         q_start, start_site = ready, None
         if fixture.starts:  # start at another object, a spot on the table, under the table
             q_start = None

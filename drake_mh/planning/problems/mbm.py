@@ -40,6 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
+from drake_mh.spheres import DEFAULT_TOLERANCE
 
 MBM_SETS = ("table_pick", "table_under_pick", "box", "bookshelf_small", "bookshelf_tall", "bookshelf_thin", "cage")
 """MotionBenchMaker's Panda sets, as named in the archive (without the ``_panda`` suffix)."""
@@ -217,17 +218,20 @@ def _configuration(robot, values: dict, what: str, where: str) -> np.ndarray:
 
 
 def to_motion_problem(problem: MBMProblem, robot, clearance: float = 0.0, self_clearance: float = 0.0,
-                      self_collision: bool = True):
+                      self_collision: bool = True, sphere_tolerance: float = DEFAULT_TOLERANCE):
     """Build the :class:`~drake_mh.planning.MotionProblem` of one archive problem.
 
     Self-collision leaves out the robot's always-close link pairs
-    (:func:`drake_mh.planning.problems.generate.always_close_pairs`).
+    (:func:`drake_mh.planning.problems.generate.always_close_pairs`). ``sphere_tolerance`` [m]:
+    covering tolerance of the scene's sphere model (default 1 cm; coarser is faster but more
+    pessimistic: :func:`drake_mh.planning.problems.generate.new_scene`).
 
     Raises:
         InvalidMotionProblem: the start or goal is outside the limits or not certified free
             for this robot (sphere model, with the clearances plus
             :data:`~drake_mh.planning.problems.generate.MARGIN`).
-        InvalidArgument: a joint of the robot has no value in the request.
+        InvalidArgument: a joint of the robot has no value in the request, or a non-positive
+            ``sphere_tolerance``.
     """
     from pydrake.math import RollPitchYaw, RotationMatrix
 
@@ -237,7 +241,7 @@ def to_motion_problem(problem: MBMProblem, robot, clearance: float = 0.0, self_c
     from drake_mh.planning.problems.generate import MARGIN, certified_with_margin, new_scene
 
     where = f"MotionBenchMaker {problem.set} {problem.index}"
-    scene = new_scene(robot, self_collision)
+    scene = new_scene(robot, self_collision, sphere_tolerance)
     for name, shape, p_WO, R_WO in problem.obstacles:
         scene.add(name, shape, p_WO, RollPitchYaw(RotationMatrix(R_WO)).vector())
     q_start = _configuration(robot, problem.start, "start state", where)
