@@ -17,7 +17,9 @@ A path ``(M, nq)`` succeeds when
    its acceleration (the trajectory's certificate). A sphere then moves at most
    ``max_c Σ_j reach[c, j] δ_j`` (:attr:`~drake_mh.scene.batch.CollisionModel.reach`) from the
    certified segments; ``Δt`` is chosen so that this is :data:`TRAJECTORY_SHIFTS` (1 mm, finer if needed), and the
-   trajectory's certified clearance is the segments' minus it.
+   trajectory's certified clearance is the segments' minus it. ruckig's trajectories move
+   exactly along the certified straight segments, so they take the path's certificate
+   (:data:`ON_PATH_ALLOWANCE`) without sampling.
 
 Jerk: toppra's time law has piecewise-constant ``s̈``, so its acceleration steps at every
 gridpoint and its jerk is unbounded there. On a robot that declares jerk limits (the Panda:
@@ -149,7 +151,7 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
     result.min_clearance = cert.min_clearance
     result.success, result.message = True, "certified"
     if retime:
-        trajectory, message = _retime(problem, P, RETIME_CHOICES[retime])
+        trajectory, message = _retime(problem, P, RETIME_CHOICES[retime], cert)
         if trajectory is None:
             result.success, result.message = False, message
         else:
@@ -162,10 +164,37 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
     return result
 
 
-def trajectory_clearance(problem, trajectory) -> tuple[float, str]:
+ON_PATH_ALLOWANCE = 1e-9
+"""[m] subtracted from the path's certified clearance for a trajectory that moves exactly along
+the certified straight segments (ruckig's, :func:`drake_mh.trajectories.retime`): its
+configurations are ``q_a + s(t) (q_b - q_a)`` with ``s`` in ``[0, 1]`` up to floating-point
+rounding of the polynomial (3e-15 rad measured), which moves a sphere by far less than this."""
+
+
+def _on_certified_path(trajectory, W: np.ndarray) -> bool:
+    """Whether ``trajectory`` is ruckig's motion along exactly the straight segments through
+    ``W`` (its construction; its waypoints checked at their times to 1e-9 rad)."""
+    on_path, times = trajectory.info.get("on_path"), trajectory.info.get("waypoint_times")
+    if trajectory.method != "ruckig" or on_path is None or times is None or on_path.shape != W.shape:
+        return False
+    if not np.array_equal(on_path, W):
+        return False
+    return bool(np.max(np.abs(trajectory.position(np.asarray(times)) - W)) <= 1e-9)
+
+
+def trajectory_clearance(problem, trajectory, path_certificate=None, W=None) -> tuple[float, str]:
     """Certified lower bound of the obstacle clearance along ``trajectory``'s executed motion [m]
-    (NaN and the reason where it cannot be certified with the problem's clearances)."""
+    (NaN and the reason where it cannot be certified with the problem's clearances).
+
+    A trajectory along exactly the certified straight segments through ``W`` (ruckig's) gets the
+    ``path_certificate``'s clearance less :data:`ON_PATH_ALLOWANCE`, without sampling. Otherwise
+    the trajectory is sampled (module docstring); the finer levels of
+    :data:`TRAJECTORY_SHIFTS` are skipped once a sampled configuration itself is not free at the
+    problem's clearances under the sphere model (no finer sampling can certify it then).
+    """
     robot, scene = problem.robot, problem.scene
+    if path_certificate is not None and W is not None and _on_certified_path(trajectory, W):
+        return path_certificate.min_clearance - ON_PATH_ALLOWANCE, ""
     cert = trajectory.info.get("certificate")
     if cert is None or "acceleration" not in cert.ratios:
         return float("nan"), "the trajectory has no certified acceleration bound"
@@ -181,16 +210,20 @@ def trajectory_clearance(problem, trajectory) -> tuple[float, str]:
         n = max(2, int(np.ceil(duration / max(dt, 1e-9))) + 1)
         t = np.linspace(trajectory.start_time, trajectory.end_time, n)
         shift = per_dt2 * (t[1] - t[0]) ** 2
-        path = scene.certify_path(trajectory.position(t), problem.clearance + shift, problem.self_clearance + shift,
+        Q = trajectory.position(t)
+        path = scene.certify_path(Q, problem.clearance + shift, problem.self_clearance + shift,
                                   tolerance=REPORT_TOLERANCE)
         if path.certified:
             return path.min_clearance - shift, ""
+        if not np.all(scene.collision_free(Q, problem.clearance, problem.self_clearance)):
+            return float("nan"), (f"the retimed trajectory ({trajectory.method}) passes configurations closer "
+                                  f"than the clearance ({problem.clearance * 1e3:.1f} mm) under the sphere model")
         why = (f"the retimed trajectory ({trajectory.method}) is not certified at {problem.clearance * 1e3:.1f} mm "
                f"+ {shift * 1e3:.3f} mm between its {n} samples: {path.segments.reason(path.first_failure)}")
     return float("nan"), why
 
 
-def _retime(problem, P: np.ndarray, methods: tuple) -> tuple[object, str]:
+def _retime(problem, P: np.ndarray, methods: tuple, path_certificate) -> tuple[object, str]:
     """The first of ``methods`` that retimes ``P``; the executed motion certified
     (:func:`trajectory_clearance`)."""
     from drake_mh.errors import DrakeMhError
@@ -208,7 +241,7 @@ def _retime(problem, P: np.ndarray, methods: tuple) -> tuple[object, str]:
         except DrakeMhError as exc:
             reasons.append(f"{method}: {exc}")
             continue
-        clearance, why = trajectory_clearance(problem, trajectory)
+        clearance, why = trajectory_clearance(problem, trajectory, path_certificate, W)
         if not np.isnan(clearance):  # +inf: a scene without obstacles or checked self pairs
             trajectory.info["certified_clearance"] = clearance
             return trajectory, ""

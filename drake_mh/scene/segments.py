@@ -192,6 +192,37 @@ class PathCertificate:
         return f"PathCertificate(segment {self.first_failure}: {self.segments.reason(self.first_failure)})"
 
 
+def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, self_clearance: float,
+             tolerance: float, max_evaluations: int) -> SegmentCertificate:
+    """Refine only the segments whose bound could hold the path's minimum down by more than
+    ``tolerance``.
+
+    The path's smallest clearance is at most ``U``, the sphere-model clearance at its waypoints
+    and segment midpoints (configurations on it). A segment certified with ``lower >= U -
+    tolerance`` already keeps the path's bound within ``tolerance`` of that minimum; only the
+    others are certified again with ``tolerance`` (each then within it of its own minimum, which
+    is at least the path's). Same promise as refining every segment, at a fraction of the cost
+    where most segments keep well clear (measured 0.15 s instead of 7.6 s on a MotionBenchMaker
+    path of the meshed Panda). The bounds stay certified whatever ``U`` is: it only chooses what
+    to refine.
+    """
+    if not cert.all_certified or not len(cert.lower) or not np.all(np.isfinite(cert.lower)):
+        return cert
+    probes = np.vstack([Q, 0.5 * (Q[:-1] + Q[1:])])
+    upper = float(np.min(scene.batch_min_distance(probes)))
+    refine = np.flatnonzero(cert.lower < upper - tolerance)
+    if not len(refine):
+        return cert
+    fine = certify_segments(scene, Q[:-1][refine], Q[1:][refine], clearance, self_clearance, tolerance=tolerance,
+                            max_evaluations=max_evaluations)
+    lower, evaluations = cert.lower.copy(), cert.evaluations.copy()
+    ok = fine.certified
+    lower[refine[ok]] = np.maximum(lower[refine[ok]], fine.lower[ok])
+    evaluations[refine] += fine.evaluations
+    return SegmentCertificate(cert.status, cert.t_stop, lower, cert.lower_self, evaluations, cert.clearance,
+                              cert.self_clearance)
+
+
 def certify_path(scene, Q, clearance: float = 0.0, self_clearance: float = 0.0, *, tolerance: float = np.inf,
                  durations=None, max_evaluations: int = MAX_EVALUATIONS) -> PathCertificate:
     """Certify the motion through the rows of ``Q (M, nq)``, straight in joint space between them.
@@ -199,7 +230,12 @@ def certify_path(scene, Q, clearance: float = 0.0, self_clearance: float = 0.0, 
     Args:
         durations: ``(M - 1,)`` seconds per segment: obstacles move with their velocities from
             where they are now, segment after segment. ``None``: they stand still.
-        clearance, self_clearance, tolerance, max_evaluations: as :func:`certify_segments`.
+        clearance, self_clearance, max_evaluations: as :func:`certify_segments`.
+        tolerance: refine until the path's ``min_clearance`` is within this of its smallest
+            value [m] (``inf``: certification only). Without ``durations`` only the segments that
+            can hold the minimum down are refined (:func:`_tighten`), so each segment's
+            ``lower`` is a valid bound but not necessarily within ``tolerance`` of its own
+            minimum; with ``durations``, every segment as in :func:`certify_segments`.
 
     Returns:
         A :class:`PathCertificate`.
@@ -209,8 +245,9 @@ def certify_path(scene, Q, clearance: float = 0.0, self_clearance: float = 0.0, 
     if Q.shape[0] == 1:
         Q = np.vstack([Q, Q])  # one configuration: a zero-length segment
     if durations is None:
-        cert = certify_segments(scene, Q[:-1], Q[1:], clearance, self_clearance, tolerance=tolerance,
-                                max_evaluations=max_evaluations)
+        cert = certify_segments(scene, Q[:-1], Q[1:], clearance, self_clearance, max_evaluations=max_evaluations)
+        if np.isfinite(tolerance):
+            cert = _tighten(scene, Q, cert, clearance, self_clearance, float(tolerance), max_evaluations)
     else:
         durations = np.asarray(durations, dtype=float).reshape(-1)
         if durations.shape != (Q.shape[0] - 1,) or not np.all(np.isfinite(durations)) or np.any(durations < 0):

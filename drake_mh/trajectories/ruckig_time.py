@@ -188,4 +188,6 @@ def _ruckig_path(W, robot, factors) -> Trajectory:
         t += pp.x[-1] - pp.x[0]
     x = np.concatenate([pieces[0].x] + [p.x[1:] for p in pieces[1:]])
     c = np.concatenate([p.c for p in pieces], axis=1)
-    return Trajectory(PPoly(c, x), None, tuple(robot.joint_names), "ruckig", {"segments": len(pieces)})
+    times = np.cumsum([0.0] + [p.x[-1] - p.x[0] for p in pieces])
+    return Trajectory(PPoly(c, x), None, tuple(robot.joint_names), "ruckig",
+                      {"segments": len(pieces), "on_path": np.array(W, dtype=float), "waypoint_times": times})

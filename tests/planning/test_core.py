@@ -51,6 +51,44 @@ def test_jerk_is_reported_honestly_and_ruckig_limits_it():
         solve_motion(problem, "straight", retime="spline")
 
 
+def test_ruckig_motion_takes_the_path_certificate_and_dense_drake_sampling_agrees():
+    problem = MotionProblem(PANDA, _wall_scene(), PANDA.home, _around_the_wall())
+    result = solve_motion(problem, "rrt_connect", seed=1, retime="ruckig")
+    assert result.success and len(result.path) >= 3, result.message
+    path_clearance = result.info["certificate"].min_clearance
+    assert result.min_clearance == path_clearance - 1e-9  # no sampling: the motion is on the path
+    t = np.linspace(0, result.duration, 3000)
+    exact = _wall_scene().exact_min_distance(result.trajectory.position(t))
+    assert exact.min() >= result.min_clearance - 1e-9
+
+
+def test_trajectory_leaving_the_path_is_still_sampled(monkeypatch):
+    from drake_mh.planning import verify
+
+    problem = MotionProblem(PANDA, _wall_scene(), PANDA.home, _around_the_wall())
+    result = solve_motion(problem, "rrt_connect", seed=1, retime="ruckig")
+    W = result.trajectory.info["on_path"].copy()
+    W[1, 0] += 1e-3  # not the path the trajectory was built on: no shortcut
+    assert not verify._on_certified_path(result.trajectory, W)
+    clearance, why = verify.trajectory_clearance(problem, result.trajectory, result.info["certificate"], W)
+    assert why == "" and clearance <= result.min_clearance
+
+
+def _wall_scene():
+    """A ball on the straight line from home to :func:`_around_the_wall` (at its middle)."""
+    scene = Scene(PANDA)
+    middle = PANDA.home.copy()
+    middle[0] += 0.75
+    scene.add("wall", Sphere(0.08), PANDA.fk(middle)[:3, 3])
+    return scene
+
+
+def _around_the_wall():
+    q_goal = PANDA.home.copy()
+    q_goal[0] += 1.5
+    return q_goal
+
+
 def test_straight_line_through_an_obstacle_fails_honestly():
     scene = Scene(PANDA)
     q_goal = PANDA.home.copy()

@@ -83,6 +83,24 @@ def test_tight_lower_bound_with_tolerance():
         assert cert.lower[i] >= sampled - 1e-3 - 1e-9
 
 
+def test_path_tolerance_bounds_the_whole_path_minimum():
+    scene = cluttered(2)
+    QA, QB = free_pairs(scene, 4, 40, 0.3)
+    checked = 0
+    for i in range(0, 30, 3):  # paths of three chained segments from the free pairs
+        Q = np.vstack([QA[i], QB[i], QA[i + 1], QB[i + 1]])
+        loose, tight = scene.certify_path(Q), scene.certify_path(Q, tolerance=1e-3)
+        assert loose.certified == tight.certified
+        if not tight.certified:
+            continue
+        sampled = scene.batch_min_distance(np.vstack([dense(a, b, 801) for a, b in zip(Q[:-1], Q[1:])])).min()
+        assert loose.min_clearance <= tight.min_clearance <= sampled + 1e-9
+        assert tight.min_clearance >= sampled - 1e-3 - 1e-9
+        assert np.all(tight.segments.lower >= loose.segments.lower)
+        checked += 1
+    assert checked >= 3
+
+
 def test_self_collision_segments():
     scene = Scene(PANDA, self_collision=True)
     rng = np.random.default_rng(8)
