@@ -25,6 +25,7 @@ beside, marked as not measured in this run.
 
 A method that is not registered here (an optional peer such as OMPL without its wheel) is
 listed as unavailable, not run. ``DRAKE_MH_MOTION_METHODS=a,b,...`` restricts the methods and
+``DRAKE_MH_MOTION_ROBOTS=panda,panda_hand,panda_hand_mbm`` restricts the robots,
 ``DRAKE_MH_MOTION_PROBLEMS=N`` sets N problems per set and robot (one replicate) for a shorter
 full run. Full run: 7 sets × 8 problems × 2 seeds on the capsule Panda and
 7 × 2 × 1 on the Panda with its hand, every registered method (about twenty), 10 s per plan:
@@ -92,12 +93,20 @@ def _mbm_archive() -> str | None:
     return path if path and os.path.exists(path) else None
 
 
+def _chosen_robots() -> set[str]:
+    """Robots of ``DRAKE_MH_MOTION_ROBOTS`` (comma-separated; empty: all)."""
+    return {r.strip() for r in os.environ.get("DRAKE_MH_MOTION_ROBOTS", "").split(",") if r.strip()}
+
+
 def _robots() -> dict:
     """:data:`ROBOTS` (robots whose models are installed); ``DRAKE_MH_MOTION_PROBLEMS=N``: N
     problems per set and robot, one replicate."""
     from drake_mh.example_arms import example_robot_data_root
 
     robots = {r: v for r, v in ROBOTS.items() if r == "panda" or example_robot_data_root() is not None}
+    chosen = _chosen_robots()
+    if chosen:
+        robots = {r: v for r, v in robots.items() if r in chosen}
     count = os.environ.get("DRAKE_MH_MOTION_PROBLEMS", "").strip()
     if count.isdigit() and int(count) > 0:
         robots = {r: (int(count), 1) for r in robots}
@@ -116,7 +125,7 @@ def _grid(quick: bool) -> list[dict]:
                 for rep in range(seeds):
                     cases += [{"robot": robot, "set": name, "problem": problem, "rep": rep, "method": m}
                               for m in methods]
-    if _mbm_archive():
+    if _mbm_archive() and (not _chosen_robots() or MBM_ROBOT in _chosen_robots()):
         from drake_mh.planning.problems import MBM_SETS
 
         for name in MBM_SETS:
