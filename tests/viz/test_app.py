@@ -18,6 +18,12 @@ from drake_mh.viz.app_controls import BUTTONS, MAX_GOAL_JOINTS, SECTIONS, joint_
 FAST = dict(method="pso", budget=4000, n_points=14)
 
 
+def _default_sigint():
+    """In the app's process, before exec: Ctrl-C as in a terminal. A test run started as a
+    background job (``cmd &`` in a script) ignores SIGINT, and a child would inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.fixture
 def app(meshcat, tmp_path):
     app = PlannerApp(AppConfig(status_file=str(tmp_path / "status.json"), **FAST), meshcat=meshcat, page=False)
@@ -128,7 +134,8 @@ def test_cli_runs_headless_and_exits(tmp_path):
 def test_ctrl_c_prints_the_apps_own_stop_line():
     app = subprocess.Popen([sys.executable, "-m", "drake_mh", "app", "--port", "0", "--method", "pso",
                             "--budget", "3000", "--n-points", "12", "--run"],
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           preexec_fn=_default_sigint)
     try:
         assert "open http://localhost:" in app.stdout.readline()
         app.send_signal(signal.SIGINT)

@@ -26,6 +26,13 @@ FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-
          "--window-size=1400,900")
 
 
+
+def _default_sigint():
+    """In the app's process, before exec: Ctrl-C as in a terminal. A test run started as a
+    background job (``cmd &`` in a script) ignores SIGINT, and a child would inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _missing(message: str):
     """Skip locally; in CI (``CI`` set, as .ci/run runs) the browser test must run: fail."""
     if os.environ.get("CI"):
@@ -116,7 +123,8 @@ def test_app_in_headless_chromium(tmp_path):
     status = tmp_path / "status.json"
     app = subprocess.Popen([sys.executable, "-m", "drake_mh", "app", "--port", "0", "--max-seconds", "240",
                             "--method", "pso", "--budget", "4000", "--status-file", str(status)],
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           preexec_fn=_default_sigint)
     try:
         line = app.stdout.readline()
         match = re.search(r"open (http://localhost:\d+) in a browser", line)
