@@ -28,7 +28,7 @@ has no text element) reports what happened. ``status_file`` receives the same st
 The page a user opens is the app's own (:mod:`drake_mh.viz.app_page`): the status box and the
 controls first, in Table 1's order, and Meshcat's 3-D view beside them (Meshcat's own panel
 lists the controls after its Scene / Animations folders, below the fold). The obstacle is drawn
-translucent red, distinct from the (orange) robots. :func:`run_app` is ``drake-mh app``: it
+translucent red, distinct from the (orange) robots. :func:`drake_mh.viz.cli.run_app` is ``drake-mh app``: it
 prints the page's URL, runs the loop, and ends with its own "app stopped" line on Ctrl-C.
 
 Everything runs in the thread that created Meshcat (Drake requires it): one loop polls the
@@ -43,7 +43,6 @@ import hashlib
 import json
 import logging
 import os
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -56,7 +55,7 @@ from drake_mh.viz.app_plan import AppPlanner, check_plan_settings
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["AppConfig", "PlannerApp", "POINT_NAMES", "run_app"]
+__all__ = ["AppConfig", "PlannerApp", "POINT_NAMES"]
 
 POINT_NAMES = ("start", "via 1", "via 2", "end")
 
@@ -561,54 +560,3 @@ class PlannerApp:
         self._status()
         return self.state()
 
-
-def run_app(config: AppConfig, *, generate: bool = False, run: bool = False, plan: str | None = None,
-            max_seconds: float | None = None, out=None) -> int:
-    """``drake-mh app``: starts the app, prints its URL, runs until Ctrl-C or ``max_seconds``.
-
-    Args:
-        config: :class:`AppConfig`.
-        generate: generate solutions before the loop; run: then start running (implies generate).
-        plan: ``"pose"`` / ``"joints"``: plan to the goal point / configuration before the loop,
-            which then plays the motion.
-        max_seconds: wall-clock seconds from the printed URL to the end (the start-up generation
-            included; a generation under way finishes first); ``None``: until Ctrl-C.
-        out: where the two lines go (default ``sys.stdout``).
-
-    Returns:
-        0: the app ended normally, by ``max_seconds`` or by Ctrl-C (it prints "app stopped").
-    """
-    out = out if out is not None else sys.stdout
-    app = None
-    reason = "stopped by Ctrl-C"
-    try:
-        app = PlannerApp(config)
-        started = time.monotonic()
-        print(f"drake-mh app: open {app.page_url} in a browser (controls and 3-D view; Meshcat alone at "
-              f"{app.meshcat.web_url()}; localhost only; Ctrl-C to stop)", file=out, flush=True)
-        if generate or run:
-            app.generate()
-        if run:
-            app.play("run")
-        if plan is not None:
-            app.planner.start(plan, wait=True)
-        left = None if max_seconds is None else max(0.0, float(max_seconds) - (time.monotonic() - started))
-        app.run(left)
-        reason = "stopped" if max_seconds is None else f"stopped after --max-seconds {max_seconds:g}"
-    except KeyboardInterrupt:
-        pass
-    finally:
-        if app is not None:
-            app.close()
-    if app is None:
-        print("drake-mh app: app stopped by Ctrl-C while starting", file=out, flush=True)
-        return 0
-    try:
-        app._status(f"app {reason}: start drake-mh app again to continue")
-    except Exception:  # noqa: BLE001 - Ctrl-C may have left the loop inside a Meshcat call
-        logger.debug("could not write the final status", exc_info=True)
-    state = app.state()
-    fps = state["run_fps"]
-    print(f"drake-mh app: app {reason} ({state['elapsed']:.0f} s, {state['events']} regeneration events"
-          + (f", {fps:.1f} frames/s while running)" if fps else ")"), file=out, flush=True)
-    return 0

@@ -14,8 +14,12 @@ Prints the Meshcat URL (localhost only) and runs until Ctrl-C or ``--max-seconds
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
-__all__ = ["register", "cmd_app"]
+if TYPE_CHECKING:
+    from drake_mh.viz.app import AppConfig
+
+__all__ = ["register", "cmd_app", "run_app"]
 
 
 def register(subparsers, common: argparse.ArgumentParser) -> None:
@@ -83,7 +87,7 @@ def cmd_app(args: argparse.Namespace) -> int:
     """``drake-mh app``: returns 0 when the app ends (``--max-seconds`` or Ctrl-C: "app stopped")."""
     from drake_mh.cli import register_robot_options
     from drake_mh.errors import InvalidArgument
-    from drake_mh.viz.app import AppConfig, run_app
+    from drake_mh.viz.app import AppConfig
 
     robots = tuple(args.robot) if args.robot else AppConfig.robots
     register_robot_options(robots, args)  # model paths get --ee-frame / --package
@@ -118,3 +122,62 @@ def _check_writable(path: str) -> None:
     if target.is_dir() or not folder.is_dir() or not os.access(folder, os.W_OK):
         raise InvalidArgument(f"--status-file {path}: cannot write there (its folder must exist and be "
                               "writable, and it must not be a folder)")
+
+
+def run_app(config: AppConfig, *, generate: bool = False, run: bool = False, plan: str | None = None,
+            max_seconds: float | None = None, out=None) -> int:
+    """``drake-mh app``: starts the app, prints its URL, runs until Ctrl-C or ``max_seconds``.
+
+    Args:
+        config: :class:`AppConfig`.
+        generate: generate solutions before the loop; run: then start running (implies generate).
+        plan: ``"pose"`` / ``"joints"``: plan to the goal point / configuration before the loop,
+            which then plays the motion.
+        max_seconds: wall-clock seconds from the printed URL to the end (the start-up generation
+            included; a generation under way finishes first); ``None``: until Ctrl-C.
+        out: where the two lines go (default ``sys.stdout``).
+
+    Returns:
+        0: the app ended normally, by ``max_seconds`` or by Ctrl-C (it prints "app stopped").
+    """
+    import logging
+    import sys
+    import time
+
+    from drake_mh.viz.app import PlannerApp
+
+    logger = logging.getLogger("drake_mh.viz.app")
+    out = out if out is not None else sys.stdout
+    app = None
+    reason = "stopped by Ctrl-C"
+    try:
+        app = PlannerApp(config)
+        started = time.monotonic()
+        print(f"drake-mh app: open {app.page_url} in a browser (controls and 3-D view; Meshcat alone at "
+              f"{app.meshcat.web_url()}; localhost only; Ctrl-C to stop)", file=out, flush=True)
+        if generate or run:
+            app.generate()
+        if run:
+            app.play("run")
+        if plan is not None:
+            app.planner.start(plan, wait=True)
+        left = None if max_seconds is None else max(0.0, float(max_seconds) - (time.monotonic() - started))
+        app.run(left)
+        reason = "stopped" if max_seconds is None else f"stopped after --max-seconds {max_seconds:g}"
+    except KeyboardInterrupt:
+        pass
+    finally:
+        if app is not None:
+            app.close()
+    if app is None:
+        print("drake-mh app: app stopped by Ctrl-C while starting", file=out, flush=True)
+        return 0
+    try:
+        app._status(f"app {reason}: start drake-mh app again to continue")
+    except Exception:  # noqa: BLE001 - Ctrl-C may have left the loop inside a Meshcat call
+        logger.debug("could not write the final status", exc_info=True)
+    state = app.state()
+    fps = state["run_fps"]
+    print(f"drake-mh app: app {reason} ({state['elapsed']:.0f} s, {state['events']} regeneration events"
+          + (f", {fps:.1f} frames/s while running)" if fps else ")"), file=out, flush=True)
+    return 0
