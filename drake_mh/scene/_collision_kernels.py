@@ -31,13 +31,12 @@ import numpy as np
 from numpy.lib.stride_tricks import as_strided
 
 from drake_mh._kernels import _frames_block
+from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, pair_clearance
 
 LANES = 128
 """Configurations per block (measured: 32 / 64 / 128 lanes gave 164 / 137 / 123 ns per Panda
 configuration against 10 obstacles, the fixed cost per block shrinking with its size)."""
 
-FASTMATH = {"nnan", "nsz", "contract"}
-"""No ``ninf``: infinite values mean "nothing near" here, and LLVM may fold ``x < inf`` under it."""
 SPHERE, BOX, CYLINDER, CAPSULE = 0, 1, 2, 3
 
 
@@ -217,6 +216,7 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
     idx = np.empty(L, np.int64)
     hit = np.zeros(8 * ((L + 7) // 8), np.uint8)
     words = hit.view(np.uint64)
+    pbuf = np.empty((s_radius.shape[0], 4))
     for n0 in range(0, N, LANES):
         m = used = min(LANES, N - n0)
         nw = (m + 7) // 8
@@ -268,35 +268,13 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
                     c += 1
             if c == 0:
                 continue
-            for i in range(c):  # the lanes whose bounding spheres are near: every sphere pair
-                b = idx[i]
-                alive[b] &= _pair_min(b, g_anchor[ga], g_anchor[gb], g_start[ga], g_start[ga + 1], g_start[gb],
-                                      g_start[gb + 1], s_offset, s_radius, R, p) >= self_clearance
+            for j in range(c):  # the lanes whose bounding spheres are near: their sphere pairs
+                b = idx[j]
+                alive[b] &= pair_clearance(b, ga, gb, self_clearance, self_clearance, False, g_anchor, g_start,
+                                           g_radius, Gx[ga, b], Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b],
+                                           Gz[gb, b], s_offset, s_radius, R, p, pbuf) >= self_clearance
         for b in range(used):
             out[n0 + b] = alive[b]
-
-
-@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
-def _lane_point(a, o, R, p, b):
-    """World position of offset ``o`` fixed in moving frame ``a`` (-1: the world), lane ``b``."""
-    if a < 0:
-        return o[0], o[1], o[2]
-    return (p[a, 0, b] + R[a, 0, 0, b] * o[0] + R[a, 0, 1, b] * o[1] + R[a, 0, 2, b] * o[2],
-            p[a, 1, b] + R[a, 1, 0, b] * o[0] + R[a, 1, 1, b] * o[1] + R[a, 1, 2, b] * o[2],
-            p[a, 2, b] + R[a, 2, 0, b] * o[0] + R[a, 2, 1, b] * o[1] + R[a, 2, 2, b] * o[2])
-
-
-@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
-def _pair_min(b, aa, ab, s0, s1, t0, t1, s_offset, s_radius, R, p):
-    """Smallest ``|c_s - c_t| - r_s - r_t`` over the spheres of two links, lane ``b``."""
-    best = np.inf
-    for s in range(s0, s1):
-        ax, ay, az = _lane_point(aa, s_offset[s], R, p, b)
-        for t in range(t0, t1):
-            ex, ey, ez = _lane_point(ab, s_offset[t], R, p, b)
-            dx, dy, dz = ax - ex, ay - ey, az - ez
-            best = min(best, math.sqrt(dx * dx + dy * dy + dz * dz) - s_radius[s] - s_radius[t])
-    return best
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
@@ -309,8 +287,8 @@ def link_clearances(QT, tau, fine_below, per_obstacle, parent, KR, Kp, perm, kin
     per obstacle (exact for the model). Otherwise ``out (N, G + P)``: per link the smallest
     value over its spheres and all obstacles, replaced by the link's bounding-sphere value (a
     lower bound of it) where that is at least ``fine_below``; then per checked link pair the
-    smallest sphere-sphere clearance (or the bounding spheres' where that is at least
-    ``fine_below``).
+    smallest sphere-sphere clearance where that is below ``fine_below`` (above it, a lower bound
+    of it at least the bounding spheres' value: :func:`._pair_kernel.pair_clearance`).
     """
     F, G, N, K, P = parent.shape[0], g_anchor.shape[0], QT.shape[1], kinds.shape[0], pair_a.shape[0]
     L = max(1, min(LANES, N))  # a short batch (segment bisection) allocates its lanes only
@@ -321,6 +299,7 @@ def link_clearances(QT, tau, fine_below, per_obstacle, parent, KR, Kp, perm, kin
     lb = np.empty((G, K, L))
     best = np.empty((max(K, G), L))
     idx = np.empty(L, np.int64)
+    pbuf = np.empty((s_radius.shape[0], 4))
     pc, Rc = np.empty((3, L)), np.empty((3, 3, L))
     ccx, ccy, ccz, tc, sc = np.empty(L), np.empty(L), np.empty(L), np.empty(L), np.empty(L)
     for n0 in range(0, N, LANES):
@@ -393,9 +372,10 @@ def link_clearances(QT, tau, fine_below, per_obstacle, parent, KR, Kp, perm, kin
             for b in range(used):
                 dx, dy, dz = Gx[ga, b] - Gx[gb, b], Gy[ga, b] - Gy[gb, b], Gz[ga, b] - Gz[gb, b]
                 v = math.sqrt(dx * dx + dy * dy + dz * dz) - g_radius[ga] - g_radius[gb]
-                if v < fine_below:
-                    v = _pair_min(b, g_anchor[ga], g_anchor[gb], g_start[ga], g_start[ga + 1], g_start[gb],
-                                  g_start[gb + 1], s_offset, s_radius, R, p)
+                if v < fine_below:  # exact below fine_below, a lower bound (at least v) above
+                    v = pair_clearance(b, ga, gb, fine_below, -np.inf, True, g_anchor, g_start, g_radius, Gx[ga, b],
+                                       Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b], Gz[gb, b], s_offset, s_radius, R,
+                                       p, pbuf)
                 out[n0 + b, G + i] = v
 
 
@@ -498,10 +478,11 @@ def collision_free_packed(QT, clearance, self_clearance, ints, floats, out):
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
 def _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius,
-              g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, R, p, sn, cs, gc):
+              g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, R, p, sn, cs, gc,
+              pbuf):
     """:func:`collision_free` of the one configuration ``QT (nq, 1)``, scalar (no lane arrays,
-    no allocation: ``R, p, sn, cs`` and ``gc (G, 3)`` are the caller's), stopping at the first
-    sphere below the clearance. Same tests in the same order, so the same answer."""
+    no allocation: ``R, p, sn, cs``, ``gc (G, 3)`` and ``pbuf (S, 4)`` are the caller's),
+    stopping at the first sphere below the clearance. Same tests in the same order, so the same answer."""
     _frames_block(QT, 0, 1, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
     for g in range(g_anchor.shape[0]):
         a = g_anchor[g]
@@ -522,9 +503,9 @@ def _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g
         ga, gb = pair_a[i], pair_b[i]
         dx, dy, dz = gc[ga, 0] - gc[gb, 0], gc[ga, 1] - gc[gb, 1], gc[ga, 2] - gc[gb, 2]
         lim = self_clearance + g_radius[ga] + g_radius[gb]
-        if dx * dx + dy * dy + dz * dz < lim * lim and _pair_min(
-                0, g_anchor[ga], g_anchor[gb], g_start[ga], g_start[ga + 1], g_start[gb], g_start[gb + 1], s_offset,
-                s_radius, R, p) < self_clearance:
+        if dx * dx + dy * dy + dz * dz < lim * lim and pair_clearance(
+                0, ga, gb, self_clearance, self_clearance, False, g_anchor, g_start, g_radius, gc[ga, 0], gc[ga, 1],
+                gc[ga, 2], gc[gb, 0], gc[gb, 1], gc[gb, 2], s_offset, s_radius, R, p, pbuf) < self_clearance:
             return False
     return True
 
@@ -544,8 +525,8 @@ def one_entry_point():
 
 def one_workspace(ints) -> np.ndarray:
     """The float64 buffer :func:`collision_free_one` works in, for the arrays of :func:`pack`."""
-    F, G = int(ints[0]), int(ints[1])
-    return np.empty(12 * F + 2 + 3 * G)
+    F, G, S = int(ints[0]), int(ints[1]), int(ints[2])
+    return np.empty(12 * F + 2 + 3 * G + 4 * S)
 
 
 @numba.njit(cache=True)
@@ -569,7 +550,9 @@ def collision_free_one(q, clearance, self_clearance, ints, floats, work):
     p = as_strided(work[9 * F:12 * F], shape=(F, 3, 1), strides=(24, 8, 8))
     sn, cs = work[12 * F:12 * F + 1], work[12 * F + 1:12 * F + 2]
     gc = _rows(work, 12 * F + 2, G, 3)
+    pbuf = _rows(work, 12 * F + 2 + 3 * G, s_radius.shape[0], 4)
     QT = as_strided(q, shape=(q.shape[0], 1), strides=(q.strides[0], 8))  # (nq, 1), q's own strides
     free = _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius,
-                     g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, R, p, sn, cs, gc)
+                     g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, R, p, sn, cs, gc,
+                     pbuf)
     return 1 if free else 0

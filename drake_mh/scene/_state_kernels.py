@@ -26,7 +26,7 @@ the few lanes still near, scalar per lane and sphere (first collision returns).
 Typical use (compiled code; the workspace is allocated once per plan)::
 
     arrays = _collision_kernels._unpack(ints, floats)        # a scene's packed arrays
-    ws = state_workspace(F, G, lanes)
+    ws = state_workspace(F, G, S, lanes)
     answer = check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, arrays, ws, out)
 """
 
@@ -36,22 +36,22 @@ import numba
 import numpy as np
 
 from drake_mh._kernels import _frames_block
-from drake_mh.scene._collision_kernels import (FASTMATH, _centre_block, _lane_point, _obstacle_free, _pair_min,
-                                               _point_free)
+from drake_mh.scene._collision_kernels import _centre_block, _obstacle_free, _point_free
+from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, pair_clearance
 
 CLEAR, NEAR, COLLISION = 0, 1, 2
 """Answers of :func:`check_states`."""
 
 
 @numba.njit(cache=True)
-def state_workspace(F, G, lanes):
-    """Arrays :func:`check_states` writes into, for ``F`` moving frames, ``G`` links and at most
-    ``lanes`` configurations per call (allocate once, reuse for every call)."""
+def state_workspace(F, G, S, lanes):
+    """Arrays :func:`check_states` writes into, for ``F`` moving frames, ``G`` links, ``S``
+    spheres and at most ``lanes`` configurations per call (allocate once, reuse for every call)."""
     L = lanes
     hit = np.zeros(8 * ((L + 7) // 8), np.uint8)
     return (np.empty((F, 3, 3, L)), np.empty((F, 3, L)), np.empty(L), np.empty(L), np.empty((G, L)),
             np.empty((G, L)), np.empty((G, L)), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_),
-            np.empty(L, np.bool_), np.empty(L, np.int64), hit, hit.view(np.uint64))
+            np.empty(L, np.bool_), np.empty(L, np.int64), hit, hit.view(np.uint64), np.empty((S, 4)))
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -93,7 +93,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b) = arrays
-    R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words = ws
+    R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf = ws
     G, K = g_anchor.shape[0], kinds.shape[0]
     nw = (m + 7) // 8
     for b in range(m, 8 * nw):  # lanes past m read 0
@@ -142,10 +142,11 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
             if dx * dx + dy * dy + dz * dz < lim * lim:
                 idx[c] = b
                 c += 1
-        for j in range(c):  # the lanes whose bounding spheres are near: every sphere pair, once
+        for j in range(c):  # the lanes whose bounding spheres are near: their sphere pairs, once
             b = idx[j]
-            value = _pair_min(b, g_anchor[ga], g_anchor[gb], g_start[ga], g_start[ga + 1], g_start[gb],
-                              g_start[gb + 1], s_offset, s_radius, R, p)
+            value = pair_clearance(b, ga, gb, pair_margin[i], pair_plain[i], False, g_anchor, g_start, g_radius,
+                                   Gx[ga, b], Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b], Gz[gb, b], s_offset,
+                                   s_radius, R, p, pbuf)
             if value < pair_plain[i]:
                 return COLLISION
             if value < pair_margin[i]:

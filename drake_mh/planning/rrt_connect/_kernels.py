@@ -460,7 +460,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     start = now(clock, buf)
     arrays = _unpack(ints, floats)
     lanes = (first_lanes, block_lanes)
-    ws = state_workspace(arrays[0].shape[0], arrays[6].shape[0], max(first_lanes, block_lanes))
+    ws = state_workspace(arrays[0].shape[0], arrays[6].shape[0], arrays[11].shape[0], max(first_lanes, block_lanes))
     nq, G = q_start.shape[0], goals.shape[0]
     rng = seed
     empty = np.empty((0, nq))
@@ -591,7 +591,7 @@ def certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance
     buf = np.zeros(2, np.int64)
     arrays = _unpack(ints, floats)
     lanes = (first_lanes, block_lanes)
-    ws = state_workspace(arrays[0].shape[0], arrays[6].shape[0], max(first_lanes, block_lanes))
+    ws = state_workspace(arrays[0].shape[0], arrays[6].shape[0], arrays[11].shape[0], max(first_lanes, block_lanes))
     out = np.empty(QA.shape[0], np.bool_)
     for i in range(QA.shape[0]):
         out[i] = _motion(QA[i], QB[i], arrays, ws, lanes, v_WO, reach, clearance, self_clearance, resolution, margin,
