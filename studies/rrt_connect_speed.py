@@ -17,6 +17,15 @@ interleaved on every problem and seed, after :func:`drake_mh.planning.rrt_connec
   (its own checks included).
 
 With ``self`` scenes the robot's link pairs are checked too (``Scene(self_collision=True)``).
+
+With the environment variable ``DRAKE_MH_MBM_ARCHIVE`` set to a downloaded ``problems.tar.bz2``
+of the ``vamp-planner`` source distribution, the original MotionBenchMaker Panda problems join
+as scenes ``mbm/<set>`` (of the first :data:`MBM_PROBLEMS` problems of each set, those certified
+free for the Panda with MotionBenchMaker's hand, 778 spheres, self-collision checked; never
+downloaded here), and a third method runs interleaved on them: ``rrt_connect (no pair
+tables)``, the same planner on a copy of each scene whose self-collision pairs have no floor
+tables (:mod:`drake_mh.scene.pair_table`): the code before those tables, as the same-run
+baseline (same trees: the tables change the cost of each check, not its answer).
 The batched checks are the scene's :func:`drake_mh.scene._state_kernels.check_states` (early
 exit, two clearances per link and link pair); the MotionBenchMaker-like figures of
 :mod:`drake_mh.planning.rrt_connect` (issue #18's 0.5 ms target) come from the problem sets of
@@ -36,6 +45,8 @@ from drake_mh.study.machine import cpu_model, load_average
 
 SCENES = ("table", "shelf", "slot", "table self")
 METHODS = ("rrt_connect", "rrt_connect_smooth")
+BASELINE = "rrt_connect (no pair tables)"
+MBM_PROBLEMS = 5
 READY = (0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785)  # MotionBenchMaker's start
 PROBLEMS, SEEDS = 20, 3
 SPLIT = ("t_sample", "t_nn", "t_check", "t_certify", "t_shortcut")
@@ -82,29 +93,73 @@ def _problems(robot, name: str, count: int, rng) -> list:
     return [MotionProblem(robot, scene, np.array(READY), q, name=f"{name}/{i}") for i, q in enumerate(found[:count])]
 
 
+def _mbm_sets() -> list:
+    """``["mbm/<set>", ...]`` when ``DRAKE_MH_MBM_ARCHIVE`` names a readable file, else ``[]``."""
+    import os
+
+    from drake_mh.planning.problems import MBM_SETS
+
+    archive = os.environ.get("DRAKE_MH_MBM_ARCHIVE", "")
+    return [f"mbm/{name}" for name in MBM_SETS] if archive and os.path.isfile(archive) else []
+
+
+def _mbm_problems(scene: str, count: int, tables: bool = True) -> list:
+    """The first ``count`` problems of MotionBenchMaker set ``mbm/<set>`` that are certified free
+    for the Panda with its hand; with ``tables=False``, on a fresh copy of the scene whose
+    self-collision pairs have no floor tables (``CollisionModel(pair_tables=False)``: the
+    baseline)."""
+    import os
+
+    from drake_mh.planning.problems import motionbenchmaker_set
+    from drake_mh.scene.batch import CollisionModel
+
+    problems = list(motionbenchmaker_set(os.environ["DRAKE_MH_MBM_ARCHIVE"], scene.split("/")[1], count=count))
+    if not tables:
+        for problem in problems:
+            s = problem.scene
+            s.__dict__["collision_model"] = CollisionModel(s.robot, s.sphere_model, s.collision_model.self_pairs,
+                                                           pair_tables=False)
+    return problems
+
+
 def run(case: Case) -> dict:
     import drake_mh
     from drake_mh.planning import solve_motion
     from drake_mh.planning.rrt_connect import prepare
 
-    robot = drake_mh.load_robot("panda")
-    problems = _problems(robot, case["scene"], 4 if case.quick else PROBLEMS, case.instance_rng)
+    mbm = case["scene"].startswith("mbm/")
+    if mbm:
+        count = 2 if case.quick else MBM_PROBLEMS
+        problems = _mbm_problems(case["scene"], count)
+        baseline = dict(zip((p.name for p in problems), _mbm_problems(case["scene"], count, tables=False)))
+    else:
+        robot = drake_mh.load_robot("panda")
+        problems = _problems(robot, case["scene"], 4 if case.quick else PROBLEMS, case.instance_rng)
+        baseline = {}
+    methods = METHODS + ((BASELINE,) if mbm else ())
     seeds = 1 if case.quick else SEEDS
     prepared = prepare(problems[0])
-    rows = {m: [] for m in METHODS}
+    rows = {m: [] for m in methods}
     straight = [solve_motion(p, "straight", retime=False).success for p in problems]
     loads = [load_average()]
     for problem in problems:
         for seed in range(seeds):
-            for method in METHODS:  # interleaved
-                r = solve_motion(problem, method, seed=seed, timeout=10.0, retime=False)
+            for method in methods:  # interleaved
+                if method == BASELINE:
+                    r = solve_motion(baseline[problem.name], "rrt_connect", seed=seed, timeout=10.0, retime=False)
+                else:
+                    r = solve_motion(problem, method, seed=seed, timeout=10.0, retime=False)
                 rows[method].append((r.success, r.planning_time, r.cpu_time, r.verify_time, r.info.get("nodes", 0),
                                      r.info.get("motions", 0), r.info.get("states", 0), r.path_length))
         loads.append(load_average())
-    split = {m: dict.fromkeys(SPLIT + ("t_total",), 0.0) for m in METHODS}
+    split = {m: dict.fromkeys(SPLIT + ("t_total",), 0.0) for m in methods}
     for problem in problems:  # a profiled pass: where the time goes
-        for method in METHODS:
-            r = solve_motion(problem, method, seed=0, timeout=10.0, retime=False, profile=True)
+        for method in methods:
+            if method == BASELINE:
+                r = solve_motion(baseline[problem.name], "rrt_connect", seed=0, timeout=10.0, retime=False,
+                                 profile=True)
+            else:
+                r = solve_motion(problem, method, seed=0, timeout=10.0, retime=False, profile=True)
             for key in split[method]:
                 split[method][key] += r.info.get(key, 0.0)
     out = {"success": True, "problems": len(problems), "seeds": seeds, "straight_free": float(np.mean(straight)),
@@ -143,7 +198,7 @@ def summarize(records: list[dict]) -> str:
              "checked | length [rad] |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     order = {name: i for i, name in enumerate(SCENES)}
     for r in sorted(ok, key=lambda r: order.get(r["scene"], 99)):
-        for m in METHODS:
+        for m in METHODS + ((BASELINE,) if f"{BASELINE} success" in r else ()):
             lines.append(
                 f"| {r['scene']} | {m} | {r['problems']} × {r['seeds']} | {r['straight_free']:.0%} | "
                 f"{r[f'{m} success']:.0%} | {r[f'{m} wall median [s]'] * 1e3:.2f} ({r[f'{m} cpu median [s]'] * 1e3:.2f}) | "
@@ -151,6 +206,12 @@ def summarize(records: list[dict]) -> str:
                 f"{r[f'{m} verify median [s]'] * 1e3:.2f} | {r[f'{m} plan+verify median [s]'] * 1e3:.2f} | "
                 f"{r[f'{m} nodes']:.0f} | {r[f'{m} motions']:.0f} | {r[f'{m} states']:.0f} | "
                 f"{r[f'{m} length [rad]']:.2f} |")
+    mbm = [r for r in ok if f"{BASELINE} success" in r]
+    if mbm:
+        ratios = [r[f"{BASELINE} cpu median [s]"] / r["rrt_connect cpu median [s]"] for r in mbm]
+        lines += ["", "MotionBenchMaker scenes, rrt_connect against the same planner without pair floor tables "
+                  "(same run, interleaved): CPU median ratio " + ", ".join(
+                      f"{r['scene']} {x:.1f}x" for r, x in zip(mbm, ratios))]
     lines += ["", "Where rrt_connect's time goes (profiled pass, share of the kernel's time; shortcutting includes "
               "its own checks):", "", "| scene | sampling | nearest neighbours | batched checks | certification "
               "within margins | shortcutting |", "|---|---|---|---|---|---|"]
@@ -163,7 +224,7 @@ def summarize(records: list[dict]) -> str:
 study = Study(
     name="rrt_connect_speed",
     run=run,
-    grid={"scene": list(SCENES)},
+    grid={"scene": list(SCENES) + _mbm_sets()},
     quick_grid={"scene": ["table"]},
     fields=Fields(method="scene", success="success", time="time", error="error", nfe="states", rank=False,
                   error_unit="failed runs"),

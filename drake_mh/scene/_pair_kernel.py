@@ -18,6 +18,9 @@ Below ``bound`` the answer is the clearance exactly (a pair below ``bound`` has 
 spheres left, and every other value is at least ``bound``), so a caller that asks "below
 ``bound``?" or needs the value only below ``bound`` gets what the full product gave; above it,
 ``bound`` or a lower bound of the clearance.
+
+Pairs that one or two joints move also have floor tables (:mod:`drake_mh.scene.pair_table`):
+:func:`pair_floor` reads a configuration's floor, :func:`segment_floor` a straight motion's.
 """
 
 from __future__ import annotations
@@ -110,4 +113,74 @@ def pair_clearance(b, ga, gb, bound, stop, lower, g_anchor, g_start, g_radius, c
                 best = value
                 if best < stop:
                     return best
+    return best
+
+
+@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
+def pair_floor(i, QT, col, t_meta, t_grid, t_vals):
+    """A lower bound of pair ``i``'s clearance at configuration ``QT[:, col]`` from its floor
+    table (:mod:`drake_mh.scene.pair_table`), or ``-inf`` where it has none (no table, or the
+    configuration outside the table's joint limits)."""
+    dims = t_meta[i, 0]
+    if dims == 0:
+        return -math.inf
+    n1 = t_meta[i, 3]
+    x = (QT[t_meta[i, 1], col] - t_grid[i, 0]) * t_grid[i, 1]
+    if not (x >= 0.0 and x <= n1):
+        return -math.inf
+    cell = min(int(x), n1 - 1)
+    if dims == 2:
+        n2 = t_meta[i, 4]
+        y = (QT[t_meta[i, 2], col] - t_grid[i, 2]) * t_grid[i, 3]
+        if not (y >= 0.0 and y <= n2):
+            return -math.inf
+        cell = cell * n2 + min(int(y), n2 - 1)
+    return t_vals[t_meta[i, 5] + cell]
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def segment_floor(i, qa, qb, t_meta, t_grid, t_vals):
+    """A lower bound of pair ``i``'s clearance on the whole straight motion ``qa -> qb`` from its
+    floor table: the smallest floor of the cells the motion's projection on the table's joints
+    passes through (a grid walk, Amanatides and Woo 1987), or ``-inf`` without a table or with
+    an end outside the table's joint limits.
+
+    Every point of the motion lies in a visited cell (up to round-off, which the tables' grown
+    cells cover: :mod:`drake_mh.scene.pair_table`), so no Lipschitz margin is needed between
+    the motion's states for this pair.
+    """
+    dims = t_meta[i, 0]
+    if dims == 0:
+        return -math.inf
+    j1, j2, n1, n2, offset = t_meta[i, 1], t_meta[i, 2], t_meta[i, 3], t_meta[i, 4], t_meta[i, 5]
+    x0 = (qa[j1] - t_grid[i, 0]) * t_grid[i, 1]
+    x1 = (qb[j1] - t_grid[i, 0]) * t_grid[i, 1]
+    if not (x0 >= 0.0 and x0 <= n1 and x1 >= 0.0 and x1 <= n1):
+        return -math.inf
+    cx, ex = min(int(x0), n1 - 1), min(int(x1), n1 - 1)
+    best = math.inf
+    if dims == 1:
+        for c in range(min(cx, ex), max(cx, ex) + 1):
+            best = min(best, t_vals[offset + c])
+        return best
+    y0 = (qa[j2] - t_grid[i, 2]) * t_grid[i, 3]
+    y1 = (qb[j2] - t_grid[i, 2]) * t_grid[i, 3]
+    if not (y0 >= 0.0 and y0 <= n2 and y1 >= 0.0 and y1 <= n2):
+        return -math.inf
+    cy, ey = min(int(y0), n2 - 1), min(int(y1), n2 - 1)
+    dx, dy = x1 - x0, y1 - y0
+    sx, sy = (1 if ex > cx else -1), (1 if ey > cy else -1)
+    # the motion's parameter where it leaves the current cell along x / along y, and per cell
+    tx = ((cx + 1.0 - x0) / dx if sx > 0 else (x0 - cx) / -dx) if dx != 0.0 else math.inf
+    ty = ((cy + 1.0 - y0) / dy if sy > 0 else (y0 - cy) / -dy) if dy != 0.0 else math.inf
+    ux = abs(1.0 / dx) if dx != 0.0 else math.inf
+    uy = abs(1.0 / dy) if dy != 0.0 else math.inf
+    for _ in range(abs(ex - cx) + abs(ey - cy) + 1):  # a staircase from the first cell to the last
+        best = min(best, t_vals[offset + cx * n2 + cy])
+        if cx != ex and (cy == ey or tx < ty):
+            cx += sx
+            tx += ux
+        elif cy != ey:
+            cy += sy
+            ty += uy
     return best

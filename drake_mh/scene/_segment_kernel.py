@@ -34,7 +34,8 @@ def _bound(V0, V1, lam, h):
 @numba.njit(cache=True, fastmath=FASTMATH)
 def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance, min_piece, max_evals,
                      parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-                     kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, status, t_stop, lower, lower_self, evals):
+                     kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, status, t_stop, lower,
+                     lower_self, evals):
     """Certify each segment ``QA[i] -> QB[i]`` (module docstring).
 
     Args:
@@ -72,8 +73,8 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
             QT[j, 0], QT[j, 1] = QA[i, j], QB[i, j]
         ts[0], ts[1] = 0.0, 1.0
         link_clearances(QT, ts[:2].copy(), fine, False, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset,
-                        g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b,
-                        vals[:2])
+                        g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta,
+                        t_grid, t_vals, vals[:2])
         n = 2
         status[i], t_stop[i] = CERTIFIED, np.nan
         low, low_self = np.inf, np.inf
@@ -140,7 +141,7 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
                 w += 1
             link_clearances(QT, tau, fine, False, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset,
                             g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b,
-                            vals[n:n + count])
+                            t_meta, t_grid, t_vals, vals[n:n + count])
             first = np.inf
             for w in range(count):
                 for c in range(C):

@@ -66,7 +66,7 @@ def largest_separation(robot, sphere_model, pairs) -> dict:
 
     if not pairs:
         return {}
-    model = CollisionModel(robot, sphere_model, pairs)
+    model = CollisionModel(robot, sphere_model, pairs, pair_tables=False)  # measures, then never again
     Q = robot.random_configurations(SAMPLES, np.random.default_rng(0))
     C = model.clearances(robot.batch._transposed(Q), obstacle_arrays(()), per_obstacle=False)
     largest = C[:, model.num_links:].max(axis=0)

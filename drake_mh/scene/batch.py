@@ -10,7 +10,8 @@
 * the obstacles as arrays (kind, ``R_WO``, ``p_WO``, half sizes);
 * the link pairs checked for self-collision: every pair of links with collision geometry that
   Drake's collision filter of the scene does not exclude (Drake filters links connected by a
-  joint and links welded together; ``Scene(ignore_link_pairs=...)`` adds more).
+  joint and links welded together; ``Scene(ignore_link_pairs=...)`` adds more), with floor
+  tables for the pairs that one or two joints move (:mod:`drake_mh.scene.pair_table`);
 
 and, per sphere and per link pair, how far it can move when the configuration moves
 (:meth:`CollisionModel.reach`), which the segment certificate needs.
@@ -23,6 +24,7 @@ import functools
 import numpy as np
 
 from drake_mh.scene import _collision_kernels as K
+from drake_mh.scene.pair_table import empty_tables
 from drake_mh.shapes import Box, Capsule, Cylinder, Sphere
 
 
@@ -66,7 +68,7 @@ class CollisionModel:
         self_pairs: ``[(link_a, link_b)]`` link pairs to check for self-collision.
     """
 
-    def __init__(self, robot, model, self_pairs=()):
+    def __init__(self, robot, model, self_pairs=(), pair_tables: bool = True):
         batch = robot.batch
         self.robot = robot
         self.sphere_model = model
@@ -93,7 +95,17 @@ class CollisionModel:
         pairs = sorted({tuple(sorted((index[a], index[b]))) for a, b in self_pairs
                         if a in index and b in index and a != b})
         self.self_pairs = tuple((self.link_names[a], self.link_names[b]) for a, b in pairs)
-        self.pair_arrays = (np.array([a for a, _ in pairs], np.int64), np.array([b for _, b in pairs], np.int64))
+        self.pair_index = (np.array([a for a, _ in pairs], np.int64), np.array([b for _, b in pairs], np.int64))
+        self._use_tables = pair_tables
+
+    @functools.cached_property
+    def pair_arrays(self) -> tuple:
+        """``(pair_a, pair_b, t_meta, t_grid, t_vals)``: the checked link pairs (rows of the
+        links) and their floor tables (:func:`drake_mh.scene.pair_table.pair_tables`; built on
+        first use, a second or two per meshed arm, then cached on disk)."""
+        from drake_mh.scene.pair_table import pair_tables
+
+        return self.pair_index + (pair_tables(self) if self._use_tables else empty_tables(self.num_pairs))
 
     @property
     def num_links(self) -> int:
@@ -156,29 +168,20 @@ class CollisionModel:
         width = len(obstacles[0]) if per_obstacle else self.num_links + self.num_pairs
         out = np.empty((N, width))
         tau = np.zeros(N) if tau is None else np.ascontiguousarray(tau, dtype=float)
-        pairs = self.pair_arrays if not per_obstacle else (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        no_pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64)) + empty_tables()
+        pairs = no_pairs if per_obstacle else self.pair_arrays
         K.link_clearances(QT, tau, float(fine_below), bool(per_obstacle), *self._kernel_args(), *obstacles,
                           *pairs, out)
         return out
 
     @functools.cached_property
-    def reach(self) -> np.ndarray:
-        """``(G + P, nq)``: how far [m] the geometry behind each constraint value can move per
-        unit of joint j's motion (the Lipschitz constants of :mod:`._segment_kernel`).
-
-        Rows ``0..G-1`` (links): the elementwise largest row of the link's spheres. A sphere's
-        row: a bound on the distance of its centre from joint j's axis over every configuration
-        (revolute: the centre moves at most ``reach · |Δq_j|``), 1 for a prismatic joint on its
-        path, 0 for joints not on its path. The bound is the length of the chain from the
-        joint's origin to the centre: the sum of the constant offsets between them plus the
-        largest travel of the prismatic joints between them. The link's value (smallest sphere
-        clearance) then changes no faster than its fastest sphere moves.
-
-        Rows ``G..G+P-1`` (link pairs): the elementwise largest sphere row of each link, summed,
-        over the joints that move one link relative to the other (a joint that carries both
-        links rotates or translates their difference vector rigidly: its length, and so the
-        pair's distance, does not change).
-        """
+    def sphere_reach(self) -> np.ndarray:
+        """``(S, nq)`` per sphere (kernel order): a bound on the distance of its centre from
+        joint j's axis over every configuration (revolute: the centre moves at most
+        ``reach · |Δq_j|``), 1 for a prismatic joint on its path, 0 for joints not on its path.
+        The bound is the length of the chain from the joint's origin to the centre: the sum of
+        the constant offsets between them plus the largest travel of the prismatic joints
+        between them."""
         chain = self.robot.batch.chain
         parent, Kp = chain.parent, chain.K[:, :3, 3]
         lower, upper = self.robot.lower, self.robot.upper
@@ -200,12 +203,31 @@ class CollisionModel:
                 k = parent[k]
             return out
 
-        g_anchor, g_offset, _, start, s_offset, _ = self.model_arrays
-        sphere_rows = [row(a, o) for a, o in zip(self.sphere_anchor, s_offset)]
+        s_offset = self.model_arrays[4]
+        return np.array([row(a, o) for a, o in zip(self.sphere_anchor, s_offset)]).reshape(-1, nq)
+
+    @functools.cached_property
+    def reach(self) -> np.ndarray:
+        """``(G + P, nq)``: how far [m] the geometry behind each constraint value can move per
+        unit of joint j's motion (the Lipschitz constants of :mod:`._segment_kernel`).
+
+        Rows ``0..G-1`` (links): the elementwise largest :attr:`sphere_reach` row of the link's
+        spheres: the link's value (smallest sphere clearance) changes no faster than its
+        fastest sphere moves.
+
+        Rows ``G..G+P-1`` (link pairs): the elementwise largest sphere row of each link, summed,
+        over the joints that move one link relative to the other (a joint that carries both
+        links rotates or translates their difference vector rigidly: its length, and so the
+        pair's distance, does not change).
+        """
+        chain = self.robot.batch.chain
+        nq = self.robot.nq
+        g_anchor, _, _, start, _, _ = self.model_arrays
+        sphere_rows = self.sphere_reach
         group_rows = [np.max(sphere_rows[start[g]:start[g + 1]], axis=0) for g in range(len(g_anchor))]
         rows = list(group_rows)
         ancestors = chain.ancestors
-        pair_a, pair_b = self.pair_arrays
+        pair_a, pair_b = self.pair_index
         for ga, gb in zip(pair_a, pair_b):
             shared = np.zeros(nq, bool)
             aa, ab = g_anchor[ga], g_anchor[gb]

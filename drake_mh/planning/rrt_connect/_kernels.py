@@ -24,6 +24,7 @@ import numpy as np
 
 from drake_mh.planning.rrt_connect._clock import now
 from drake_mh.scene._collision_kernels import _unpack
+from drake_mh.scene._pair_kernel import segment_floor
 from drake_mh.scene._segment_kernel import CERTIFIED
 from drake_mh.scene._segment_kernel import certify_segments as _certify_segments
 from drake_mh.scene._state_kernels import CLEAR, COLLISION, NEAR, check_states, state_workspace
@@ -237,7 +238,10 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
     Every constraint row ``c`` (a link against the obstacles, a checked link pair) changes
     along the motion no faster than ``Λ_c = Σ_j reach[c, j] |Δq_j|`` per unit of t (the
     Lipschitz bound of :mod:`drake_mh.scene._segment_kernel`, from
-    :attr:`~drake_mh.scene.batch.CollisionModel.reach`).
+    :attr:`~drake_mh.scene.batch.CollisionModel.reach`). A link pair with a floor table
+    (:mod:`drake_mh.scene.pair_table`) whose cells along the motion all keep the pair's clearance
+    is certified on the whole motion by them (:func:`drake_mh.scene._pair_kernel.segment_floor`):
+    its ``Λ_c`` is taken as 0, and each state then skips its sphere pairs by the same floors.
 
     1. ``n`` pieces, ``n >= resolution · |qb - qa|`` and ``n >= max_c Λ_c / (2 max_margin)``;
        the ``n + 1`` states ``t = i / n`` (ends included), in VAMP's "rake" order (``lanes[0]``
@@ -256,7 +260,7 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
        from :func:`~drake_mh.scene._collision_kernels.link_clearances`).
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b) = arrays
+     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals) = arrays
     t0 = now(clock, buf) if profile else 0.0
     nq = qa.shape[0]
     G, C = g_anchor.shape[0], reach.shape[0]
@@ -270,6 +274,8 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
         acc = 0.0
         for j in range(nq):
             acc += reach[c, j] * abs(qb[j] - qa[j])
+        if c >= G and segment_floor(c - G, qa, qb, t_meta, t_grid, t_vals) >= self_clearance + 1e-12:
+            acc = 0.0  # the pair's table certifies it along the whole motion: no margin needed
         lam[c] = acc
         lam_max = max(lam_max, acc)
     n = max(1, int(math.ceil(d * resolution)), int(math.ceil(lam_max / (2.0 * max_margin))))
@@ -314,7 +320,8 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
         lower, lower_self, spent = np.empty(1), np.empty(1), np.empty(1, np.int64)
         _certify_segments(QA, QB, reach, 0.0, clearance, self_clearance, np.inf, 1e-9, max_evals,
                           parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-                          kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, status, t_stop, lower, lower_self, spent)
+                          kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, status, t_stop, lower,
+                          lower_self, spent)
         certified, evals = status[0] == CERTIFIED, spent[0]
     stats[REFINED] += 1
     stats[REFINE_EVALS] += evals
