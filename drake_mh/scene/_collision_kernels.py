@@ -281,7 +281,7 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def link_clearances(QT, tau, fine_below, per_obstacle, parent, KR, Kp, perm, kind, qidx,
+def link_clearances(QT, tau, fine_below, pair_fine_below, per_obstacle, parent, KR, Kp, perm, kind, qidx,
                     g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
                     kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, out):
     """Clearance values of every configuration of ``QT (nq, N)`` (obstacles at ``tau (N,)``).
@@ -290,9 +290,9 @@ def link_clearances(QT, tau, fine_below, per_obstacle, parent, KR, Kp, perm, kin
     per obstacle (exact for the model). Otherwise ``out (N, G + P)``: per link the smallest
     value over its spheres and all obstacles, replaced by the link's bounding-sphere value (a
     lower bound of it) where that is at least ``fine_below``; then per checked link pair the
-    smallest sphere-sphere clearance where that is below ``fine_below`` (above it, a lower bound
-    of it at least the bounding spheres' value: :func:`._pair_kernel.pair_clearance`, or the
-    pair's floor table where that is at least ``fine_below``: :mod:`drake_mh.scene.pair_table`).
+    smallest sphere-sphere clearance where that is below ``pair_fine_below`` (above it, a lower
+    bound of it at least the bounding spheres' value: :func:`._pair_kernel.pair_clearance`, or the
+    pair's floor table where that is at least ``pair_fine_below``: :mod:`drake_mh.scene.pair_table`).
     """
     F, G, N, K, P = parent.shape[0], g_anchor.shape[0], QT.shape[1], kinds.shape[0], pair_a.shape[0]
     L = max(1, min(LANES, N))  # a short batch (segment bisection) allocates its lanes only
@@ -376,14 +376,14 @@ def link_clearances(QT, tau, fine_below, per_obstacle, parent, KR, Kp, perm, kin
             for b in range(used):
                 dx, dy, dz = Gx[ga, b] - Gx[gb, b], Gy[ga, b] - Gy[gb, b], Gz[ga, b] - Gz[gb, b]
                 v = math.sqrt(dx * dx + dy * dy + dz * dz) - g_radius[ga] - g_radius[gb]
-                if v < fine_below:  # exact below fine_below, a lower bound (at least v) above
+                if v < pair_fine_below:  # exact below pair_fine_below, a lower bound (at least v) above
                     floor = pair_floor(i, QT, n0 + b, t_meta, t_grid, t_vals)
-                    if floor >= fine_below:  # the pair's table: a lower bound above fine_below
+                    if floor >= pair_fine_below:  # the pair's table: a lower bound above pair_fine_below
                         out[n0 + b, G + i] = max(v, floor)
                         continue
-                    v = pair_clearance(b, ga, gb, fine_below, -np.inf, True, g_anchor, g_start, g_radius, Gx[ga, b],
-                                       Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b], Gz[gb, b], s_offset, s_radius, R,
-                                       p, pbuf)
+                    v = pair_clearance(b, ga, gb, pair_fine_below, -np.inf, True, g_anchor, g_start, g_radius,
+                                       Gx[ga, b], Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b], Gz[gb, b], s_offset,
+                                       s_radius, R, p, pbuf)
                 out[n0 + b, G + i] = v
 
 

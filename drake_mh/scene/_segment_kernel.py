@@ -55,9 +55,11 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
     G = g_anchor.shape[0]
     C = reach.shape[0]
     nq = QA.shape[1]
-    # fine spheres below 5 cm above the requirement (bounding spheres above it), everywhere when
-    # a tight bound is asked for
+    # fine spheres below 5 cm above the requirement (bounding spheres above it); for the links,
+    # everywhere when a tight bound is asked for (the tolerance concerns the obstacle clearance:
+    # link pairs need only be certified, and exact pairs everywhere cost 40x on meshed arms)
     fine = min(clearance, self_clearance) + 0.05 if tolerance == np.inf else np.inf
+    pair_fine = min(clearance, self_clearance) + 0.05 if tolerance == np.inf else self_clearance + 0.05
     lam = np.empty(C)
     for i in range(QA.shape[0]):
         cap = 64
@@ -72,9 +74,9 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
         for j in range(nq):
             QT[j, 0], QT[j, 1] = QA[i, j], QB[i, j]
         ts[0], ts[1] = 0.0, 1.0
-        link_clearances(QT, ts[:2].copy(), fine, False, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset,
-                        g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta,
-                        t_grid, t_vals, vals[:2])
+        link_clearances(QT, ts[:2].copy(), fine, pair_fine, False, parent, KR, Kp, perm, kind, qidx, g_anchor,
+                        g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b,
+                        t_meta, t_grid, t_vals, vals[:2])
         n = 2
         status[i], t_stop[i] = CERTIFIED, np.nan
         low, low_self = np.inf, np.inf
@@ -139,9 +141,9 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
                 new[2 * w, 0], new[2 * w, 1] = e0, n + w
                 new[2 * w + 1, 0], new[2 * w + 1, 1] = n + w, e1
                 w += 1
-            link_clearances(QT, tau, fine, False, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset,
-                            g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b,
-                            t_meta, t_grid, t_vals, vals[n:n + count])
+            link_clearances(QT, tau, fine, pair_fine, False, parent, KR, Kp, perm, kind, qidx, g_anchor,
+                            g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a,
+                            pair_b, t_meta, t_grid, t_vals, vals[n:n + count])
             first = np.inf
             for w in range(count):
                 for c in range(C):

@@ -170,8 +170,8 @@ class CollisionModel:
         tau = np.zeros(N) if tau is None else np.ascontiguousarray(tau, dtype=float)
         no_pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64)) + empty_tables()
         pairs = no_pairs if per_obstacle else self.pair_arrays
-        K.link_clearances(QT, tau, float(fine_below), bool(per_obstacle), *self._kernel_args(), *obstacles,
-                          *pairs, out)
+        K.link_clearances(QT, tau, float(fine_below), float(fine_below), bool(per_obstacle), *self._kernel_args(),
+                          *obstacles, *pairs, out)
         return out
 
     @functools.cached_property

@@ -127,7 +127,8 @@ def certify_segments(scene, QA, QB, clearance: float = 0.0, self_clearance: floa
         self_clearance: required distance between checked link pairs [m].
         tolerance: also refine certified pieces until the reported ``lower`` is within this of
             the smallest clearance seen at evaluated configurations [m] (``inf``: stop at the
-            first certificate; a report wants e.g. 1e-3).
+            first certificate; a report wants e.g. 1e-3). It concerns the obstacle clearance:
+            link pairs are certified, and ``lower_self`` is a valid bound, not a tight one.
         duration: seconds each segment takes: obstacles then move with their velocities during
             it (from where they are now). ``None``: they stand still.
         max_evaluations: most configurations per segment before it is undecided.
