@@ -31,7 +31,7 @@ import numpy as np
 from numpy.lib.stride_tricks import as_strided
 
 from drake_mh._kernels import _frames_block
-from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, pair_clearance, pair_floor
+from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
 LANES = 128
 """Configurations per block (measured: 32 / 64 / 128 lanes gave 164 / 137 / 123 ns per Panda
@@ -203,10 +203,11 @@ def _spheres_free(b, a, s0, s1, s_offset, s_radius, clearance, R, p, k, kinds, R
 @numba.njit(cache=True, fastmath=FASTMATH)
 def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx,
                    g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-                   kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, out):
+                   kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, out):
     """``out (N,)``: every sphere at least ``clearance`` from every obstacle and every checked
     link pair at least ``self_clearance`` apart (both > 0: the tests compare squares; the pairs'
-    floor tables ``t_meta, t_grid, t_vals`` of :mod:`drake_mh.scene.pair_table`)."""
+    floor tables ``t_meta, t_grid, t_vals`` of :mod:`drake_mh.scene.pair_table` and the links'
+    bounding capsules ``g_capsule`` of :class:`drake_mh.scene.batch.CollisionModel`)."""
     F, G, N, K = parent.shape[0], g_anchor.shape[0], QT.shape[1], kinds.shape[0]
     L = min(LANES, N)  # one configuration allocates one lane
     R, p = np.empty((F, 3, 3, L)), np.empty((F, 3, L))
@@ -273,6 +274,8 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
                 b = idx[j]
                 if pair_floor(i, QT, n0 + b, t_meta, t_grid, t_vals) >= self_clearance:
                     continue  # the pair's table shows it clear
+                if capsule_gap(b, ga, gb, g_anchor, g_capsule, R, p) >= self_clearance:
+                    continue  # so do the links' bounding capsules
                 alive[b] &= pair_clearance(b, ga, gb, self_clearance, self_clearance, False, g_anchor, g_start,
                                            g_radius, Gx[ga, b], Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b],
                                            Gz[gb, b], s_offset, s_radius, R, p, pbuf) >= self_clearance
@@ -283,16 +286,17 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
 @numba.njit(cache=True, fastmath=FASTMATH)
 def link_clearances(QT, tau, fine_below, pair_fine_below, per_obstacle, parent, KR, Kp, perm, kind, qidx,
                     g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-                    kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, out):
+                    kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, out):
     """Clearance values of every configuration of ``QT (nq, N)`` (obstacles at ``tau (N,)``).
 
     With ``per_obstacle``: ``out (N, K)``, the smallest ``sd_k(c_s) - r_s`` over all spheres,
     per obstacle (exact for the model). Otherwise ``out (N, G + P)``: per link the smallest
     value over its spheres and all obstacles, replaced by the link's bounding-sphere value (a
     lower bound of it) where that is at least ``fine_below``; then per checked link pair the
-    smallest sphere-sphere clearance where that is below ``pair_fine_below`` (above it, a lower
-    bound of it at least the bounding spheres' value: :func:`._pair_kernel.pair_clearance`, or the
-    pair's floor table where that is at least ``pair_fine_below``: :mod:`drake_mh.scene.pair_table`).
+    smallest sphere-sphere clearance where that is below the pair's ``pair_fine_below (P,)``
+    (above it, a lower bound of it at least the bounding spheres' value:
+    :func:`._pair_kernel.pair_clearance`, or the pair's floor table where that is at least
+    ``pair_fine_below``: :mod:`drake_mh.scene.pair_table`; ``-inf``: the bounding spheres' value).
     """
     F, G, N, K, P = parent.shape[0], g_anchor.shape[0], QT.shape[1], kinds.shape[0], pair_a.shape[0]
     L = max(1, min(LANES, N))  # a short batch (segment bisection) allocates its lanes only
@@ -376,12 +380,15 @@ def link_clearances(QT, tau, fine_below, pair_fine_below, per_obstacle, parent, 
             for b in range(used):
                 dx, dy, dz = Gx[ga, b] - Gx[gb, b], Gy[ga, b] - Gy[gb, b], Gz[ga, b] - Gz[gb, b]
                 v = math.sqrt(dx * dx + dy * dy + dz * dz) - g_radius[ga] - g_radius[gb]
-                if v < pair_fine_below:  # exact below pair_fine_below, a lower bound (at least v) above
+                fine = pair_fine_below[i]
+                if v < fine:  # the bounding capsules' value, a lower bound too
+                    v = max(v, capsule_gap(b, ga, gb, g_anchor, g_capsule, R, p))
+                if v < fine:  # exact below the pair's fine_below, a lower bound (at least v) above
                     floor = pair_floor(i, QT, n0 + b, t_meta, t_grid, t_vals)
-                    if floor >= pair_fine_below:  # the pair's table: a lower bound above pair_fine_below
+                    if floor >= fine:  # the pair's table: a lower bound above fine
                         out[n0 + b, G + i] = max(v, floor)
                         continue
-                    v = pair_clearance(b, ga, gb, pair_fine_below, -np.inf, True, g_anchor, g_start, g_radius,
+                    v = pair_clearance(b, ga, gb, fine, -np.inf, True, g_anchor, g_start, g_radius,
                                        Gx[ga, b], Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b], Gz[gb, b], s_offset,
                                        s_radius, R, p, pbuf)
                 out[n0 + b, G + i] = v
@@ -426,8 +433,9 @@ def _offsets(ints):
     f_orad = f_dims + 3 * K
     f_grid = f_orad + K
     f_vals = f_grid + 4 * P
+    f_caps = f_vals + T
     return (F, G, S, K, P, T, i_parent, i_perm, i_kind, i_qidx, i_anchor, i_start, i_kinds, i_a, i_b, i_meta, f_KR,
-            f_Kp, f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_grid, f_vals)
+            f_Kp, f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_grid, f_vals, f_caps)
 
 
 @numba.njit(cache=True, inline="always")
@@ -435,7 +443,7 @@ def _unpack(ints, floats):
     """Views of the arrays :func:`pack` laid out in two buffers (no copies), C-ordered: the
     array types a call from Python passes too, so the kernels they reach compile once."""
     (F, G, S, K, P, T, i_parent, i_perm, i_kind, i_qidx, i_anchor, i_start, i_kinds, i_a, i_b, i_meta, f_KR, f_Kp,
-     f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_grid, f_vals) = _offsets(ints)
+     f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_grid, f_vals, f_caps) = _offsets(ints)
     return (ints[i_parent:i_parent + F], floats[f_KR:f_KR + 9 * F].reshape((F, 3, 3)),
             floats[f_Kp:f_Kp + 3 * F].reshape((F, 3)), ints[i_perm:i_perm + 3 * F].reshape((F, 3)),
             ints[i_kind:i_kind + F], ints[i_qidx:i_qidx + F], ints[i_anchor:i_anchor + G],
@@ -445,7 +453,7 @@ def _unpack(ints, floats):
             floats[f_pWO:f_pWO + 3 * K].reshape((K, 3)), floats[f_dims:f_dims + 3 * K].reshape((K, 3)),
             floats[f_orad:f_orad + K], ints[i_a:i_a + P], ints[i_b:i_b + P],
             ints[i_meta:i_meta + 6 * P].reshape((P, 6)), floats[f_grid:f_grid + 4 * P].reshape((P, 4)),
-            floats[f_vals:f_vals + T])
+            floats[f_vals:f_vals + T], floats[f_caps:f_caps + 7 * G].reshape((G, 7)))
 
 
 @numba.njit(cache=True, inline="always")
@@ -453,25 +461,25 @@ def _unpack_views(ints, floats):
     """:func:`_unpack` with ``as_strided`` views instead of reshapes (about 1 ns instead of
     200 for all of them; any-layout array types): for :func:`collision_free_one`."""
     (F, G, S, K, P, T, i_parent, i_perm, i_kind, i_qidx, i_anchor, i_start, i_kinds, i_a, i_b, i_meta, f_KR, f_Kp,
-     f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_grid, f_vals) = _offsets(ints)
+     f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_grid, f_vals, f_caps) = _offsets(ints)
     return (ints[i_parent:i_parent + F], _mats(floats, f_KR, F), _rows(floats, f_Kp, F, 3), _rows(ints, i_perm, F, 3),
             ints[i_kind:i_kind + F], ints[i_qidx:i_qidx + F], ints[i_anchor:i_anchor + G],
             _rows(floats, f_offset, G, 3), floats[f_radius:f_radius + G], ints[i_start:i_start + G + 1],
             _rows(floats, f_soffset, S, 3), floats[f_sradius:f_sradius + S], ints[i_kinds:i_kinds + K],
             _mats(floats, f_RWO, K), _rows(floats, f_pWO, K, 3), _rows(floats, f_dims, K, 3),
             floats[f_orad:f_orad + K], ints[i_a:i_a + P], ints[i_b:i_b + P], _rows(ints, i_meta, P, 6),
-            _rows(floats, f_grid, P, 4), floats[f_vals:f_vals + T])
+            _rows(floats, f_grid, P, 4), floats[f_vals:f_vals + T], _rows(floats, f_caps, G, 7))
 
 
 def pack(parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-         kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals):
+         kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule):
     """``(ints, floats)``: the arrays of :func:`collision_free` in two buffers, so that a call
-    from Python passes 6 arguments instead of 26 (numba's dispatch costs per argument)."""
+    from Python passes 6 arguments instead of 27 (numba's dispatch costs per argument)."""
     sizes = [len(parent), len(g_anchor), len(s_radius), len(kinds), len(pair_a), len(t_vals)]
     ints = np.concatenate([np.asarray(sizes), parent, np.ravel(perm), kind, qidx, g_anchor, g_start, kinds,
                            pair_a, pair_b, np.ravel(t_meta)]).astype(np.int64)
     floats = np.concatenate([np.ravel(a) for a in (KR, Kp, g_offset, g_radius, s_offset, s_radius, R_WO, p_WO,
-                                                     dims, o_radius, t_grid, t_vals)]).astype(np.float64)
+                                                     dims, o_radius, t_grid, t_vals, g_capsule)]).astype(np.float64)
     return np.ascontiguousarray(ints), np.ascontiguousarray(floats)
 
 
@@ -484,10 +492,10 @@ def collision_free_packed(QT, clearance, self_clearance, ints, floats, out):
             if not math.isfinite(QT[j, n]):
                 return False
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals) = _unpack(ints, floats)
+     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule) = _unpack(ints, floats)
     collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius,
                    g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid,
-                   t_vals, out)
+                   t_vals, g_capsule, out)
     return True
 
 
@@ -498,7 +506,7 @@ def _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g
     no allocation: ``R, p, sn, cs``, ``gc (G, 3)`` and ``pbuf (S, 4)`` are the caller's),
     stopping at the first sphere below the clearance. Same tests in the same order, so the same
     answer. ``pairs``: :attr:`drake_mh.scene.batch.CollisionModel.pair_arrays`."""
-    pair_a, pair_b, t_meta, t_grid, t_vals = pairs
+    pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule = pairs
     _frames_block(QT, 0, 1, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
     for g in range(g_anchor.shape[0]):
         a = g_anchor[g]
@@ -520,7 +528,7 @@ def _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g
         dx, dy, dz = gc[ga, 0] - gc[gb, 0], gc[ga, 1] - gc[gb, 1], gc[ga, 2] - gc[gb, 2]
         lim = self_clearance + g_radius[ga] + g_radius[gb]
         if dx * dx + dy * dy + dz * dz < lim * lim and pair_floor(i, QT, 0, t_meta, t_grid, t_vals) < self_clearance \
-                and pair_clearance(
+                and capsule_gap(0, ga, gb, g_anchor, g_capsule, R, p) < self_clearance and pair_clearance(
                 0, ga, gb, self_clearance, self_clearance, False, g_anchor, g_start, g_radius, gc[ga, 0], gc[ga, 1],
                 gc[ga, 2], gc[gb, 0], gc[gb, 1], gc[gb, 2], s_offset, s_radius, R, p, pbuf) < self_clearance:
             return False
@@ -561,7 +569,8 @@ def collision_free_one(q, clearance, self_clearance, ints, floats, work):
             return -1
     clearance, self_clearance = max(clearance, 1e-12), max(self_clearance, 1e-12)  # squared tests
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals) = _unpack_views(ints, floats)
+     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals,
+     g_capsule) = _unpack_views(ints, floats)
     F, G = parent.shape[0], g_anchor.shape[0]
     R = as_strided(work[:9 * F], shape=(F, 3, 3, 1), strides=(72, 24, 8, 8))
     p = as_strided(work[9 * F:12 * F], shape=(F, 3, 1), strides=(24, 8, 8))
@@ -571,5 +580,5 @@ def collision_free_one(q, clearance, self_clearance, ints, floats, work):
     QT = as_strided(q, shape=(q.shape[0], 1), strides=(q.strides[0], 8))  # (nq, 1), q's own strides
     free = _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius,
                      g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius,
-                     (pair_a, pair_b, t_meta, t_grid, t_vals), R, p, sn, cs, gc, pbuf)
+                     (pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule), R, p, sn, cs, gc, pbuf)
     return 1 if free else 0

@@ -14,6 +14,11 @@ so a piece whose bound is at least the required clearance is certified, *for eve
 Pieces that are not are cut in two (all of one level evaluated together, in SIMD blocks)
 until every piece is certified, a configuration below the clearance is found, or a piece is
 shorter than ``min_piece`` (undecided: a touching contact cannot be certified either way).
+
+A link pair with a floor table (:mod:`drake_mh.scene.pair_table`) whose cells along the segment
+all keep the self-clearance is certified by them on the whole segment
+(:func:`drake_mh.scene._pair_kernel.segment_floor`, also its ``lower_self``): its value is
+then not computed beyond the bounding spheres.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ import numba
 import numpy as np
 
 from drake_mh.scene._collision_kernels import FASTMATH, link_clearances
+from drake_mh.scene._pair_kernel import segment_floor
 
 CERTIFIED, BLOCKED, UNDECIDED = 1, 0, -1
 
@@ -34,8 +40,8 @@ def _bound(V0, V1, lam, h):
 @numba.njit(cache=True, fastmath=FASTMATH)
 def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance, min_piece, max_evals,
                      parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-                     kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, status, t_stop, lower,
-                     lower_self, evals):
+                     kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, status, t_stop,
+                     lower, lower_self, evals):
     """Certify each segment ``QA[i] -> QB[i]`` (module docstring).
 
     Args:
@@ -61,7 +67,15 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
     fine = min(clearance, self_clearance) + 0.05 if tolerance == np.inf else np.inf
     pair_fine = min(clearance, self_clearance) + 0.05 if tolerance == np.inf else self_clearance + 0.05
     lam = np.empty(C)
+    P = C - G
+    fines, tabled, floors = np.empty(P), np.empty(P, np.bool_), np.empty(P)
     for i in range(QA.shape[0]):
+        # pairs whose floor table keeps them clear along the whole segment: certified by it, and
+        # computed no further than their bounding spheres (drake_mh.scene.pair_table)
+        for q in range(P):
+            floors[q] = segment_floor(q, QA[i], QB[i], t_meta, t_grid, t_vals)
+            tabled[q] = floors[q] >= self_clearance
+            fines[q] = -np.inf if tabled[q] else pair_fine
         cap = 64
         vals = np.empty((cap, C))
         ts = np.empty(cap)
@@ -74,15 +88,15 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
         for j in range(nq):
             QT[j, 0], QT[j, 1] = QA[i, j], QB[i, j]
         ts[0], ts[1] = 0.0, 1.0
-        link_clearances(QT, ts[:2].copy(), fine, pair_fine, False, parent, KR, Kp, perm, kind, qidx, g_anchor,
+        link_clearances(QT, ts[:2].copy(), fine, fines, False, parent, KR, Kp, perm, kind, qidx, g_anchor,
                         g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b,
-                        t_meta, t_grid, t_vals, vals[:2])
+                        t_meta, t_grid, t_vals, g_capsule, vals[:2])
         n = 2
         status[i], t_stop[i] = CERTIFIED, np.nan
         low, low_self = np.inf, np.inf
         for e in range(2):
             for c in range(C):
-                if vals[e, c] < (clearance if c < G else self_clearance):
+                if vals[e, c] < (clearance if c < G else self_clearance) and not (c >= G and tabled[c - G]):
                     if status[i] == CERTIFIED:
                         status[i], t_stop[i] = BLOCKED, ts[e]
         if status[i] == BLOCKED:
@@ -98,7 +112,10 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
                 h = ts[e1] - ts[e0]
                 ok, lo, lo_self, seen = True, np.inf, np.inf, np.inf
                 for c in range(C):
-                    bound = _bound(vals[e0, c], vals[e1, c], lam[c], h)
+                    if c >= G and tabled[c - G]:
+                        bound = floors[c - G]  # the whole segment's floor
+                    else:
+                        bound = _bound(vals[e0, c], vals[e1, c], lam[c], h)
                     if c < G:
                         ok &= bound >= clearance
                         lo = min(lo, bound)
@@ -141,13 +158,13 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
                 new[2 * w, 0], new[2 * w, 1] = e0, n + w
                 new[2 * w + 1, 0], new[2 * w + 1, 1] = n + w, e1
                 w += 1
-            link_clearances(QT, tau, fine, pair_fine, False, parent, KR, Kp, perm, kind, qidx, g_anchor,
+            link_clearances(QT, tau, fine, fines, False, parent, KR, Kp, perm, kind, qidx, g_anchor,
                             g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a,
-                            pair_b, t_meta, t_grid, t_vals, vals[n:n + count])
+                            pair_b, t_meta, t_grid, t_vals, g_capsule, vals[n:n + count])
             first = np.inf
             for w in range(count):
                 for c in range(C):
-                    if vals[n + w, c] < (clearance if c < G else self_clearance):
+                    if vals[n + w, c] < (clearance if c < G else self_clearance) and not (c >= G and tabled[c - G]):
                         first = min(first, ts[n + w])
             n += count
             if first < np.inf:

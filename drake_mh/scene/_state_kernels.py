@@ -37,7 +37,7 @@ import numpy as np
 
 from drake_mh._kernels import _frames_block
 from drake_mh.scene._collision_kernels import _centre_block, _obstacle_free, _point_free
-from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, pair_clearance, pair_floor
+from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
 CLEAR, NEAR, COLLISION = 0, 1, 2
 """Answers of :func:`check_states`."""
@@ -92,7 +92,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
         the inputs only (not on the order of the tests), so results are deterministic.
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals) = arrays
+     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule) = arrays
     R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf = ws
     G, K = g_anchor.shape[0], kinds.shape[0]
     nw = (m + 7) // 8
@@ -146,6 +146,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
             b = idx[j]
             if pair_floor(i, QT, n0 + b, t_meta, t_grid, t_vals) >= pair_margin[i]:
                 continue  # the pair's table shows it keeping its margin (drake_mh.scene.pair_table)
+            if capsule_gap(b, ga, gb, g_anchor, g_capsule, R, p) >= pair_margin[i]:
+                continue  # so do the links' bounding capsules
             value = pair_clearance(b, ga, gb, pair_margin[i], pair_plain[i], False, g_anchor, g_start, g_radius,
                                    Gx[ga, b], Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b], Gz[gb, b], s_offset,
                                    s_radius, R, p, pbuf)

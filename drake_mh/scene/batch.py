@@ -6,7 +6,8 @@
 * the robot's kinematic chain (from :class:`drake_mh.kinematics.BatchKinematics`);
 * its :class:`drake_mh.spheres.SphereModel`, grouped per link, each link with a *bounding
   sphere* that contains all of the link's spheres (centre: the middle of the centres' bounding
-  box; radius: the farthest sphere surface from it);
+  box; radius: the farthest sphere surface from it), and a *bounding capsule* (tighter for long
+  links: the pairs' second test);
 * the obstacles as arrays (kind, ``R_WO``, ``p_WO``, half sizes);
 * the link pairs checked for self-collision: every pair of links with collision geometry that
   Drake's collision filter of the scene does not exclude (Drake filters links connected by a
@@ -59,6 +60,32 @@ def bounding_radii(obstacles: tuple) -> np.ndarray:
     return np.ascontiguousarray(np.where(kinds == K.CAPSULE, dims[:, 0] + dims[:, 1], radii))
 
 
+def bounding_capsules(offsets: np.ndarray, radii: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """``(G, 7)``: per link (spheres ``start[g] .. start[g + 1] - 1``, centres ``offsets`` in the
+    link's frame) a capsule that contains all of its spheres: axis ends (6) and radius.
+
+    The axis is the centres' principal direction through their mean; of 21 lengths (the
+    centres' whole projected extent down to a point) the one of least volume is kept; the radius
+    is then the farthest sphere surface from that segment, so containment holds exactly.
+    """
+    out = np.empty((len(start) - 1, 7))
+    for g in range(len(start) - 1):
+        c, r = offsets[start[g]:start[g + 1]], radii[start[g]:start[g + 1]]
+        m = c.mean(axis=0)
+        u = np.linalg.svd(c - m)[2][0] if len(c) > 1 else np.array([0.0, 0.0, 1.0])
+        t = (c - m) @ u
+        best = None
+        for shrink in np.linspace(0.0, 1.0, 21):
+            half = 0.5 * shrink * (t.max() - t.min())
+            lo, hi = t.min() + half, t.max() - half
+            radius = float(np.max(np.linalg.norm(c - (m + np.clip(t, lo, hi)[:, None] * u), axis=1) + r))
+            volume = np.pi * radius ** 2 * (hi - lo) + 4.0 / 3.0 * np.pi * radius ** 3
+            if best is None or volume < best[0]:
+                best = (volume, np.concatenate([m + lo * u, m + hi * u, [radius]]))
+        out[g] = best[1]
+    return out
+
+
 class CollisionModel:
     """The sphere model of a scene's robot, grouped per link for the compiled kernels.
 
@@ -90,6 +117,7 @@ class CollisionModel:
             g_radius[g] = np.max(np.linalg.norm(c - g_offset[g], axis=1) + radii[s0:s1])
         self.sphere_anchor = anchors
         self.model_arrays = (g_anchor, g_offset, g_radius, start, offsets, radii)
+        self.capsules = bounding_capsules(offsets, radii, start)
         self.chain_arrays = batch._args
         index = {name: g for g, name in enumerate(self.link_names)}
         pairs = sorted({tuple(sorted((index[a], index[b]))) for a, b in self_pairs
@@ -100,12 +128,15 @@ class CollisionModel:
 
     @functools.cached_property
     def pair_arrays(self) -> tuple:
-        """``(pair_a, pair_b, t_meta, t_grid, t_vals)``: the checked link pairs (rows of the
-        links) and their floor tables (:func:`drake_mh.scene.pair_table.pair_tables`; built on
-        first use, a second or two per meshed arm, then cached on disk)."""
+        """``(pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule)``: what the self-collision
+        kernels read: the checked link pairs (rows of the links), their floor tables
+        (:func:`drake_mh.scene.pair_table.pair_tables`; built on first use, a second or two per
+        meshed arm, then cached on disk) and the links' bounding capsules
+        (:func:`bounding_capsules`)."""
         from drake_mh.scene.pair_table import pair_tables
 
-        return self.pair_index + (pair_tables(self) if self._use_tables else empty_tables(self.num_pairs))
+        tables = pair_tables(self) if self._use_tables else empty_tables(self.num_pairs)
+        return self.pair_index + tables + (self.capsules,)
 
     @property
     def num_links(self) -> int:
@@ -168,10 +199,11 @@ class CollisionModel:
         width = len(obstacles[0]) if per_obstacle else self.num_links + self.num_pairs
         out = np.empty((N, width))
         tau = np.zeros(N) if tau is None else np.ascontiguousarray(tau, dtype=float)
-        no_pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64)) + empty_tables()
+        no_pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64)) + empty_tables() + (self.capsules,)
         pairs = no_pairs if per_obstacle else self.pair_arrays
-        K.link_clearances(QT, tau, float(fine_below), float(fine_below), bool(per_obstacle), *self._kernel_args(),
-                          *obstacles, *pairs, out)
+        pair_fine = np.full(len(pairs[0]), float(fine_below))
+        K.link_clearances(QT, tau, float(fine_below), pair_fine, bool(per_obstacle), *self._kernel_args(), *obstacles,
+                          *pairs, out)
         return out
 
     @functools.cached_property

@@ -125,3 +125,37 @@ def test_tables_are_cached_on_disk(scene):
         again = CollisionModel(robot, scene.sphere_model, pairs).pair_arrays
         for x, y in zip(first, again):
             np.testing.assert_array_equal(x, y)
+
+
+def test_segments_certified_through_tables_are_clear_everywhere(scene):
+    """certify_segments lets a pair's table certify it along a segment: dense sampling of the
+    certified segments never finds that pair (or any other) below the self-clearance, nor below
+    the reported ``lower_self``."""
+    robot = scene.robot
+    rng = np.random.default_rng(8)
+    QA = robot.random_configurations(60, rng=rng)
+    QA[::2, 5] = rng.uniform(robot.upper[5] - 0.8, robot.upper[5], 30)  # the hand near link 5
+    QA = QA[scene.collision_free(QA, 0.0, 0.002)][:30]
+    QB = np.clip(QA + rng.normal(0.0, 0.3, QA.shape), robot.lower, robot.upper)
+    cert = scene.certify_segments(QA, QB, 0.0, 0.002)
+    assert cert.certified.sum() >= 5
+    t = np.linspace(0.0, 1.0, 101)
+    for i in np.flatnonzero(cert.certified):
+        dense = QA[i] + t[:, None] * (QB[i] - QA[i])
+        values = pair_values(scene, dense, scene.collision_model.self_pairs)
+        assert values.min() >= 0.002
+        assert values.min() >= cert.lower_self[i] - 1e-12
+
+
+def test_bounding_capsules_contain_their_links_spheres(scene):
+    from drake_mh.scene.batch import bounding_capsules
+
+    model = scene.collision_model
+    _, _, _, start, offsets, radii = model.model_arrays
+    caps = bounding_capsules(offsets, radii, start)
+    for g in range(model.num_links):
+        c, r = offsets[start[g]:start[g + 1]], radii[start[g]:start[g + 1]]
+        a, b, radius = caps[g, :3], caps[g, 3:6], caps[g, 6]
+        d = b - a
+        t = np.clip((c - a) @ d / max(d @ d, 1e-300), 0.0, 1.0)
+        assert np.all(np.linalg.norm(c - (a + t[:, None] * d), axis=1) + r <= radius + 1e-12)
