@@ -40,8 +40,8 @@ def _bound(V0, V1, lam, h):
 @numba.njit(cache=True, fastmath=FASTMATH)
 def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance, min_piece, max_evals,
                      parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-                     kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, status, t_stop,
-                     lower, lower_self, evals):
+                     kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart,
+                     u_start, u_offset, u_radius, status, t_stop, lower, lower_self, evals):
     """Certify each segment ``QA[i] -> QB[i]`` (module docstring).
 
     Args:
@@ -90,7 +90,7 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
         ts[0], ts[1] = 0.0, 1.0
         link_clearances(QT, ts[:2].copy(), fine, fines, False, parent, KR, Kp, perm, kind, qidx, g_anchor,
                         g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b,
-                        t_meta, t_grid, t_vals, g_capsule, vals[:2])
+                        t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius, vals[:2])
         n = 2
         status[i], t_stop[i] = CERTIFIED, np.nan
         low, low_self = np.inf, np.inf
@@ -160,7 +160,8 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
                 w += 1
             link_clearances(QT, tau, fine, fines, False, parent, KR, Kp, perm, kind, qidx, g_anchor,
                             g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a,
-                            pair_b, t_meta, t_grid, t_vals, g_capsule, vals[n:n + count])
+                            pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius,
+                            vals[n:n + count])
             first = np.inf
             for w in range(count):
                 for c in range(C):

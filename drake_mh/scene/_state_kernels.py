@@ -69,6 +69,25 @@ def _spheres_state(b, a, s0, s1, s_offset, s_radius, margin, plain, R, p, k, kin
     return answer
 
 
+@numba.njit(cache=True, fastmath=FASTMATH)  # not inlined: a second copy in check_states slowed its loop
+def _groups_state(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, margin, plain, R, p, k, kinds,
+                  R_WO, p_WO, dims):
+    """:func:`_spheres_state` of the spheres of groups ``u0 .. u1-1``, a group whose bounding
+    sphere keeps the margin passed whole (:func:`drake_mh.scene.batch.sphere_groups`)."""
+    answer = CLEAR
+    for u in range(u0, u1):
+        x, y, z = _lane_point(a, u_offset[u], R, p, b)
+        if _point_free(k, kinds, R_WO, p_WO, dims, margin + u_radius[u], x, y, z):
+            continue
+        state = _spheres_state(b, a, u_start[u], u_start[u + 1], s_offset, s_radius, margin, plain, R, p, k, kinds,
+                               R_WO, p_WO, dims)
+        if state == COLLISION:
+            return COLLISION
+        if state == NEAR:
+            answer = NEAR
+    return answer
+
+
 @numba.njit(cache=True, fastmath=FASTMATH)
 def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, arrays, ws, out):
     """Check configurations ``QT[:, n0:n0+m]`` at two clearance levels in one pass.
@@ -92,7 +111,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
         the inputs only (not on the order of the tests), so results are deterministic.
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule) = arrays
+     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset,
+     u_radius) = arrays
     R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf = ws
     G, K = g_anchor.shape[0], kinds.shape[0]
     nw = (m + 7) // 8
@@ -127,8 +147,12 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
                     continue
                 for b in range(8 * w, 8 * w + 8):
                     if hit[b]:  # the link's spheres
-                        state = _spheres_state(b, a, g_start[g], g_start[g + 1], s_offset, s_radius, margin, plain,
-                                               R, p, k, kinds, R_WO, p_WO, dims)
+                        if g_ustart[g + 1] - g_ustart[g] > 1:  # the link's spheres a group at a time
+                            state = _groups_state(b, a, g_ustart[g], g_ustart[g + 1], u_start, u_offset, u_radius,
+                                                  s_offset, s_radius, margin, plain, R, p, k, kinds, R_WO, p_WO, dims)
+                        else:  # one group: the link's bounding sphere, known to be near
+                            state = _spheres_state(b, a, g_start[g], g_start[g + 1], s_offset, s_radius, margin,
+                                                   plain, R, p, k, kinds, R_WO, p_WO, dims)
                         if state == COLLISION:
                             return COLLISION
                         if state == NEAR:

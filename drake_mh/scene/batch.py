@@ -60,6 +60,28 @@ def bounding_radii(obstacles: tuple) -> np.ndarray:
     return np.ascontiguousarray(np.where(kinds == K.CAPSULE, dims[:, 0] + dims[:, 1], radii))
 
 
+GROUP_SIZE = 16
+"""Most spheres in a group (:func:`sphere_groups`)."""
+
+
+def sphere_groups(centres: np.ndarray, size: int = GROUP_SIZE) -> list:
+    """Index arrays that split ``centres (n, 3)`` into groups of at most ``size`` neighbours:
+    halves at the median along the longest side of the bounding box, recursively
+    (deterministic). A group's bounding sphere lets a near link's spheres be tested against an
+    obstacle a group at a time."""
+    parts, todo = [], [np.arange(len(centres))]
+    while todo:
+        idx = todo.pop()
+        if len(idx) <= size:
+            parts.append(idx)
+            continue
+        c = centres[idx]
+        ranked = idx[np.argsort(c[:, int(np.argmax(np.ptp(c, axis=0)))], kind="stable")]
+        half = len(ranked) // 2
+        todo += [ranked[half:], ranked[:half]]
+    return parts
+
+
 def bounding_capsules(offsets: np.ndarray, radii: np.ndarray, start: np.ndarray) -> np.ndarray:
     """``(G, 7)``: per link (spheres ``start[g] .. start[g + 1] - 1``, centres ``offsets`` in the
     link's frame) a capsule that contains all of its spheres: axis ends (6) and radius.
@@ -101,7 +123,14 @@ class CollisionModel:
         self.sphere_model = model
         links = np.asarray(model.links)
         self.link_names = tuple(dict.fromkeys(model.links))  # order of first appearance
-        order = np.concatenate([np.flatnonzero(links == name) for name in self.link_names])
+        order, sizes, g_ustart = [], [], [0]
+        for name in self.link_names:  # each link's spheres in groups of neighbours
+            ids = np.flatnonzero(links == name)
+            for part in sphere_groups(model.centres_B[ids]):
+                order.extend(ids[part])
+                sizes.append(len(part))
+            g_ustart.append(len(sizes))
+        order = np.asarray(order, np.int64)
         self.sphere_order = order  # kernel sphere i is model sphere order[i]
         anchors, offsets = batch.compile_points(list(links[order]), model.centres_B[order])
         radii = np.ascontiguousarray(model.radii[order])
@@ -118,6 +147,13 @@ class CollisionModel:
         self.sphere_anchor = anchors
         self.model_arrays = (g_anchor, g_offset, g_radius, start, offsets, radii)
         self.capsules = bounding_capsules(offsets, radii, start)
+        u_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        u_offset, u_radius = np.empty((len(sizes), 3)), np.empty(len(sizes))
+        for u in range(len(sizes)):  # each group's bounding sphere, as the links' below
+            c = offsets[u_start[u]:u_start[u + 1]]
+            u_offset[u] = 0.5 * (c.min(axis=0) + c.max(axis=0))
+            u_radius[u] = np.max(np.linalg.norm(c - u_offset[u], axis=1) + radii[u_start[u]:u_start[u + 1]])
+        self.group_arrays = (np.asarray(g_ustart, np.int64), u_start, u_offset, u_radius)
         self.chain_arrays = batch._args
         index = {name: g for g, name in enumerate(self.link_names)}
         pairs = sorted({tuple(sorted((index[a], index[b]))) for a, b in self_pairs
@@ -128,15 +164,18 @@ class CollisionModel:
 
     @functools.cached_property
     def pair_arrays(self) -> tuple:
-        """``(pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule)``: what the self-collision
-        kernels read: the checked link pairs (rows of the links), their floor tables
+        """``(pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset,
+        u_radius)``: what the kernels read beyond the chain, the spheres and the obstacles: the
+        checked link pairs (rows of the links), their floor tables
         (:func:`drake_mh.scene.pair_table.pair_tables`; built on first use, a second or two per
-        meshed arm, then cached on disk) and the links' bounding capsules
-        (:func:`bounding_capsules`)."""
+        meshed arm, then cached on disk), the links' bounding capsules
+        (:func:`bounding_capsules`) and the links' sphere groups (:attr:`group_arrays`: link
+        ``g`` holds groups ``g_ustart[g] .. g_ustart[g + 1] - 1``, group ``u`` the spheres
+        ``u_start[u] .. u_start[u + 1] - 1`` inside the sphere ``(u_offset[u], u_radius[u])``)."""
         from drake_mh.scene.pair_table import pair_tables
 
         tables = pair_tables(self) if self._use_tables else empty_tables(self.num_pairs)
-        return self.pair_index + tables + (self.capsules,)
+        return self.pair_index + tables + (self.capsules,) + self.group_arrays
 
     @property
     def num_links(self) -> int:
@@ -199,7 +238,8 @@ class CollisionModel:
         width = len(obstacles[0]) if per_obstacle else self.num_links + self.num_pairs
         out = np.empty((N, width))
         tau = np.zeros(N) if tau is None else np.ascontiguousarray(tau, dtype=float)
-        no_pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64)) + empty_tables() + (self.capsules,)
+        no_pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64)) + empty_tables()
+        no_pairs += (self.capsules,) + self.group_arrays
         pairs = no_pairs if per_obstacle else self.pair_arrays
         pair_fine = np.full(len(pairs[0]), float(fine_below))
         K.link_clearances(QT, tau, float(fine_below), pair_fine, bool(per_obstacle), *self._kernel_args(), *obstacles,

@@ -146,16 +146,3 @@ def test_segments_certified_through_tables_are_clear_everywhere(scene):
         assert values.min() >= 0.002
         assert values.min() >= cert.lower_self[i] - 1e-12
 
-
-def test_bounding_capsules_contain_their_links_spheres(scene):
-    from drake_mh.scene.batch import bounding_capsules
-
-    model = scene.collision_model
-    _, _, _, start, offsets, radii = model.model_arrays
-    caps = bounding_capsules(offsets, radii, start)
-    for g in range(model.num_links):
-        c, r = offsets[start[g]:start[g + 1]], radii[start[g]:start[g + 1]]
-        a, b, radius = caps[g, :3], caps[g, 3:6], caps[g, 6]
-        d = b - a
-        t = np.clip((c - a) @ d / max(d @ d, 1e-300), 0.0, 1.0)
-        assert np.all(np.linalg.norm(c - (a + t[:, None] * d), axis=1) + r <= radius + 1e-12)

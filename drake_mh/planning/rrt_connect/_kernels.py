@@ -260,7 +260,8 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
        from :func:`~drake_mh.scene._collision_kernels.link_clearances`).
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule) = arrays
+     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset,
+     u_radius) = arrays
     t0 = now(clock, buf) if profile else 0.0
     nq = qa.shape[0]
     G, C = g_anchor.shape[0], reach.shape[0]
@@ -320,8 +321,8 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
         lower, lower_self, spent = np.empty(1), np.empty(1), np.empty(1, np.int64)
         _certify_segments(QA, QB, reach, 0.0, clearance, self_clearance, np.inf, 1e-9, max_evals,
                           parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-                          kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, status,
-                          t_stop, lower, lower_self, spent)
+                          kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart,
+                          u_start, u_offset, u_radius, status, t_stop, lower, lower_self, spent)
         certified, evals = status[0] == CERTIFIED, spent[0]
     stats[REFINED] += 1
     stats[REFINE_EVALS] += evals

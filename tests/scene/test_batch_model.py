@@ -1,0 +1,42 @@
+"""The sphere model as the kernels read it (scene/batch.py): every link's bounding capsule and
+sphere groups contain the spheres they stand for, on the Panda with its hand (778 spheres)."""
+
+import numpy as np
+import pytest
+
+from drake_mh.planning.problems import load_problem_robot
+from drake_mh.scene import Scene
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return Scene(load_problem_robot("panda_hand_mbm"), self_collision=True)
+
+
+def test_bounding_capsules_contain_their_links_spheres(scene):
+    from drake_mh.scene.batch import bounding_capsules
+
+    model = scene.collision_model
+    _, _, _, start, offsets, radii = model.model_arrays
+    caps = bounding_capsules(offsets, radii, start)
+    for g in range(model.num_links):
+        c, r = offsets[start[g]:start[g + 1]], radii[start[g]:start[g + 1]]
+        a, b, radius = caps[g, :3], caps[g, 3:6], caps[g, 6]
+        d = b - a
+        t = np.clip((c - a) @ d / max(d @ d, 1e-300), 0.0, 1.0)
+        assert np.all(np.linalg.norm(c - (a + t[:, None] * d), axis=1) + r <= radius + 1e-12)
+
+
+def test_sphere_groups_hold_their_spheres(scene):
+    model = scene.collision_model
+    _, _, _, start, offsets, radii = model.model_arrays
+    g_ustart, u_start, u_offset, u_radius = model.group_arrays
+    assert g_ustart[0] == 0 and g_ustart[-1] == len(u_radius) and u_start[-1] == len(radii)
+    for g in range(model.num_links):
+        u0, u1 = g_ustart[g], g_ustart[g + 1]
+        assert u_start[u0] == start[g] and u_start[u1] == start[g + 1]  # the link's spheres, all of them
+        for u in range(u0, u1):
+            s0, s1 = u_start[u], u_start[u + 1]
+            assert 1 <= s1 - s0 <= 16
+            d = np.linalg.norm(offsets[s0:s1] - u_offset[u], axis=1) + radii[s0:s1]
+            assert np.all(d <= u_radius[u] + 1e-12)
