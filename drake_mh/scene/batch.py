@@ -82,6 +82,19 @@ def sphere_groups(centres: np.ndarray, size: int = GROUP_SIZE) -> list:
     return parts
 
 
+def bounding_spheres(offsets: np.ndarray, radii: np.ndarray, start: np.ndarray) -> tuple:
+    """``(centre (R, 3), radius (R,))``: per range ``start[r] .. start[r + 1] - 1`` of spheres
+    (centres ``offsets`` in one frame) a sphere that contains them: centred in the middle of the
+    centres' bounding box, out to the farthest sphere surface."""
+    R = len(start) - 1
+    centre, radius = np.empty((R, 3)), np.empty(R)
+    for r in range(R):
+        c = offsets[start[r]:start[r + 1]]
+        centre[r] = 0.5 * (c.min(axis=0) + c.max(axis=0))
+        radius[r] = np.max(np.linalg.norm(c - centre[r], axis=1) + radii[start[r]:start[r + 1]])
+    return centre, radius
+
+
 def bounding_capsules(offsets: np.ndarray, radii: np.ndarray, start: np.ndarray) -> np.ndarray:
     """``(G, 7)``: per link (spheres ``start[g] .. start[g + 1] - 1``, centres ``offsets`` in the
     link's frame) a capsule that contains all of its spheres: axis ends (6) and radius.
@@ -136,24 +149,13 @@ class CollisionModel:
         radii = np.ascontiguousarray(model.radii[order])
         counts = [int(np.sum(links == name)) for name in self.link_names]
         start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        G = len(self.link_names)
-        g_anchor, g_offset, g_radius = np.empty(G, np.int64), np.empty((G, 3)), np.empty(G)
-        for g in range(G):
-            s0, s1 = start[g], start[g + 1]
-            c = offsets[s0:s1]
-            g_anchor[g] = anchors[s0]
-            g_offset[g] = 0.5 * (c.min(axis=0) + c.max(axis=0))
-            g_radius[g] = np.max(np.linalg.norm(c - g_offset[g], axis=1) + radii[s0:s1])
+        g_anchor = anchors[start[:-1]]
+        g_offset, g_radius = bounding_spheres(offsets, radii, start)
         self.sphere_anchor = anchors
         self.model_arrays = (g_anchor, g_offset, g_radius, start, offsets, radii)
         self.capsules = bounding_capsules(offsets, radii, start)
         u_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-        u_offset, u_radius = np.empty((len(sizes), 3)), np.empty(len(sizes))
-        for u in range(len(sizes)):  # each group's bounding sphere, as the links' below
-            c = offsets[u_start[u]:u_start[u + 1]]
-            u_offset[u] = 0.5 * (c.min(axis=0) + c.max(axis=0))
-            u_radius[u] = np.max(np.linalg.norm(c - u_offset[u], axis=1) + radii[u_start[u]:u_start[u + 1]])
-        self.group_arrays = (np.asarray(g_ustart, np.int64), u_start, u_offset, u_radius)
+        self.group_arrays = (np.asarray(g_ustart, np.int64), u_start) + bounding_spheres(offsets, radii, u_start)
         self.chain_arrays = batch._args
         index = {name: g for g, name in enumerate(self.link_names)}
         pairs = sorted({tuple(sorted((index[a], index[b]))) for a, b in self_pairs
