@@ -25,7 +25,7 @@ the few lanes still near, scalar per lane and sphere (first collision returns).
 
 Typical use (compiled code; the workspace is allocated once per plan)::
 
-    arrays = _collision_kernels._unpack(ints, floats)        # a scene's packed arrays
+    arrays = _packing._unpack(ints, floats)                  # a scene's packed arrays
     ws = state_workspace(F, G, S, lanes)
     answer = check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, arrays, ws, out)
 """
@@ -99,8 +99,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
             every obstacle and each checked link pair between its links, with a margin.
         link_plain, pair_plain: the same without the margin (each at most its margin value;
             all > 0: the tests compare squares, so pass 1e-12 for "touching collides").
-        arrays: the scene's unpacked arrays (:func:`drake_mh.scene._collision_kernels._unpack`
-            of :func:`~drake_mh.scene._collision_kernels.pack`'s buffers).
+        arrays: the scene's unpacked arrays (:func:`drake_mh.scene._packing._unpack`
+            of :func:`~drake_mh.scene._packing.pack`'s buffers).
         ws: :func:`state_workspace`.
         out: ``(N,)`` bool; ``out[n0 + b]`` is set to whether configuration ``n0 + b`` keeps
             every margin (unless the answer is COLLISION: then ``out`` is not written).
@@ -185,3 +185,28 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
         if not keep[b]:
             answer = NEAR
     return answer
+
+
+@numba.njit(cache=True)
+def check_blocks(QT, n, lanes, margins, plain, arrays, ws, out):
+    """Columns ``0 .. n-1`` of ``QT`` in blocks (:func:`check_states`): the first of ``lanes[0]``
+    columns (VAMP's "rake": states spread over a motion, so a collision is found early), the
+    others of ``lanes[1]``.
+
+    ``margins``, ``plain``: ``(link clearances (G,), pair clearances (P,))``.
+
+    Returns:
+        ``(answer, configurations checked)``: COLLISION (stops there), NEAR (``out[w]``: column
+        ``w`` kept the margins), or CLEAR.
+    """
+    answer = CLEAR
+    n0 = 0
+    while n0 < n:
+        m = min(lanes[0] if n0 == 0 else lanes[1], n - n0)
+        r = check_states(QT, n0, m, margins[0], margins[1], plain[0], plain[1], arrays, ws, out)
+        if r == COLLISION:
+            return COLLISION, n0 + m
+        if r == NEAR:
+            answer = NEAR
+        n0 += m
+    return answer, n

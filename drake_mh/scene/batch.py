@@ -25,6 +25,7 @@ import functools
 import numpy as np
 
 from drake_mh.scene import _collision_kernels as K
+from drake_mh.scene._packing import pack
 from drake_mh.scene.pair_table import empty_tables
 from drake_mh.shapes import Box, Capsule, Cylinder, Sphere
 
@@ -203,7 +204,7 @@ class CollisionModel:
         ``(nq,)`` (any strides), the clearances Python floats >= 0: the caller checks them.
         """
         kinds, R_WO, p_WO, _, dims = obstacles
-        ints, floats = K.pack(*self._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(obstacles),
+        ints, floats = pack(*self._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(obstacles),
                               *self.pair_arrays)
         kernel, empty, boolean = K.collision_free_packed, np.empty, np.bool_
 

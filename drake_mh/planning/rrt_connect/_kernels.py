@@ -23,11 +23,11 @@ import numba
 import numpy as np
 
 from drake_mh.planning.rrt_connect._clock import now
-from drake_mh.scene._collision_kernels import _unpack
+from drake_mh.scene._packing import _unpack
 from drake_mh.scene._pair_kernel import segment_floor
 from drake_mh.scene._segment_kernel import CERTIFIED
 from drake_mh.scene._segment_kernel import certify_segments as _certify_segments
-from drake_mh.scene._state_kernels import CLEAR, COLLISION, NEAR, check_states, state_workspace
+from drake_mh.scene._state_kernels import CLEAR, COLLISION, check_blocks, state_workspace
 
 FOUND, BUDGET, TIMEOUT = 0, 1, 2
 """Outcomes of :func:`plan_kernel`."""
@@ -97,30 +97,6 @@ def _steer(qa, qb, step, out):
     for j in range(qa.shape[0]):
         out[j] = qa[j] + s * (qb[j] - qa[j])
     return False
-
-
-@numba.njit(cache=True)
-def _check(QT, n, lanes, margins, plain, arrays, ws, out):
-    """Columns ``0 .. n-1`` of ``QT`` in blocks (:func:`drake_mh.scene._state_kernels.check_states`):
-    the first of ``lanes[0]`` columns, the others of ``lanes[1]``.
-
-    ``margins``, ``plain``: ``(link clearances (G,), pair clearances (P,))``.
-
-    Returns:
-        ``(answer, configurations checked)``: COLLISION (stops there), NEAR (``out[w]``: column
-        ``w`` kept the margins), or CLEAR.
-    """
-    answer = CLEAR
-    n0 = 0
-    while n0 < n:
-        m = min(lanes[0] if n0 == 0 else lanes[1], n - n0)
-        r = check_states(QT, n0, m, margins[0], margins[1], plain[0], plain[1], arrays, ws, out)
-        if r == COLLISION:
-            return COLLISION, n0 + m
-        if r == NEAR:
-            answer = NEAR
-        n0 += m
-    return answer, n
 
 
 @numba.njit(cache=True)
@@ -210,7 +186,7 @@ def _refine(qa, qb, out, order, n, lam, plain, clearance, self_clearance, arrays
             for j in range(nq):
                 QE[j, w] = qa[j] + t * (qb[j] - qa[j])
         kept = np.empty(k, np.bool_)
-        answer, used = _check(QE, k, (lanes[1], lanes[1]), margins, plain, arrays, ws, kept)
+        answer, used = check_blocks(QE, k, (lanes[1], lanes[1]), margins, plain, arrays, ws, kept)
         evals += used
         if answer == COLLISION:
             return False, evals
@@ -297,7 +273,7 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
     margins = _clearances(lam, 1.0 / (2 * n), G, clearance, self_clearance)
     plain = _clearances(lam, 0.0, G, clearance, self_clearance)
     out = np.empty(total, np.bool_)
-    answer, used = _check(QT, total, lanes, margins, plain, arrays, ws, out)
+    answer, used = check_blocks(QT, total, lanes, margins, plain, arrays, ws, out)
     stats[MOTIONS] += 1
     stats[STATES] += used
     if profile:

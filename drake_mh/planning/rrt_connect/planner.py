@@ -123,7 +123,7 @@ _PREPARED = False
 
 def _arguments(scene) -> tuple:
     """``(ints, floats, v_WO, reach)`` of the scene's current obstacles (cached until they change)."""
-    from drake_mh.scene._collision_kernels import pack
+    from drake_mh.scene._packing import pack
     from drake_mh.scene.batch import bounding_radii
 
     arrays = getattr(scene, "_obstacle_arrays", None)  # None after add/move/remove: the property rebuilds it
