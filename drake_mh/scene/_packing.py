@@ -38,6 +38,8 @@ def _offsets(ints):
     i_a = i_kinds + K
     i_b = i_a + P
     i_meta = i_b + P
+    i_ustart = i_meta + 6 * P
+    i_ustart_s = i_ustart + G + 1
     f_KR = 0
     f_Kp = f_KR + 9 * F
     f_offset = f_Kp + 3 * F
@@ -51,8 +53,6 @@ def _offsets(ints):
     f_grid = f_orad + K
     f_vals = f_grid + 4 * P
     f_caps = f_vals + T
-    i_ustart = i_meta + 6 * P
-    i_ustart_s = i_ustart + G + 1
     f_uoffset = f_caps + 7 * G
     f_uradius = f_uoffset + 3 * U
     return (F, G, S, K, P, T, U, i_parent, i_perm, i_kind, i_qidx, i_anchor, i_start, i_kinds, i_a, i_b, i_meta,

@@ -241,9 +241,10 @@ class CollisionModel:
         width = len(obstacles[0]) if per_obstacle else self.num_links + self.num_pairs
         out = np.empty((N, width))
         tau = np.zeros(N) if tau is None else np.ascontiguousarray(tau, dtype=float)
-        no_pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64)) + empty_tables()
-        no_pairs += (self.capsules,) + self.group_arrays
-        pairs = no_pairs if per_obstacle else self.pair_arrays
+        if per_obstacle:  # no pairs (and no tables to build)
+            pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64), *empty_tables(), self.capsules, *self.group_arrays)
+        else:
+            pairs = self.pair_arrays
         pair_fine = np.full(len(pairs[0]), float(fine_below))
         K.link_clearances(QT, tau, float(fine_below), pair_fine, bool(per_obstacle), *self._kernel_args(), *obstacles,
                           *pairs, out)
