@@ -299,8 +299,9 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
                 if capsule_gap(b, ga, gb, g_anchor, g_capsule, R, p) >= self_clearance:
                     continue  # so do the links' bounding capsules
                 alive[b] &= pair_clearance(b, ga, gb, self_clearance, self_clearance, False, g_anchor, g_start,
-                                           g_radius, Gx[ga, b], Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b],
-                                           Gz[gb, b], s_offset, s_radius, R, p, pbuf) >= self_clearance
+                                           g_radius, g_ustart, u_start, u_offset, u_radius, Gx[ga, b], Gy[ga, b],
+                                           Gz[ga, b], Gx[gb, b], Gy[gb, b], Gz[gb, b], s_offset, s_radius, R, p,
+                                           pbuf) >= self_clearance
         for b in range(used):
             out[n0 + b] = alive[b]
 
@@ -411,9 +412,9 @@ def link_clearances(QT, tau, fine_below, pair_fine_below, per_obstacle, parent, 
                     if floor >= fine:  # the pair's table: a lower bound above fine
                         out[n0 + b, G + i] = max(v, floor)
                         continue
-                    v = pair_clearance(b, ga, gb, fine, -np.inf, True, g_anchor, g_start, g_radius,
-                                       Gx[ga, b], Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b], Gz[gb, b], s_offset,
-                                       s_radius, R, p, pbuf)
+                    v = pair_clearance(b, ga, gb, fine, -np.inf, True, g_anchor, g_start, g_radius, g_ustart, u_start,
+                                       u_offset, u_radius, Gx[ga, b], Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b],
+                                       Gz[gb, b], s_offset, s_radius, R, p, pbuf)
                 out[n0 + b, G + i] = v
 
 
@@ -464,8 +465,9 @@ def _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g
         lim = self_clearance + g_radius[ga] + g_radius[gb]
         if dx * dx + dy * dy + dz * dz < lim * lim and pair_floor(i, QT, 0, t_meta, t_grid, t_vals) < self_clearance \
                 and capsule_gap(0, ga, gb, g_anchor, g_capsule, R, p) < self_clearance and pair_clearance(
-                0, ga, gb, self_clearance, self_clearance, False, g_anchor, g_start, g_radius, gc[ga, 0], gc[ga, 1],
-                gc[ga, 2], gc[gb, 0], gc[gb, 1], gc[gb, 2], s_offset, s_radius, R, p, pbuf) < self_clearance:
+                0, ga, gb, self_clearance, self_clearance, False, g_anchor, g_start, g_radius, g_ustart, u_start,
+                u_offset, u_radius, gc[ga, 0], gc[ga, 1], gc[ga, 2], gc[gb, 0], gc[gb, 1], gc[gb, 2], s_offset,
+                s_radius, R, p, pbuf) < self_clearance:
             return False
     return True
 

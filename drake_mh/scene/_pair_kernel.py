@@ -69,9 +69,53 @@ def _near_spheres(b, a, s0, s1, s_offset, s_radius, R, p, cx, cy, cz, reach, bou
     return n, low
 
 
+@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
+def _near_groups(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, R, p, cx, cy, cz, reach, bound, lower,
+                 buf, n):
+    """:func:`_near_spheres` of the spheres of groups ``u0 .. u1-1`` (frame ``a``), with the
+    test in frame ``a``: the sphere's centre is moved into it once, a group whose bounding
+    sphere is at least ``bound`` from it is passed whole (its spheres are inside it,
+    :func:`drake_mh.scene.batch.sphere_groups`; with ``lower`` its value is the bound of its
+    spheres), and only the spheres kept are moved into the world. Link 5 against link 7 of the
+    hand Panda (131 x 40 spheres) near a collision: 0.89 -> 0.56 µs."""
+    if a >= 0:
+        dx, dy, dz = cx - p[a, 0, b], cy - p[a, 1, b], cz - p[a, 2, b]
+        lx = R[a, 0, 0, b] * dx + R[a, 1, 0, b] * dy + R[a, 2, 0, b] * dz
+        ly = R[a, 0, 1, b] * dx + R[a, 1, 1, b] * dy + R[a, 2, 1, b] * dz
+        lz = R[a, 0, 2, b] * dx + R[a, 1, 2, b] * dy + R[a, 2, 2, b] * dz
+    else:
+        lx, ly, lz = cx, cy, cz
+    low = math.inf
+    for u in range(u0, u1):
+        dx, dy, dz = u_offset[u, 0] - lx, u_offset[u, 1] - ly, u_offset[u, 2] - lz
+        d2 = dx * dx + dy * dy + dz * dz
+        lim = bound + u_radius[u] + reach
+        if not (lim > 0.0 and d2 < lim * lim):
+            if lower:
+                low = min(low, math.sqrt(d2) - u_radius[u] - reach)
+            continue
+        for s in range(u_start[u], u_start[u + 1]):
+            ox, oy, oz = s_offset[s, 0], s_offset[s, 1], s_offset[s, 2]
+            dx, dy, dz = ox - lx, oy - ly, oz - lz
+            d2 = dx * dx + dy * dy + dz * dz
+            lim = bound + s_radius[s] + reach
+            if lim > 0.0 and d2 < lim * lim:
+                if a >= 0:
+                    buf[n, 0] = p[a, 0, b] + R[a, 0, 0, b] * ox + R[a, 0, 1, b] * oy + R[a, 0, 2, b] * oz
+                    buf[n, 1] = p[a, 1, b] + R[a, 1, 0, b] * ox + R[a, 1, 1, b] * oy + R[a, 1, 2, b] * oz
+                    buf[n, 2] = p[a, 2, b] + R[a, 2, 0, b] * ox + R[a, 2, 1, b] * oy + R[a, 2, 2, b] * oz
+                else:
+                    buf[n, 0], buf[n, 1], buf[n, 2] = ox, oy, oz
+                buf[n, 3] = s_radius[s]
+                n += 1
+            elif lower:
+                low = min(low, math.sqrt(d2) - s_radius[s] - reach)
+    return n, low
+
+
 @numba.njit(cache=True, fastmath=FASTMATH)
-def pair_clearance(b, ga, gb, bound, stop, lower, g_anchor, g_start, g_radius, cax, cay, caz, cbx, cby, cbz,
-                   s_offset, s_radius, R, p, buf):
+def pair_clearance(b, ga, gb, bound, stop, lower, g_anchor, g_start, g_radius, g_ustart, u_start, u_offset, u_radius,
+                   cax, cay, caz, cbx, cby, cbz, s_offset, s_radius, R, p, buf):
     """The clearance of links ``ga`` and ``gb`` in lane ``b`` on the sphere model, where it is
     below ``bound``.
 
@@ -84,6 +128,9 @@ def pair_clearance(b, ga, gb, bound, stop, lower, g_anchor, g_start, g_radius, c
         lower: above ``bound``, return the best lower bound the pruning gives (a square root
             per sphere left out) instead of ``bound``.
         g_anchor, g_start, g_radius: the links' frames, sphere ranges and bounding radii.
+        g_ustart, u_start, u_offset, u_radius: the links' sphere groups (ranges of groups per
+            link, of spheres per group, and the groups' bounding spheres): with a finite
+            ``bound``, spheres are pruned a group at a time (:func:`_near_groups`).
         cax, cay, caz, cbx, cby, cbz: world centres of the two links' bounding spheres, lane ``b``.
         s_offset, s_radius: the spheres' centres in their frames and radii.
         R, p: the moving frames' rotations ``(F, 3, 3, L)`` and positions ``(F, 3, L)``.
@@ -94,12 +141,21 @@ def pair_clearance(b, ga, gb, bound, stop, lower, g_anchor, g_start, g_radius, c
         ``bound`` (or with ``lower`` a lower bound of ``v`` at least ``bound``). With ``stop``:
         a value below ``stop`` as soon as one pair is (then ``v`` is below it too).
     """
-    na, low_a = _near_spheres(b, g_anchor[ga], g_start[ga], g_start[ga + 1], s_offset, s_radius, R, p, cbx, cby,
-                              cbz, g_radius[gb], bound, lower, buf, 0)
+    grouped = bound < math.inf  # with nothing pruned, the plain loop is faster (7.8 against 11 µs)
+    if grouped:
+        na, low_a = _near_groups(b, g_anchor[ga], g_ustart[ga], g_ustart[ga + 1], u_start, u_offset, u_radius,
+                                 s_offset, s_radius, R, p, cbx, cby, cbz, g_radius[gb], bound, lower, buf, 0)
+    else:
+        na, low_a = _near_spheres(b, g_anchor[ga], g_start[ga], g_start[ga + 1], s_offset, s_radius, R, p, cbx, cby,
+                                  cbz, g_radius[gb], bound, lower, buf, 0)
     if na == 0:
         return low_a if lower else bound
-    n, low_b = _near_spheres(b, g_anchor[gb], g_start[gb], g_start[gb + 1], s_offset, s_radius, R, p, cax, cay,
-                             caz, g_radius[ga], bound, lower, buf, na)
+    if grouped:
+        n, low_b = _near_groups(b, g_anchor[gb], g_ustart[gb], g_ustart[gb + 1], u_start, u_offset, u_radius,
+                                s_offset, s_radius, R, p, cax, cay, caz, g_radius[ga], bound, lower, buf, na)
+    else:
+        n, low_b = _near_spheres(b, g_anchor[gb], g_start[gb], g_start[gb + 1], s_offset, s_radius, R, p, cax, cay,
+                                 caz, g_radius[ga], bound, lower, buf, na)
     # every pair with a sphere left out is at least its lower bound (and that is at least bound)
     best = min(low_a, low_b) if lower else bound
     for i in range(na):

@@ -32,6 +32,8 @@ Typical use (compiled code; the workspace is allocated once per plan)::
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 
@@ -96,7 +98,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
         QT: ``(nq, N)`` configurations, one per column.
         n0, m: the first column and how many (``m`` at most the workspace's lanes).
         link_margin, pair_margin: ``(G,)`` / ``(P,)`` clearances [m] each link must keep from
-            every obstacle and each checked link pair between its links, with a margin.
+            every obstacle and each checked link pair between its links, with a margin (a pair
+            at ``-inf`` is not checked: the caller knows it clear on these configurations).
         link_plain, pair_plain: the same without the margin (each at most its margin value;
             all > 0: the tests compare squares, so pass 1e-12 for "touching collides").
         arrays: the scene's unpacked arrays (:func:`drake_mh.scene._packing._unpack`
@@ -158,6 +161,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
                         if state == NEAR:
                             keep[b] = False
     for i in range(pair_a.shape[0]):
+        if pair_margin[i] == -math.inf:
+            continue  # the caller has certified the pair on these configurations (rrt_connect: its floor table)
         ga, gb = pair_a[i], pair_b[i]
         lim = pair_margin[i] + g_radius[ga] + g_radius[gb]
         c = 0
@@ -173,8 +178,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
             if capsule_gap(b, ga, gb, g_anchor, g_capsule, R, p) >= pair_margin[i]:
                 continue  # so do the links' bounding capsules
             value = pair_clearance(b, ga, gb, pair_margin[i], pair_plain[i], False, g_anchor, g_start, g_radius,
-                                   Gx[ga, b], Gy[ga, b], Gz[ga, b], Gx[gb, b], Gy[gb, b], Gz[gb, b], s_offset,
-                                   s_radius, R, p, pbuf)
+                                   g_ustart, u_start, u_offset, u_radius, Gx[ga, b], Gy[ga, b], Gz[ga, b],
+                                   Gx[gb, b], Gy[gb, b], Gz[gb, b], s_offset, s_radius, R, p, pbuf)
             if value < pair_plain[i]:
                 return COLLISION
             if value < pair_margin[i]:
