@@ -99,14 +99,21 @@ def _steer(qa, qb, step, out):
     return False
 
 
+CERTIFIED_ROW = -1.0
+"""``Λ_c`` of a link pair certified on the whole motion by its floor table: no state checks it."""
+
+
 @numba.njit(cache=True)
 def _clearances(lam, scale, G, clearance, self_clearance):
     """``(link (G,), pair (P,))``: the required clearance of each constraint row plus
-    ``scale · Λ_c`` (and 1e-12: the kernels compare squares, so "touching" must fail)."""
+    ``scale · Λ_c`` (and 1e-12: the kernels compare squares, so "touching" must fail); ``-inf``
+    for a pair row whose ``Λ_c`` is :data:`CERTIFIED_ROW` (``check_states`` skips it)."""
     link, pair = np.empty(G), np.empty(lam.shape[0] - G)
     for c in range(lam.shape[0]):
         if c < G:
             link[c] = clearance + scale * lam[c] + 1e-12
+        elif lam[c] == CERTIFIED_ROW:
+            pair[c - G] = -np.inf
         else:
             pair[c - G] = self_clearance + scale * lam[c] + 1e-12
     return link, pair
@@ -217,7 +224,8 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
     :attr:`~drake_mh.scene.batch.CollisionModel.reach`). A link pair with a floor table
     (:mod:`drake_mh.scene.pair_table`) whose cells along the motion all keep the pair's clearance
     is certified on the whole motion by them (:func:`drake_mh.scene._pair_kernel.segment_floor`):
-    its ``Λ_c`` is taken as 0, and each state then skips its sphere pairs by the same floors.
+    its ``Λ_c`` is :data:`CERTIFIED_ROW` and no state checks that pair (its clearance rows are
+    ``-inf``: neither its bounding spheres, nor its table, nor its sphere pairs).
 
     1. ``n`` pieces, ``n >= resolution · |qb - qa|`` and ``n >= max_c Λ_c / (2 max_margin)``;
        the ``n + 1`` states ``t = i / n`` (ends included), in VAMP's "rake" order (``lanes[0]``
@@ -252,7 +260,7 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
         for j in range(nq):
             acc += reach[c, j] * abs(qb[j] - qa[j])
         if c >= G and segment_floor(c - G, qa, qb, t_meta, t_grid, t_vals) >= self_clearance + 1e-12:
-            acc = 0.0  # the pair's table certifies it along the whole motion: no margin needed
+            acc = CERTIFIED_ROW  # the pair's table certifies it along the whole motion: no state checks it
         lam[c] = acc
         lam_max = max(lam_max, acc)
     n = max(1, int(math.ceil(d * resolution)), int(math.ceil(lam_max / (2.0 * max_margin))))
