@@ -8,6 +8,7 @@ import logging
 import time
 
 from drake_mh.errors import InvalidArgument
+from drake_mh.study.machine import machine_line
 
 logger = logging.getLogger(__name__)
 
@@ -110,6 +111,9 @@ def run_and_print(name: str, args: argparse.Namespace, out=None, quick=None, reu
     line += f") in {elapsed:.1f} s -> {result.folder}"
     if not quiet:
         print(line)
+        machine = machine_line(result.records)
+        if machine:
+            print(machine)
         if already and reuse_hint:
             print(f"({already} finished cases were reused from {result.folder}, not run again; {reuse_hint})")
         if result.summary.strip():

@@ -18,6 +18,7 @@ import numpy as np
 
 from drake_mh.study.case import Case, CaseSpec
 from drake_mh.study.loader import StudySource, load_source
+from drake_mh.study.machine import cpu_model, load_average
 
 logger = logging.getLogger(__name__)
 
@@ -97,7 +98,8 @@ def run_case_task(source: StudySource, spec: CaseSpec) -> CaseOutcome:
     record: dict[str, Any] = {}
     arrays: dict[str, np.ndarray] = {}
     case = Case.from_spec(spec)
-    start = time.perf_counter()
+    load = load_average()
+    start, cpu_start = time.perf_counter(), time.process_time()
     try:
         study = load_source(source)
         result = study.run(case)
@@ -121,7 +123,7 @@ def run_case_task(source: StudySource, spec: CaseSpec) -> CaseOutcome:
             "traceback": "".join(traceback.format_exception(exc))[-4000:],
         }
         logger.debug("case %s raised", spec.key, exc_info=True)
-    wall = time.perf_counter() - start
+    wall, cpu = time.perf_counter() - start, time.process_time() - cpu_start
     full: dict[str, Any] = dict(spec.params)
     full.update(record)
     full.update(
@@ -130,11 +132,16 @@ def run_case_task(source: StudySource, spec: CaseSpec) -> CaseOutcome:
             "case_id": spec.case_id,
             "seed": spec.seed,
             "wall_time": wall,
+            # the machine, beside every timing (shared machines): a worker runs one case at a time
+            "case_cpu_time": cpu,
+            "case_load_average": max(load, load_average()),
+            "case_cpu_model": cpu_model(),
         }
     )
     return CaseOutcome(spec=spec, record=full, arrays=arrays, attachments=dict(case.attachments))
 
 
 _RUNNER_FIELDS = frozenset(
-    {"key", "case_id", "seed", "status", "wall_time", "arrays", "attachments", "exception", "exception_type", "traceback"}
+    {"key", "case_id", "seed", "status", "wall_time", "case_cpu_time", "case_load_average", "case_cpu_model", "arrays",
+     "attachments", "exception", "exception_type", "traceback"}
 )

@@ -55,8 +55,9 @@ def write_toy(folder: Path, sleep: float = 0.0, reps: int = 4, name: str = "toy.
 
 
 def comparable(records):
-    """Records without timing fields, keyed by case key."""
-    return {r["key"]: {k: v for k, v in r.items() if k not in ("wall_time", "traceback")} for r in records}
+    """Records without timing and machine fields, keyed by case key."""
+    varying = ("wall_time", "traceback", "case_cpu_time", "case_load_average", "case_cpu_model")
+    return {r["key"]: {k: v for k, v in r.items() if k not in varying} for r in records}
 
 
 def external_resources(page: str) -> list[str]:

@@ -23,6 +23,19 @@ def test_runs_every_case_records_errors_and_reports(toy, tmp_path):
     assert result.report.name == "index.html" and result.report.is_file()
 
 
+def test_every_record_carries_the_machine_beside_its_timing(toy, tmp_path):
+    from drake_mh.study.machine import cpu_model, machine_line
+
+    result = run_study(toy, out=tmp_path / "out", workers=0)
+    for r in result.records:  # the cases that raised too
+        assert 0.0 <= r["case_cpu_time"] <= r["wall_time"] * 1.5 + 0.05
+        assert r["case_cpu_model"] == cpu_model() and r["case_load_average"] >= 0.0
+    line = machine_line(result.records)
+    assert line.startswith(f"Machine: {cpu_model()}; 1-minute load average") and "(24 of 24 records)" in line
+    assert line in (tmp_path / "out" / "report.md").read_text()
+    assert machine_line([{"key": "older record, no machine fields"}]) == ""
+
+
 def test_results_do_not_depend_on_worker_count(toy, tmp_path):
     serial = run_study(toy, out=tmp_path / "serial", workers=0, report=False)
     parallel = run_study(toy, out=tmp_path / "parallel", workers=2, report=False)

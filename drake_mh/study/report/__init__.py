@@ -10,6 +10,8 @@ import logging
 import os
 from pathlib import Path
 
+
+from drake_mh.study.machine import machine_line
 from drake_mh.study.report.data import ReportData, method_of
 from drake_mh.study.report.document import Animation, Document, Heading, Markdown, Paragraph, to_html, to_markdown
 from drake_mh.study.report.plots import FigureFile, box_figure, convergence_figure, trajectory_figure
@@ -19,7 +21,7 @@ from drake_mh.study.store import write_atomic
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["write_report", "build_document", "ReportData", "rank_stats", "method_table"]
+__all__ = ["write_report", "build_document", "machine_line", "ReportData", "rank_stats", "method_table"]
 
 #: embedded animations at most (each Meshcat page is ~2 MB); the others are linked
 MAX_EMBEDDED_ANIMATIONS = 4
@@ -115,6 +117,9 @@ def build_document(data: ReportData) -> Document:
             + "."
         )
     )
+    machine = machine_line(data.records)
+    if machine:
+        doc.add(Paragraph(machine))
     if data.summary.strip():
         doc.add(Heading("Summary"))
         doc.add(Markdown(data.summary))
