@@ -197,21 +197,21 @@ def _range_free(b, a, s0, s1, s_offset, s_radius, clearance, R, p, k, kinds, R_W
     return True
 
 
-@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
-def _spheres_free(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, clearance, R, p, k, kinds, R_WO,
-                  p_WO, dims):
+@numba.njit(cache=True, fastmath=FASTMATH)  # not inlined: a copy in collision_free's lane loop slowed it 25 %
+def _groups_free(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, clearance, R, p, k, kinds, R_WO,
+                 p_WO, dims):
     """Whether the spheres of groups ``u0 .. u1-1`` (fixed in frame ``a``) of lane ``b`` are all
     at least ``clearance`` from obstacle k; stops at the first that is not. A group whose
-    bounding sphere keeps the clearance is passed whole (:func:`drake_mh.scene.batch.sphere_groups`);
-    a link of one group is its bounding sphere, known to be near: its spheres directly (a group
-    test there measured 20-30 % slower planning on the capsule Panda).
+    bounding sphere keeps the clearance is passed whole (:func:`drake_mh.scene.batch.sphere_groups`).
+
+    For a link of several groups: a link of one group is its bounding sphere, known to be near,
+    and its spheres are tested directly (:func:`_range_free`; a group test there measured
+    20-30 % slower planning on the capsule Panda, and this function inlined into the batch
+    kernel 107 -> 136 ns per capsule-Panda configuration against 10 obstacles).
 
     Scalar on purpose: the lanes that reach a link's spheres are few per block (about 4 of 128
     per link and obstacle in the 10-obstacle benchmark), where SIMD loops over compacted lanes
     cost more in loop overhead than they save (measured: 128 -> 115 ns per configuration)."""
-    if u1 - u0 == 1:
-        return _range_free(b, a, u_start[u0], u_start[u1], s_offset, s_radius, clearance, R, p, k, kinds, R_WO,
-                           p_WO, dims)
     for u in range(u0, u1):
         x, y, z = _lane_point(a, u_offset[u], R, p, b)
         if not _point_free(k, kinds, R_WO, p_WO, dims, clearance + u_radius[u], x, y, z) and not _range_free(
@@ -272,10 +272,15 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
                 for w in range(nw):
                     if words[w] != 0:
                         for b in range(8 * w, 8 * w + 8):
-                            if hit[b]:  # the link's spheres
-                                alive[b] = _spheres_free(b, a, g_ustart[g], g_ustart[g + 1], u_start, u_offset,
-                                                         u_radius, s_offset, s_radius, clearance, R, p, k, kinds,
-                                                         R_WO, p_WO, dims)
+                            if not hit[b]:
+                                continue
+                            if g_ustart[g + 1] - g_ustart[g] > 1:  # the link's spheres a group at a time
+                                alive[b] = _groups_free(b, a, g_ustart[g], g_ustart[g + 1], u_start, u_offset,
+                                                        u_radius, s_offset, s_radius, clearance, R, p, k, kinds,
+                                                        R_WO, p_WO, dims)
+                            else:  # one group: the link's bounding sphere, known to be near
+                                alive[b] = _range_free(b, a, g_start[g], g_start[g + 1], s_offset, s_radius,
+                                                       clearance, R, p, k, kinds, R_WO, p_WO, dims)
             any_alive = False
             for b in range(m):
                 any_alive |= alive[b]
@@ -456,8 +461,12 @@ def _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g
                 continue
             if _point_free(k, kinds, R_WO, p_WO, dims, reach, x, y, z):  # bounding sphere vs the shape
                 continue
-            if not _spheres_free(0, a, g_ustart[g], g_ustart[g + 1], u_start, u_offset, u_radius, s_offset, s_radius,
-                                 clearance, R, p, k, kinds, R_WO, p_WO, dims):
+            if g_ustart[g + 1] - g_ustart[g] > 1:
+                if not _groups_free(0, a, g_ustart[g], g_ustart[g + 1], u_start, u_offset, u_radius, s_offset,
+                                    s_radius, clearance, R, p, k, kinds, R_WO, p_WO, dims):
+                    return False
+            elif not _range_free(0, a, g_start[g], g_start[g + 1], s_offset, s_radius, clearance, R, p, k, kinds,
+                                 R_WO, p_WO, dims):
                 return False
     for i in range(pair_a.shape[0]):
         ga, gb = pair_a[i], pair_b[i]
