@@ -19,8 +19,10 @@ loaded and every kernel compiled before any clock starts):
 Batched figures are per configuration at ``N = 1024`` and, from Python, per call at ``N = 1``
 (one ``(nq,)`` array: the scalar one-configuration kernel, ``collision_free_one``, through its
 compiled entry point). The batch figure times single calls interleaved with the other methods
-(cold caches): repeated warm calls of the kernel measure less (docs/collision.md, "Speed against
-the targets of issue #16", which also holds the last run of this study beside the code before).
+(cold caches: after Drake's queries a call took 15-70 ns per configuration more); ``warm`` times
+20 consecutive calls on the same configurations, as a planner calls it (docs/collision.md, "Speed
+against the targets of issue #16", which also holds the last run of this study beside the code
+before).
 Each figure is the median of rounds; CPU time beside wall time; the CPU model and the 1-minute
 load average are recorded (shared machines: ratios hold better than absolute times).
 Correctness is checked in the same run: every configuration ``collision_free`` accepts is
@@ -41,6 +43,8 @@ from drake_mh.study.machine import cpu_model, load_average
 ROBOTS = ("panda (bundled, capsules)", "panda_hand")  # then drake_mh.example_arms
 SCENES = ("1 sphere", "10 mixed")  # drake_mh.scene.benchmark.BENCHMARK_SCENES
 N_BATCH, N_EXACT, N_SEGMENTS = 1024, 50, 200
+WARM_CALLS = 20
+"""consecutive calls on the same configurations in a sample of ``collision_free warm``."""
 
 
 def _robot(name: str):
@@ -117,6 +121,7 @@ def run(case: Case) -> dict:
     drake_bool, drake_distance = _drake(scene, True), _drake(scene, False)
     methods = {
         "collision_free": (lambda: scene.collision_free(Q), n_batch),
+        "collision_free warm": (lambda: scene.collision_free(Q), n_batch),
         "collision_free N=1": (lambda: scene.collision_free(q1), 1),
         "batch_min_distance": (lambda: scene.batch_min_distance(Q), n_batch),
         "batch_min_distance N=1": (lambda: scene.batch_min_distance(q1[None]), 1),
@@ -133,7 +138,8 @@ def run(case: Case) -> dict:
     samples = {name: [] for name in methods}
     for _ in range(rounds):  # interleaved: each method once per round
         for name, (function, count) in methods.items():
-            calls = 1 if count > 1 else 200  # N = 1: a sample is 200 calls
+            # N = 1: a sample is 200 calls; "warm": WARM_CALLS consecutive calls (a planner's use)
+            calls = 200 if count == 1 else WARM_CALLS if name.endswith("warm") else 1
             wall, cpu = _timed(lambda: [function() for _ in range(calls)], 1)
             samples[name].append((wall / (count * calls), cpu / (count * calls)))
     per_call = {name: (float(np.median([w for w, _ in v])), float(np.median([c for _, c in v])))
@@ -164,6 +170,11 @@ def _us(r, name):
     return r[f"{name} [s]"] * 1e6
 
 
+def _warm(r) -> str:
+    """The warm batch figure [ns/config], "-" for records of the study before it had one."""
+    return f"{_us(r, 'collision_free warm') * 1e3:.0f}" if "collision_free warm [s]" in r else "-"
+
+
 def summarize(records: list[dict]) -> str:
     """Per robot and scene: ns per configuration, and ratios to Drake and to the previous code."""
     ok = [r for r in records if r.get("status") == "ok"]
@@ -171,14 +182,16 @@ def summarize(records: list[dict]) -> str:
         return "no finished case"
     loads = [r["load_average"] for r in ok]
     lines = [f"CPU: {ok[0]['cpu']}; 1-min load average during the cases: {min(loads):.1f}-{max(loads):.1f}", "",
-             "| robot | scene | spheres | collision_free [ns/config] (CPU) | N=1 [µs/call] | batch_min_distance "
+             "| robot | scene | spheres | collision_free [ns/config] (CPU) | warm, 20 calls [ns/config] | N=1 [µs/call] | "
+             "batch_min_distance "
              "[ns/config] | N=1 [µs] | previous numpy [ns/config] | Drake HasCollisions [µs] | Drake distance [µs] | "
              "Scene.min_distance [µs] | Drake bool / ours | previous / ours | violations |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in sorted(ok, key=lambda r: (ROBOTS.index(r["robot"]), SCENES.index(r["scene"]))):
         ours = _us(r, "collision_free")
         lines.append(
             f"| {r['robot']} | {r['scene']} | {r['spheres']} | {ours * 1e3:.0f} ({r['collision_free cpu [s]'] * 1e9:.0f}) | "
+            f"{_warm(r)} | "
             f"{_us(r, 'collision_free N=1'):.2f} | {_us(r, 'batch_min_distance') * 1e3:.0f} | "
             f"{_us(r, 'batch_min_distance N=1'):.2f} | {_us(r, 'previous (numpy)') * 1e3:.0f} | "
             f"{_us(r, 'Drake HasCollisions'):.1f} | {_us(r, 'Drake distance'):.1f} | {_us(r, 'Scene.min_distance'):.1f} | "
