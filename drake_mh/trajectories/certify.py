@@ -245,14 +245,14 @@ def _ratio_from(D, robot, quantity: str, scale: float, backend: str) -> np.ndarr
     return np.abs(D[order]) / (scale * _limits(robot, quantity))
 
 
-def _range_ratio(robot, quantity: str, scale: float):
-    """``(lo, hi) -> ratio``: the largest ratio a value in ``[lo, hi]`` can have (per joint)."""
+def _range_ratio(robot, quantity: str, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(centre, half)`` per joint: a value ``x`` has the ratio ``|x - centre| / half``
+    (:func:`~drake_mh.trajectories.bound.kinematic_bound`)."""
     if quantity == "position":
         centre, half = 0.5 * (robot.upper + robot.lower), 0.5 * (robot.upper - robot.lower)
-        half = np.where(robot.continuous, np.inf, half)
-        return lambda lo, hi: np.maximum(hi - centre, centre - lo) / half
+        return centre, np.where(robot.continuous, np.inf, half)
     limit = scale * _limits(robot, quantity)
-    return lambda lo, hi: np.maximum(np.abs(lo), np.abs(hi)) / limit
+    return np.zeros_like(limit), limit
 
 
 _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
