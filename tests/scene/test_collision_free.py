@@ -54,6 +54,30 @@ def test_kernel_matches_numpy_reference(seed):
         assert 0 < free.sum() < 700
 
 
+def test_grouped_links_match_numpy_reference():
+    """The Panda with its hand (778 spheres, links of several sphere groups): the clearance
+    kernel skips groups (scene/_collision_kernels._groups_sd) and stays exact where it must be."""
+    from drake_mh.planning.problems import load_problem_robot
+
+    hand = load_problem_robot("panda_hand_mbm")
+    scene = cluttered(5, robot=hand)
+    assert np.any(np.diff(scene.collision_model.group_arrays[0]) > 1)  # some link has several groups
+    Q = np.random.default_rng(5).uniform(hand.lower, hand.upper, (300, hand.nq))
+    reference = sphere_reference(scene, Q)
+    QT = np.ascontiguousarray(Q.T)
+    model = scene.collision_model
+    np.testing.assert_allclose(model.clearances(QT, scene.obstacle_arrays, per_obstacle=True), reference, atol=1e-12)
+    G = model.num_links
+    per_link = model.clearances(QT, scene.obstacle_arrays, per_obstacle=False)[:, :G]
+    np.testing.assert_allclose(per_link.min(axis=1), reference.min(axis=1), atol=1e-12)
+    for fine_below in (0.0, 0.05, 0.2):
+        coarse = model.clearances(QT, scene.obstacle_arrays, per_obstacle=False, fine_below=fine_below)[:, :G]
+        assert np.all(coarse <= per_link + 1e-12)  # lower bounds everywhere
+        exact_below = coarse < fine_below
+        np.testing.assert_allclose(coarse[exact_below], per_link[exact_below], atol=1e-12)
+        assert np.all(per_link[per_link < fine_below] == coarse[per_link < fine_below])
+
+
 def test_free_means_exactly_free():
     """Conservative against Drake's exact distance: free under the model => free in fact."""
     scene = cluttered(4)
