@@ -10,7 +10,6 @@ import logging
 import os
 from pathlib import Path
 
-
 from drake_mh.study.machine import machine_line
 from drake_mh.study.report.data import ReportData, method_of
 from drake_mh.study.report.document import Animation, Document, Heading, Markdown, Paragraph, to_html, to_markdown
