@@ -29,9 +29,10 @@ robot's position limits and the requested limits within ``1 + tol``, or raises.
   motion along the segment is faster.
 
 Limits are enforced at the check points by toppra; between them the chain-rule values can
-exceed a limit slightly. Every candidate is certified. A velocity/acceleration excess of a
-toppra method is repaired by one uniform time scaling (:func:`_slow_down`, which cannot raise
-the torque beyond the larger of its old value and gravity's); any other violation scales the
+exceed a limit slightly. Every candidate is certified. A velocity, acceleration or torque excess
+of a toppra method is repaired by uniform time scalings (:func:`_slow_down`: the torque moves
+towards gravity's; where gravity alone exceeds the limit, :class:`InfeasibleTrajectory` says so);
+any other violation scales the
 offending quantity's limit by ``1 / ratio`` (times ``1 - 1e-3``; for ruckig a torque excess
 scales its velocity and acceleration limits) and solves again, at most ``max_attempts`` times,
 then :class:`~drake_mh.errors.LimitViolation` is raised.
@@ -172,6 +173,14 @@ def retime(path, robot, method: str = "toppra", *, limits=None, gridpoints: int 
         if cert.ok(quantities, tol):
             return traj
         quantity, joint, t, ratio = cert.worst(quantities)
+        if quantity == "torque" and method != "ruckig":
+            r_g = _gravity_ratios(traj, robot, cert)
+            j = list(robot.joint_names).index(joint)
+            if r_g[j] > 1.0 + tol:  # holding the arm there needs more than the limit: no speed helps
+                raise InfeasibleTrajectory(
+                    method, f"holding the arm against gravity at t = {t:.4g} s needs "
+                    f"{r_g[j]:.4g} x the effort limit of joint {joint!r} (after scaling), between the "
+                    "gridpoints; the path cannot be followed at any speed: change the path or the payload")
         if quantity == "position" or attempts >= max_attempts:
             raise LimitViolation(joint, quantity, t, ratio, tol,
                                  hint=f"{method} after {attempts} attempt(s): use more gridpoints, "
@@ -239,22 +248,54 @@ def _check_options(scale, tol, max_attempts, gridpoints, check_points, bc_type) 
 _BC_TYPES = ("not-a-knot", "clamped", "natural", "periodic")
 
 
+def _gravity_ratios(traj, robot, cert) -> np.ndarray:
+    """``(nq,)``: per joint, gravity's torque ratio (to the scaled effort limit) at the time of
+    the joint's worst torque sample."""
+    t = np.asarray(cert.times["torque"], dtype=float)
+    Q = traj.derivatives(t, 0)[0]
+    g = batch_dynamics(robot).inverse_dynamics(Q, np.zeros_like(Q), np.zeros_like(Q))
+    return np.abs(g[np.arange(len(t)), np.arange(len(t))]) / (cert.scale * robot.effort_limits)
+
+
+_TORQUE_SLOWDOWNS = 6
+"""Time scalings :func:`_slow_down` tries at most against a torque excess (each from the worst
+samples of the last certificate)."""
+
+
 def _slow_down(traj, robot, cert, quantities, reported, tol):
-    """Repair small velocity/acceleration excesses between gridpoints by a uniform time scaling.
+    """Repair small velocity, acceleration and torque excesses between gridpoints by uniform
+    time scalings.
 
     With ``λ = min(1 / r_v, 1 / sqrt(r_a))`` the velocity and acceleration ratios become
-    ``<= 1``; the torque stays between its old value and gravity's (see
-    :meth:`Trajectory.time_scaled`), so it does not get worse than it was. Torque excesses are
-    left to a re-solve with tightened limits.
+    ``<= 1``; the torque ``λ² (M q̈ + C q̇) + g`` moves from its old value towards gravity's (see
+    :meth:`Trajectory.time_scaled`). A torque excess ``r_τ`` of joint ``j`` whose gravity ratio
+    ``r_g`` at that sample is below 1 asks ``λ² <= (1 - r_g) / (r_τ - r_g)`` too; another sample
+    may then be the worst, so this repeats from each new certificate, at most
+    :data:`_TORQUE_SLOWDOWNS` times (Drake's Toppra checks its limits at its gridpoints only: at 20
+    gridpoints a torque excess between them did not shrink when the torque limit was tightened and
+    solved again). What is still violated is left to a re-solve with tightened limits.
     """
-    r = {q: cert.max_ratio((q,)) for q in quantities}
-    if r.get("torque", 0.0) > 1.0 + tol or r.get("position", 0.0) > 1.0 + tol:
-        return traj, cert
-    lam = min(1.0 / max(r.get("velocity", 0.0), 1.0), 1.0 / np.sqrt(max(r.get("acceleration", 0.0), 1.0)))
-    lam *= 1.0 - 1e-9
-    slowed = traj.time_scaled(lam)
-    slowed.info["time_scaling"] = lam
-    return slowed, certify(slowed, robot, quantities=reported, scale=cert.scale, enforced=cert.enforced)
+    total = 1.0
+    for _ in range(_TORQUE_SLOWDOWNS):
+        r = {q: cert.max_ratio((q,)) for q in quantities}
+        if r.get("position", 0.0) > 1.0 + tol or all(v <= 1.0 + tol for v in r.values()):
+            break
+        lam = min(1.0 / max(r.get("velocity", 0.0), 1.0), 1.0 / np.sqrt(max(r.get("acceleration", 0.0), 1.0)))
+        if r.get("torque", 0.0) > 1.0 + tol:
+            r_tau = np.asarray(cert.ratios["torque"], dtype=float)
+            over = r_tau > 1.0 + tol
+            r_g = _gravity_ratios(traj, robot, cert)
+            if np.any(r_g[over] >= 1.0):
+                break  # gravity alone exceeds the limit there: no speed helps
+            lam = min(lam, float(np.min(np.sqrt((1.0 - r_g[over]) / (r_tau[over] - r_g[over])))) * (1.0 - 1e-3))
+        lam *= 1.0 - 1e-9
+        if lam >= 1.0:  # only a quantity no time scaling repairs (jerk is not enforced here)
+            break
+        total *= lam
+        traj = traj.time_scaled(lam)
+        traj.info["time_scaling"] = total
+        cert = certify(traj, robot, quantities=reported, scale=cert.scale, enforced=cert.enforced)
+    return traj, cert
 
 
 def _limit(robot, quantity: str) -> np.ndarray:

@@ -7,7 +7,7 @@ import os
 import numpy as np
 import pytest
 from traj_helpers import random_waypoints
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from scipy.interpolate import PPoly
 
@@ -31,6 +31,9 @@ def _robot(name):
        method=st.sampled_from(["toppra", "drake-toppra", "ruckig"]),
        k=st.integers(2, 7), gridpoints=st.sampled_from([20, 60, 150]), seed=st.integers(0, 2**31),
        scale=st.sampled_from([1.0, 0.5]))
+# found by CI: Drake's Toppra at 20 gridpoints, a torque excess between them (gravity at 0.97 of the
+# limit) that re-solving with a tighter torque limit did not shrink; now repaired by time scaling
+@example(name="seed000_6dof", method="drake-toppra", k=7, gridpoints=20, seed=37359, scale=0.5)
 def test_every_retimed_trajectory_is_within_its_limits(name, method, k, gridpoints, seed, scale):
     """Property: whatever path, robot, method and gridpoints, a returned trajectory is within limits.
 
