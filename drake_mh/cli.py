@@ -208,11 +208,25 @@ def _no_command(parser: argparse.ArgumentParser) -> int:
 # --- entry point -------------------------------------------------------------------------
 
 
+class _StderrHandler(logging.StreamHandler):
+    """A handler that writes to ``sys.stderr`` as it is when a record comes, not as it was when
+    the handler was made: a caller that swaps ``sys.stderr`` (a test runner capturing output, a
+    notebook) and closes the old one then gets no "I/O operation on closed file" errors."""
+
+    @property
+    def stream(self):
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value):  # StreamHandler.__init__ sets it; the property always reads sys.stderr
+        pass
+
+
 def _configure_logging(verbose: bool, quiet: bool) -> None:
     level = logging.DEBUG if verbose else (logging.ERROR if quiet else logging.WARNING)
     root = logging.getLogger()
     if not any(getattr(h, "_drake_mh", False) for h in root.handlers):
-        handler = logging.StreamHandler(sys.stderr)
+        handler = _StderrHandler()
         handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
         handler._drake_mh = True  # type: ignore[attr-defined]
         root.addHandler(handler)

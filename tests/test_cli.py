@@ -186,3 +186,21 @@ def test_ctrl_c_says_resume_only_where_results_are_kept(monkeypatch, capsys, com
     err = capsys.readouterr().err
     assert f"drake-mh {command}: interrupted" in err
     assert ("run the same command again" in err) == resumable
+
+
+def test_log_handler_follows_the_current_stderr(monkeypatch, capsys):
+    """The CLI's log handler writes to sys.stderr as it is at each record (a stream swapped in
+    and closed since, as test runners and notebooks do, must not break logging)."""
+    import io
+    import logging
+
+    from drake_mh.cli import _configure_logging
+
+    _configure_logging(verbose=False, quiet=False)
+    old = io.StringIO()
+    monkeypatch.setattr("sys.stderr", old)
+    old.close()  # the stream the handler saw first is gone
+    current = io.StringIO()
+    monkeypatch.setattr("sys.stderr", current)
+    logging.getLogger("drake_mh.test").warning("still heard")
+    assert "still heard" in current.getvalue()
