@@ -311,16 +311,23 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
             out[n0 + b] = alive[b]
 
 
+@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
+def _compact_centres(c, o, Rc, pc, ccx, ccy, ccz):
+    """World position of offset ``o (3,)`` for the ``c`` compacted lanes of pose ``(Rc, pc)``
+    (:func:`_gather`)."""
+    for i in range(c):
+        ccx[i] = pc[0, i] + Rc[0, 0, i] * o[0] + Rc[0, 1, i] * o[1] + Rc[0, 2, i] * o[2]
+        ccy[i] = pc[1, i] + Rc[1, 0, i] * o[0] + Rc[1, 1, i] * o[1] + Rc[1, 2, i] * o[2]
+        ccz[i] = pc[2, i] + Rc[2, 0, i] * o[0] + Rc[2, 1, i] * o[1] + Rc[2, 2, i] * o[2]
+
+
 @numba.njit(cache=True, fastmath=FASTMATH)
 def _spheres_sd(c, s0, s1, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, s_offset, s_radius, ccx, ccy, ccz, sd, sc):
     """``sc[i] = min(sc[i], sd_k(c_s) - r_s)`` over spheres ``s0 .. s1-1`` for the ``c``
     compacted lanes of pose ``(Rc, pc)`` (obstacles at ``tc``), SIMD across the lanes."""
     for s in range(s0, s1):
         o = s_offset[s]
-        for i in range(c):
-            ccx[i] = pc[0, i] + Rc[0, 0, i] * o[0] + Rc[0, 1, i] * o[1] + Rc[0, 2, i] * o[2]
-            ccy[i] = pc[1, i] + Rc[1, 0, i] * o[0] + Rc[1, 1, i] * o[1] + Rc[1, 2, i] * o[2]
-            ccz[i] = pc[2, i] + Rc[2, 0, i] * o[0] + Rc[2, 1, i] * o[1] + Rc[2, 2, i] * o[2]
+        _compact_centres(c, o, Rc, pc, ccx, ccy, ccz)
         _obstacle_sd(c, k, kinds, R_WO, p_WO, v_WO, dims, tc, ccx, ccy, ccz, sd)
         for i in range(c):
             sc[i] = min(sc[i], sd[i] - s_radius[s])
@@ -342,10 +349,7 @@ def _groups_sd(c, u0, u1, lim, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, u_s
     key = np.empty(nu)
     for j in range(nu):
         o = u_offset[u0 + j]
-        for i in range(c):
-            ccx[i] = pc[0, i] + Rc[0, 0, i] * o[0] + Rc[0, 1, i] * o[1] + Rc[0, 2, i] * o[2]
-            ccy[i] = pc[1, i] + Rc[1, 0, i] * o[0] + Rc[1, 1, i] * o[1] + Rc[1, 2, i] * o[2]
-            ccz[i] = pc[2, i] + Rc[2, 0, i] * o[0] + Rc[2, 1, i] * o[1] + Rc[2, 2, i] * o[2]
+        _compact_centres(c, o, Rc, pc, ccx, ccy, ccz)
         _obstacle_sd(c, k, kinds, R_WO, p_WO, v_WO, dims, tc, ccx, ccy, ccz, sd)
         lowest = np.inf
         for i in range(c):

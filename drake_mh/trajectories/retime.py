@@ -248,12 +248,16 @@ def _check_options(scale, tol, max_attempts, gridpoints, check_points, bc_type) 
 _BC_TYPES = ("not-a-knot", "clamped", "natural", "periodic")
 
 
+def _gravity(robot, Q: np.ndarray) -> np.ndarray:
+    """``(N, nq)`` torques [N·m] that hold the arm still at the configurations ``Q (N, nq)``."""
+    return batch_dynamics(robot).inverse_dynamics(Q, np.zeros_like(Q), np.zeros_like(Q))
+
+
 def _gravity_ratios(traj, robot, cert) -> np.ndarray:
     """``(nq,)``: per joint, gravity's torque ratio (to the scaled effort limit) at the time of
     the joint's worst torque sample."""
     t = np.asarray(cert.times["torque"], dtype=float)
-    Q = traj.derivatives(t, 0)[0]
-    g = batch_dynamics(robot).inverse_dynamics(Q, np.zeros_like(Q), np.zeros_like(Q))
+    g = _gravity(robot, traj.derivatives(t, 0)[0])
     return np.abs(g[np.arange(len(t)), np.arange(len(t))]) / (cert.scale * robot.effort_limits)
 
 
@@ -472,9 +476,7 @@ def _dense_constraints(robot, spline, vmax, amax, tmax, fractions) -> list:
 def _diagnose(robot, method, spline, gp, factors) -> InfeasibleTrajectory:
     """Turn a failed solve into an exception that says why (gravity or limits)."""
     if "torque" in factors:
-        dyn = batch_dynamics(robot)
-        Q = spline(gp)
-        g = dyn.inverse_dynamics(Q, np.zeros_like(Q), np.zeros_like(Q))
+        g = _gravity(robot, spline(gp))
         ratio = np.abs(g) / (robot.effort_limits * factors["torque"])
         if np.max(ratio) > 1.0:
             i, j = np.unravel_index(np.argmax(ratio), ratio.shape)
@@ -492,7 +494,7 @@ def _check_gravity_on_segments(W, robot, torque_scale: float, samples: int = 64)
     them needs more than the effort limit, no slow-down helps, so say so before solving."""
     u = np.linspace(0.0, 1.0, samples)[:, None]
     Q = np.concatenate([W[k] + u * (W[k + 1] - W[k]) for k in range(len(W) - 1)])
-    g = batch_dynamics(robot).inverse_dynamics(Q, np.zeros_like(Q), np.zeros_like(Q))
+    g = _gravity(robot, Q)
     ratio = np.abs(g) / (robot.effort_limits * torque_scale)
     if np.max(ratio) > 1.0:
         i, j = np.unravel_index(np.argmax(ratio), ratio.shape)
