@@ -487,13 +487,19 @@ def link_clearances(QT, tau, fine_below, pair_fine_below, per_obstacle, parent, 
 
 
 @numba.njit(cache=True)
-def collision_free_packed(QT, clearance, self_clearance, ints, floats, out):
-    """:func:`collision_free` on the buffers of :func:`pack`; ``False`` (nothing computed) if
-    ``QT`` holds a NaN or an infinity (checked here, without fast-math)."""
-    for j in range(QT.shape[0]):
-        for n in range(QT.shape[1]):
-            if not math.isfinite(QT[j, n]):
+def collision_free_packed(Q, clearance, self_clearance, ints, floats, out):
+    """:func:`collision_free` of ``Q (N, nq)`` on the buffers of :func:`pack`; ``False``
+    (nothing computed) if ``Q`` holds a NaN or an infinity (checked here, without fast-math,
+    while ``Q`` is transposed to the kernels' layout: 1-2 ns per configuration, against 8-9 ns
+    for numpy's check and transposition from Python)."""
+    N, nq = Q.shape
+    QT = np.empty((nq, N))
+    for n in range(N):
+        for j in range(nq):
+            x = Q[n, j]
+            if not math.isfinite(x):
                 return False
+            QT[j, n] = x
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset,
      u_radius) = _unpack(ints, floats)

@@ -192,9 +192,11 @@ class CollisionModel:
         return self.chain_arrays + self.model_arrays
 
     def free_function(self, obstacles: tuple):
-        """``f(QT (nq, N), clearance, self_clearance) -> (N,) bool`` against ``obstacles`` (None if
-        ``QT`` is not finite): :func:`._collision_kernels.collision_free` with every array packed
+        """``f(Q (N, nq), clearance, self_clearance) -> (N,) bool`` against ``obstacles`` (None if
+        ``Q`` is not finite): :func:`._collision_kernels.collision_free` with every array packed
         and bound once (a call from Python then costs the kernel plus about a microsecond).
+        ``Q`` must be a C-contiguous float64 array (compiled for that layout only), the
+        clearances Python floats >= 0: the caller checks them.
 
         ``f.make_one()`` returns ``one(q (nq,) float64, clearance, self_clearance) -> 1 / 0 / -1``
         (free / not / not finite), which checks one configuration
@@ -208,11 +210,11 @@ class CollisionModel:
                               *self.pair_arrays)
         kernel, empty, boolean = K.collision_free_packed, np.empty, np.bool_
 
-        def free(QT, clearance, self_clearance):
-            out = empty(QT.shape[1], boolean)
+        def free(Q, clearance, self_clearance):
+            out = empty(Q.shape[0], boolean)
             # squared tests need a positive clearance: 1e-12 m stands for "touching is a collision"
-            if not kernel(QT, max(clearance, 1e-12), max(self_clearance, 1e-12), ints, floats, out):
-                return None  # a NaN or an infinity in QT
+            if not kernel(Q, max(clearance, 1e-12), max(self_clearance, 1e-12), ints, floats, out):
+                return None  # a NaN or an infinity in Q
             return out
 
         def make_one():  # compiled on first need (about 7 s from an empty numba cache)
@@ -226,9 +228,10 @@ class CollisionModel:
         free.make_one = make_one
         return free
 
-    def free(self, QT: np.ndarray, obstacles: tuple, clearance: float, self_clearance: float) -> np.ndarray:
-        """``(N,)`` bool: :func:`._collision_kernels.collision_free` of ``QT (nq, N)``."""
-        out = self.free_function(obstacles)(QT, float(clearance), float(self_clearance))
+    def free(self, Q: np.ndarray, obstacles: tuple, clearance: float, self_clearance: float) -> np.ndarray:
+        """``(N,)`` bool: :func:`._collision_kernels.collision_free` of ``Q (N, nq)``."""
+        Q = np.ascontiguousarray(Q, dtype=float)
+        out = self.free_function(obstacles)(Q, float(clearance), float(self_clearance))
         if out is None:
             raise ValueError("configurations must be finite")  # Scene checks them first
         return out

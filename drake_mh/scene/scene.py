@@ -472,16 +472,20 @@ class Scene:
             clearance = check_clearance(clearance, "clearance")
             self_clearance = check_clearance(self_clearance, "self_clearance")
         free = self._free()
-        if type(Q) is np.ndarray and Q.dtype == np.float64 and Q.shape == self._q_shape:
-            if self._free_one is None:  # the next one-configuration calls take the path above
-                self._free_one = free.make_one()
-            out = free(Q.reshape(-1, 1), clearance, self_clearance)  # one configuration: no copy
-            if out is not None:
-                return bool(out[0])
-            self.robot.check_q(Q)  # raises, naming the joints
+        if type(Q) is np.ndarray and Q.dtype is _F8 and Q.flags.c_contiguous:
+            if Q.shape == self._q_shape:
+                if self._free_one is None:  # the next one-configuration calls take the path above
+                    self._free_one = free.make_one()
+                out = free(Q.reshape(1, -1), clearance, self_clearance)  # one configuration: no copy
+                if out is not None:
+                    return bool(out[0])
+                self.robot.check_q(Q)  # raises, naming the joints
+            elif Q.ndim == 2 and Q.shape[1] == self._q_shape[0]:
+                out = free(Q, clearance, self_clearance)  # the kernel checks finiteness as it transposes
+                if out is not None:
+                    return out
         one = np.ndim(Q) == 1
-        QT = self.robot.batch._transposed(Q)
-        out = free(QT, clearance, self_clearance)
+        out = free(self.robot.check_Q(Q), clearance, self_clearance)  # raises on bad input
         return bool(out[0]) if one else out
 
     def segment_free(self, q_a, q_b, clearance: float = 0.0, self_clearance: float = 0.0) -> bool:

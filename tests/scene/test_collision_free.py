@@ -156,3 +156,25 @@ def test_one_configuration_path_matches_the_batch(self_collision):
     bad[3] = np.nan
     with pytest.raises(InvalidConfiguration, match="NaN or inf"):
         scene.collision_free(bad)
+
+
+def test_batch_layouts_and_bad_batches():
+    """A C-contiguous float64 batch goes to the kernel as it is (finiteness checked there while
+    it is transposed); any other layout or dtype is converted first, with the same answers, and a
+    bad batch raises the robot's error naming the rows, changing nothing."""
+    scene = cluttered(7)
+    Q = np.random.default_rng(7).uniform(PANDA.lower, PANDA.upper, (300, PANDA.nq))
+    free = scene.collision_free(Q)
+    assert 0 < free.sum() < len(Q)
+    np.testing.assert_array_equal(scene.collision_free(np.asfortranarray(Q)), free)
+    np.testing.assert_array_equal(scene.collision_free(Q.tolist()), free)
+    np.testing.assert_array_equal(scene.collision_free(Q.astype(np.float32).astype(float)),
+                                  scene.collision_free(Q.astype(np.float32)))
+    for value in (np.nan, np.inf, -np.inf):
+        bad = Q.copy()
+        bad[123, 4] = value
+        with pytest.raises(InvalidConfiguration, match=r"NaN or inf \(rows \[123\]"):
+            scene.collision_free(bad)
+    with pytest.raises(InvalidConfiguration, match="shape"):
+        scene.collision_free(Q[:, :5].copy())
+    np.testing.assert_array_equal(scene.collision_free(Q), free)  # nothing changed

@@ -101,8 +101,8 @@ def test_answers_do_not_depend_on_the_tables(scene):
     without = CollisionModel(robot, scene.sphere_model, with_tables.self_pairs, pair_tables=False)
     obstacles = scene.obstacle_arrays
     for self_clearance in (0.0, 0.002, 0.005):
-        a = with_tables.free(QT, obstacles, 0.0, self_clearance)
-        b = without.free(QT, obstacles, 0.0, self_clearance)
+        a = with_tables.free(Q, obstacles, 0.0, self_clearance)
+        b = without.free(Q, obstacles, 0.0, self_clearance)
         np.testing.assert_array_equal(a, b)
         assert 0 < a.sum() < len(Q)
     G = with_tables.num_links
