@@ -576,9 +576,11 @@ def collision_free_one(q, clearance, self_clearance, ints, floats, work):
     collision, as :meth:`drake_mh.scene.Scene.collision_free`).
 
     Returns:
-        1 (free), 0 (not free) or -1 (``q`` holds a NaN or an infinity; checked here, without
-        fast-math).
+        1 (free), 0 (not free), -1 (``q`` holds a NaN or an infinity) or -2 (a clearance is not
+        in [0, inf)); checked here, without fast-math.
     """
+    if not (0.0 <= clearance < np.inf and 0.0 <= self_clearance < np.inf):
+        return -2
     for j in range(q.shape[0]):
         if not math.isfinite(q[j]):
             return -1

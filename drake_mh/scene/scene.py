@@ -35,7 +35,7 @@ from drake_mh.spheres import DEFAULT_TOLERANCE, SphereModel
 
 __all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule"]
 
-_F8, _INF = np.dtype(np.float64), float("inf")  # Scene.collision_free's one-configuration path
+_F8 = np.dtype(np.float64)  # Scene.collision_free's one-configuration path
 
 
 def _vector3(value, what: str) -> np.ndarray:
@@ -205,7 +205,7 @@ class Scene:
         self._ids[name] = self._register(name, shape, X_WO)
         obstacle = Obstacle(name, shape, X_WO, velocity_W)
         self._obstacles[name] = obstacle
-        self._obstacle_arrays = None
+        self._obstacles_changed()
         return obstacle
 
     def _register(self, name: str, shape, X_WO: np.ndarray):
@@ -269,7 +269,7 @@ class Scene:
         self._ids[name] = self._register(name, old.shape, X_WO)
         new = Obstacle(name, old.shape, X_WO, vel)
         self._obstacles[name] = new
-        self._obstacle_arrays = None
+        self._obstacles_changed()
         return new
 
     def remove(self, name: str) -> None:
@@ -278,7 +278,7 @@ class Scene:
         self.robot.scene_graph.RemoveGeometry(self._sg_context, self.robot.obstacle_source_id, self._ids[name])
         del self._obstacles[name]
         del self._ids[name]
-        self._obstacle_arrays = None
+        self._obstacles_changed()
 
     def step(self, dt: float) -> None:
         """Advance every moving obstacle by ``velocity · dt`` [s]."""
@@ -417,6 +417,10 @@ class Scene:
 
         return CollisionModel(self.robot, self.sphere_model, self._self_link_pairs)
 
+    def _obstacles_changed(self) -> None:
+        """Drop what was bound to the obstacles (rebuilt on the next query)."""
+        self._obstacle_arrays = self._free_function = self._free_one = None
+
     @property
     def obstacle_arrays(self) -> tuple:
         """The obstacles as the compiled kernels read them (rebuilt after add/move/remove)."""
@@ -456,14 +460,12 @@ class Scene:
         Raises:
             SceneError: the robot has no collision geometry, or a bad clearance.
         """
-        one = self._free_one
-        if (one is not None and self._obstacle_arrays is not None and type(Q) is np.ndarray and Q.dtype is _F8
-                and Q.shape == self._q_shape and type(clearance) is float and type(self_clearance) is float
-                and 0.0 <= clearance < _INF and 0.0 <= self_clearance < _INF):
-            free = one(Q, clearance, self_clearance)  # one configuration, checked arguments: ~1 µs in all
+        one = self._free_one  # bound to the current obstacles (None after a change)
+        if (one is not None and type(Q) is np.ndarray and Q.dtype is _F8 and Q.shape == self._q_shape
+                and type(clearance) is float and type(self_clearance) is float):
+            free = one(Q, clearance, self_clearance)  # one configuration: ~1 µs in all
             if free >= 0:
-                return free > 0
-            self.robot.check_q(Q)  # raises, naming the joints
+                return free > 0  # else a NaN in Q or a bad clearance: the checks below raise
         from drake_mh.scene.segments import check_clearance
 
         if not self._robot_ids:
