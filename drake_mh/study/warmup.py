@@ -23,11 +23,16 @@ WAIT_TIMEOUT = 300.0
 
 def _planner_kernel() -> None:
     """Compiles ``rrt_connect``'s kernel (:func:`drake_mh.planning.rrt_connect.planner.prepare`)
-    on a small problem of the capsule Panda (the quick ``motion_benchmark``'s robot)."""
+    on a small problem of the capsule Panda (the quick ``motion_benchmark``'s robot).
+
+    ``prepare`` reads only the problem's robot, scene, start and clearances: they are given
+    here without a :class:`~drake_mh.planning.MotionProblem`, whose checks would compile the
+    scene's boolean kernels too (32 s), which the other process compiles already."""
+    from types import SimpleNamespace
+
     import numpy as np
 
     import drake_mh
-    from drake_mh.planning import MotionProblem
     from drake_mh.planning.rrt_connect import planner
     from drake_mh.scene import Box, Scene
 
@@ -35,7 +40,7 @@ def _planner_kernel() -> None:
     scene = Scene(robot)
     scene.add("table", Box((1.0, 1.0, 0.05)), [0.6, 0.0, -0.2])
     home = np.clip(np.zeros(robot.nq), robot.lower, robot.upper)
-    planner.prepare(MotionProblem(robot, scene, home, home))
+    planner.prepare(SimpleNamespace(robot=robot, scene=scene, q_start=home, clearance=0.0, self_clearance=0.0))
 
 
 def _verification_kernels() -> None:

@@ -215,7 +215,7 @@ def _refine(qa, qb, out, order, n, lam, plain, clearance, self_clearance, arrays
 
 @numba.njit(cache=True)
 def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, resolution, max_margin,
-            max_evals, boolean, stats, clock, buf, profile):
+            max_evals, by_values, stats, clock, buf, profile):
     """Whether the straight motion ``qa -> qb`` is **certified** collision-free (``qa`` free).
 
     Every constraint row ``c`` (a link against the obstacles, a checked link pair) changes
@@ -238,10 +238,13 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
        ``V_c(t) >= (V0 + V1 - Λ_c / n) / 2 >= clearance`` on it: most motions that are not
        rejected end here, certified by the boolean check alone.
     2. Otherwise (free, but within the margins somewhere) a bisection decides, with at most
-       ``max_evals`` configurations (undecided: rejected): with ``boolean``, :func:`_refine`
-       (the same bound, batched boolean checks at halving margins), else the scene's
+       ``max_evals`` configurations (undecided: rejected): with ``by_values`` None,
+       :func:`_refine` (the same bound, batched boolean checks at halving margins), else (any
+       other value, e.g. True) the scene's
        :func:`drake_mh.scene._segment_kernel.certify_segments` (the bound on clearance values
-       from :func:`~drake_mh.scene._collision_kernels.link_clearances`).
+       from :func:`~drake_mh.scene._collision_kernels.link_clearances`). The choice is made at
+       compile time from the argument's type, so the default (None) does not compile the
+       second: 35 s less from an empty numba cache.
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset,
@@ -294,7 +297,7 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
     if answer == CLEAR:
         stats[BY_MARGIN] += 1
         return True
-    if boolean:
+    if by_values is None:  # a compile-time branch (numba prunes it by the argument's type)
         certified, evals = _refine(qa, qb, out, order, n, lam, plain, clearance, self_clearance, arrays, ws, lanes,
                                    max_evals)
     else:
@@ -365,7 +368,7 @@ def _drop_collinear(path):
 
 @numba.njit(cache=True)
 def _shortcut(path, iterations, rng, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, resolution, margin,
-              max_evals, boolean, stats, clock, buf, profile, start, time_limit):
+              max_evals, by_values, stats, clock, buf, profile, start, time_limit):
     """Random shortcutting (Geraerts & Overmars, "Creating high-quality paths for motion
     planning", IJRR 2007): join two random points of the path by a certified straight motion
     (:func:`_motion`) when that is shorter, ``iterations`` times or until the deadline. The
@@ -403,7 +406,7 @@ def _shortcut(path, iterations, rng, arrays, ws, lanes, v_WO, reach, clearance, 
             qb[j] = path[k, j] + tb * (path[k + 1, j] - path[k, j])
         stats[SHORTCUTS_TRIED] += 1
         if not _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, resolution, margin,
-                       max_evals, boolean, stats, clock, buf, profile):
+                       max_evals, by_values, stats, clock, buf, profile):
             continue
         stats[SHORTCUTS_KEPT] += 1
         # path[:i+1], qa (unless it is path[i]), qb (unless it is path[k+1]), path[k+1:]
@@ -427,7 +430,7 @@ def _shortcut(path, iterations, rng, arrays, ws, lanes, v_WO, reach, clearance, 
 @numba.njit(cache=True)
 def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearance, self_clearance, seed,
                 step, resolution, margin, first_lanes, block_lanes, goal_bias, balance, max_nodes, time_limit,
-                max_evals, shortcut_iterations, boolean, clock, profile, stats):
+                max_evals, shortcut_iterations, by_values, clock, profile, stats):
     """RRT-Connect (Kuffner & LaValle, "RRT-Connect: An efficient approach to single-query path
     planning", ICRA 2000) from ``q_start`` to any row of ``goals``, then shortcutting.
 
@@ -465,7 +468,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
         dist[g] = acc
     for g in np.argsort(dist):
         if _motion(q_start, goals[g], arrays, ws, lanes, v_WO, reach, clearance, self_clearance, resolution, margin,
-                   max_evals, boolean, stats, clock, buf, profile):
+                   max_evals, by_values, stats, clock, buf, profile):
             path = np.empty((2, nq))
             path[0], path[1] = q_start, goals[g]
             stats[T_TOTAL] += now(clock, buf) - start
@@ -517,7 +520,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
         if profile:
             stats[T_NN] += now(clock, buf) - t0
         if _motion(V[a, i], q_new, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, resolution, margin,
-                   max_evals, boolean, stats, clock, buf, profile):
+                   max_evals, by_values, stats, clock, buf, profile):
             ia = count[a]
             V[a, ia] = q_new
             P[a, ia] = i
@@ -539,7 +542,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
                     V, P = V2, P2
                 reached = _steer(V[b, jb], q_new, step, q)
                 if not _motion(V[b, jb], q, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, resolution,
-                               margin, max_evals, boolean, stats, clock, buf, profile):
+                               margin, max_evals, by_values, stats, clock, buf, profile):
                     break
                 if reached:  # q_new joins the trees: the path runs through it
                     half_a = _trace(V, P, a, ia)  # q_new ... root of a
@@ -557,7 +560,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
                     stats[NODES] += added
                     path = _drop_collinear(path)
                     path = _shortcut(path, shortcut_iterations, rng, arrays, ws, lanes, v_WO, reach, clearance,
-                                     self_clearance, resolution, margin, max_evals, boolean, stats, clock, buf, profile,
+                                     self_clearance, resolution, margin, max_evals, by_values, stats, clock, buf, profile,
                                      start, time_limit)
                     stats[T_TOTAL] += now(clock, buf) - start
                     return path, FOUND, g
@@ -577,7 +580,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
 
 @numba.njit(cache=True)
 def certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance, resolution, margin, first_lanes,
-                    block_lanes, max_evals, boolean, clock, stats):
+                    block_lanes, max_evals, by_values, clock, stats):
     """``(M,)`` bool: whether each straight motion ``QA[i] -> QB[i]`` (``QA[i]`` free) is certified
     by :func:`_motion`, the planner's check (for tests and other callers)."""
     buf = np.zeros(2, np.int64)
@@ -587,5 +590,5 @@ def certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance
     out = np.empty(QA.shape[0], np.bool_)
     for i in range(QA.shape[0]):
         out[i] = _motion(QA[i], QB[i], arrays, ws, lanes, v_WO, reach, clearance, self_clearance, resolution, margin,
-                         max_evals, boolean, stats, clock, buf, False)
+                         max_evals, by_values, stats, clock, buf, False)
     return out

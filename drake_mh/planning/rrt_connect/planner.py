@@ -156,7 +156,7 @@ def prepare(problem) -> float:
         stats = np.zeros(len(K.STAT_NAMES))
         K.plan_kernel(q, q[None].copy(), robot.lower.astype(float), robot.upper.astype(float), ints, floats, v_WO,
                       reach, float(problem.clearance), float(problem.self_clearance), np.zeros(1, np.uint64),
-                      1.0, 16.0, 0.02, 8, 32, 0.05, True, 1, 1.0, 16, 1, True, _CLOCK, False, stats)
+                      1.0, 16.0, 0.02, 8, 32, 0.05, True, 1, 1.0, 16, 1, None, _CLOCK, False, stats)
         _PREPARED = True
     return time.perf_counter() - start
 
@@ -174,6 +174,12 @@ def plan_smooth(problem, goals, rng, deadline, budget, **options):
     return _run(problem, goals, rng, deadline, budget, config)
 
 
+def _by_values(config: RRTConnectConfig):
+    """The kernels' ``by_values`` argument: None for the boolean bisection (the default), True
+    for the bisection on clearance values (a compile-time choice: :func:`._kernels._motion`)."""
+    return None if config.certify == "boolean" else True
+
+
 def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
     prepare_time = prepare(problem) if not _PREPARED else 0.0
     ints, floats, v_WO, reach = _arguments(problem.scene)
@@ -189,7 +195,7 @@ def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
         float(problem.clearance), float(problem.self_clearance), seed, float(config.step), float(config.resolution),
         float(config.margin), int(config.lanes), int(config.block), float(config.goal_bias), bool(config.balance),
         max_nodes, float(time_limit), int(config.max_certify_evaluations), int(config.shortcut_iterations),
-        config.certify == "boolean", _CLOCK, bool(config.profile), stats)
+        _by_values(config), _CLOCK, bool(config.profile), stats)
     info = dict(zip(_COUNT_NAMES, map(int, stats[:_COUNTS].tolist())))
     info["t_total"] = float(stats[K.T_TOTAL])
     if config.profile:
@@ -222,5 +228,5 @@ def certify_motions(scene, QA, QB, clearance: float = 0.0, self_clearance: float
     return K.certify_motions(QA, QB, ints, floats, v_WO, reach, check_clearance(clearance, "clearance"),
                              check_clearance(self_clearance, "self_clearance"), float(config.resolution),
                              float(config.margin), int(config.lanes), int(config.block),
-                             int(config.max_certify_evaluations), config.certify == "boolean", _CLOCK,
+                             int(config.max_certify_evaluations), _by_values(config), _CLOCK,
                              np.zeros(len(K.STAT_NAMES)))
