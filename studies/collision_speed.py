@@ -18,9 +18,11 @@ loaded and every kernel compiled before any clock starts):
 
 Batched figures are per configuration at ``N = 1024`` and, from Python, per call at ``N = 1``
 (one ``(nq,)`` array: the scalar one-configuration kernel, ``collision_free_one``, through its
-compiled entry point), averaged over 200 calls on 200 different configurations (one
-configuration repeated measured 1.2-1.3 µs where the mean over 1024 was 0.96-1.16: the
-kernel's work depends on how near the arm is to the obstacles). The batch figure times single calls interleaved with the other methods
+compiled entry point), averaged over 2,000 consecutive calls cycling through 200 different
+configurations, as a planner's validity callback calls it (one configuration repeated measured
+1.2-1.3 µs where the mean over 1024 was 0.96-1.16: the kernel's work depends on how near the arm
+is to the obstacles; 200 calls right after Drake's queries measured 0.1-0.25 µs more per call,
+cold caches). The batch figure times single calls interleaved with the other methods
 (cold caches: after Drake's queries a call took 15-70 ns per configuration more); ``warm`` times
 20 consecutive calls on the same configurations, as a planner calls it (docs/collision.md, "Speed
 against the targets of issue #16", which also holds the last run of this study beside the code
@@ -45,7 +47,8 @@ from drake_mh.study.machine import cpu_model, load_average
 
 ROBOTS = ("panda (bundled, capsules)", "panda_hand")  # then drake_mh.example_arms
 SCENES = ("1 sphere", "10 mixed")  # drake_mh.scene.benchmark.BENCHMARK_SCENES
-N_BATCH, N_EXACT, N_SEGMENTS, N_ONE = 1024, 50, 200, 200
+N_BATCH, N_EXACT, N_SEGMENTS, N_ONE, ONE_CALLS = 1024, 50, 200, 200, 2000
+"""``N_ONE`` configurations cycled through by the ``ONE_CALLS`` calls of an ``N = 1`` sample."""
 WARM_CALLS = 20
 """consecutive calls on the same configurations in a sample of ``collision_free warm``."""
 
@@ -113,7 +116,7 @@ def run(case: Case) -> dict:
     n_exact = 10 if case.quick else N_EXACT
     n_segments = 20 if case.quick else N_SEGMENTS
     Q = robot.random_configurations(n_batch, rng=rng)
-    rows = cycle(list(Q[:N_ONE]))  # N = 1: a sample is N_ONE calls on N_ONE configurations
+    rows = cycle(list(Q[:N_ONE]))  # N = 1: a sample is ONE_CALLS calls cycling through N_ONE configurations
     exact_Q = Q[:n_exact]
     free_Q = Q[scene.collision_free(Q)]
     segments = {}
@@ -141,8 +144,8 @@ def run(case: Case) -> dict:
     samples = {name: [] for name in methods}
     for _ in range(rounds):  # interleaved: each method once per round
         for name, (function, count) in methods.items():
-            # N = 1: a sample is N_ONE calls; "warm": WARM_CALLS consecutive calls (a planner's use)
-            calls = N_ONE if count == 1 else WARM_CALLS if name.endswith("warm") else 1
+            # N = 1: a sample is ONE_CALLS calls; "warm": WARM_CALLS consecutive calls (a planner's use)
+            calls = ONE_CALLS if count == 1 else WARM_CALLS if name.endswith("warm") else 1
             wall, cpu = _timed(lambda: [function() for _ in range(calls)], 1)
             samples[name].append((wall / (count * calls), cpu / (count * calls)))
     per_call = {name: (float(np.median([w for w, _ in v])), float(np.median([c for _, c in v])))
