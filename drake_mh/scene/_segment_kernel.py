@@ -26,7 +26,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from drake_mh.scene._collision_kernels import FASTMATH, link_clearances
+from drake_mh.scene._collision_kernels import FASTMATH, PER_LINK, link_clearances
 from drake_mh.scene._pair_kernel import segment_floor
 
 CERTIFIED, BLOCKED, UNDECIDED = 1, 0, -1
@@ -88,7 +88,7 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
         for j in range(nq):
             QT[j, 0], QT[j, 1] = QA[i, j], QB[i, j]
         ts[0], ts[1] = 0.0, 1.0
-        link_clearances(QT, ts[:2].copy(), fine, fines, False, parent, KR, Kp, perm, kind, qidx, g_anchor,
+        link_clearances(QT, ts[:2].copy(), fine, fines, PER_LINK, parent, KR, Kp, perm, kind, qidx, g_anchor,
                         g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b,
                         t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius, vals[:2])
         n = 2
@@ -158,7 +158,7 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
                 new[2 * w, 0], new[2 * w, 1] = e0, n + w
                 new[2 * w + 1, 0], new[2 * w + 1, 1] = n + w, e1
                 w += 1
-            link_clearances(QT, tau, fine, fines, False, parent, KR, Kp, perm, kind, qidx, g_anchor,
+            link_clearances(QT, tau, fine, fines, PER_LINK, parent, KR, Kp, perm, kind, qidx, g_anchor,
                             g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a,
                             pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius,
                             vals[n:n + count])

@@ -237,6 +237,25 @@ class CollisionModel:
             raise ValueError("configurations must be finite")  # Scene checks them first
         return out
 
+    def obstacle_clearance_function(self, obstacles: tuple):
+        """``f(Q (N, nq), overall=False) -> (N, K)`` clearance per obstacle, or ``(N, 1)`` the
+        smallest over them with ``overall`` (None if ``Q`` is not finite): :meth:`clearances`
+        with ``per_obstacle`` for the obstacles where they are, every array packed and bound once
+        (:func:`._collision_kernels.obstacle_clearances_packed`). ``Q`` must be a C-contiguous
+        float64 array: the caller checks it."""
+        kinds, R_WO, p_WO, v_WO, dims = obstacles
+        ints, floats = pack(*self._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(obstacles),
+                            np.zeros(0, np.int64), np.zeros(0, np.int64), *empty_tables(), self.capsules,
+                            *self.group_arrays)
+        v_WO = np.ascontiguousarray(v_WO, dtype=float)
+        kernel, empty, K_obstacles = K.obstacle_clearances_packed, np.empty, len(kinds)
+
+        def clearance(Q, overall=False):
+            out = empty((Q.shape[0], 1 if overall else K_obstacles))
+            return out if kernel(Q, K.OVERALL if overall else K.PER_OBSTACLE, ints, floats, v_WO, out) else None
+
+        return clearance
+
     def clearances(self, QT: np.ndarray, obstacles: tuple, per_obstacle: bool, fine_below: float = np.inf,
                    tau=None) -> np.ndarray:
         """:func:`._collision_kernels.link_clearances` of ``QT (nq, N)``: ``(N, K)`` per obstacle,
@@ -250,7 +269,8 @@ class CollisionModel:
         else:
             pairs = self.pair_arrays
         pair_fine = np.full(len(pairs[0]), float(fine_below))
-        K.link_clearances(QT, tau, float(fine_below), pair_fine, bool(per_obstacle), *self._kernel_args(), *obstacles,
+        mode = K.PER_OBSTACLE if per_obstacle else K.PER_LINK
+        K.link_clearances(QT, tau, float(fine_below), pair_fine, mode, *self._kernel_args(), *obstacles,
                           *pairs, out)
         return out
 

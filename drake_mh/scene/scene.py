@@ -107,6 +107,7 @@ class Scene:
         self._obstacle_arrays = None  # the obstacles as the compiled kernels read them (batch.py)
         self._free_function = None
         self._free_one = None  # its one-configuration entry (batch.CollisionModel.free_function)
+        self._clearance_function = None  # batch_obstacle_distances' (batch.CollisionModel.obstacle_clearance_function)
         self._q_shape = (robot.nq,)
         self._self_capsule_pairs: list = []
         self._always_close: tuple = ()
@@ -377,6 +378,22 @@ class Scene:
         """World positions ``(N, S, 3)`` of the sphere model's centres."""
         return self.robot.batch.points(Q, *self._compiled_spheres)
 
+    def _sphere_clearances(self, Q, overall: bool) -> tuple:
+        """``(Q (N, nq) checked, values)``: the sphere model's clearance per obstacle ``(N, K)``,
+        or the smallest over them ``(N, 1)`` with ``overall``, before any penetration correction
+        (:meth:`drake_mh.scene.batch.CollisionModel.obstacle_clearance_function`, bound to the
+        current obstacles)."""
+        arrays = self.obstacle_arrays
+        if self._clearance_function is None:
+            self._clearance_function = self.collision_model.obstacle_clearance_function(arrays)
+        if type(Q) is np.ndarray and Q.dtype is _F8 and Q.ndim == 2 and Q.shape[1] == self._q_shape[0] \
+                and Q.flags.c_contiguous:
+            out = self._clearance_function(Q, overall)  # the kernel checks finiteness as it transposes
+            if out is not None:
+                return Q, out
+        Q = self.robot.check_Q(Q)  # raises on bad input
+        return Q, self._clearance_function(Q, overall)
+
     def batch_obstacle_distances(self, Q) -> np.ndarray:
         """Conservative clearance ``(N, K)`` of the robot to each of the K obstacles [m].
 
@@ -390,12 +407,11 @@ class Scene:
         """
         from drake_mh.scene.penetration import corrected_min
 
-        QT = self.robot.batch._transposed(Q)
-        out = self.collision_model.clearances(QT, self.obstacle_arrays, per_obstacle=True)
+        Q, out = self._sphere_clearances(Q, overall=False)
         deep_rows = np.flatnonzero((out < 0).any(axis=1)) if out.size else np.zeros(0, int)
         if len(deep_rows):  # a sphere penetrates: the union's value may be too shallow there
             model = self.sphere_model
-            Q_deep = np.ascontiguousarray(QT[:, deep_rows].T)
+            Q_deep = np.ascontiguousarray(Q[deep_rows])
             centres_W = self.sphere_centres(Q_deep)
             points_W = self.robot.batch.points(Q_deep, *self._compiled_cores)
             for k, obstacle in enumerate(self._obstacles.values()):
@@ -419,7 +435,7 @@ class Scene:
 
     def _obstacles_changed(self) -> None:
         """Drop what was bound to the obstacles (rebuilt on the next query)."""
-        self._obstacle_arrays = self._free_function = self._free_one = None
+        self._obstacle_arrays = self._free_function = self._free_one = self._clearance_function = None
 
     @property
     def obstacle_arrays(self) -> tuple:
@@ -428,7 +444,7 @@ class Scene:
 
         if self._obstacle_arrays is None:
             self._obstacle_arrays = obstacle_arrays(self._obstacles.values())
-            self._free_function = self._free_one = None
+            self._free_function = self._free_one = self._clearance_function = None
         return self._obstacle_arrays
 
     def _free(self):
@@ -525,7 +541,12 @@ class Scene:
         if not self._obstacles:
             Q = self.robot.check_Q(Q)
             return np.full(Q.shape[0], np.inf)
-        return self.batch_obstacle_distances(Q).min(axis=1)
+        Q, out = self._sphere_clearances(Q, overall=True)
+        out = out[:, 0]
+        deep = np.flatnonzero(out < 0)  # a sphere penetrates: per obstacle, corrected
+        if len(deep):
+            out[deep] = self.batch_obstacle_distances(Q[deep]).min(axis=1)
+        return out
 
     def __repr__(self) -> str:
         return f"Scene({self.robot.name!r}, obstacles={list(self._obstacles)})"

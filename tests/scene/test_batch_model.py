@@ -40,3 +40,24 @@ def test_sphere_groups_hold_their_spheres(scene):
             assert 1 <= s1 - s0 <= 16
             d = np.linalg.norm(offsets[s0:s1] - u_offset[u], axis=1) + radii[s0:s1]
             assert np.all(d <= u_radius[u] + 1e-12)
+
+
+@pytest.mark.parametrize("robot_name", ["panda", "panda_hand_mbm"])
+def test_overall_clearance_is_the_smallest_per_obstacle(robot_name):
+    """batch_min_distance's kernel mode over all obstacles skips (link, obstacle) pairs that
+    cannot go below the smallest value so far: its values equal the per-obstacle values'
+    minimum exactly, shallow and penetrating configurations alike, and batch_min_distance
+    equals the corrected per-obstacle minimum."""
+    import drake_mh
+    from drake_mh.scene.benchmark import benchmark_scene
+
+    robot = drake_mh.load_robot("panda") if robot_name == "panda" else load_problem_robot(robot_name)
+    scene = benchmark_scene(robot, "10 mixed")
+    Q = robot.random_configurations(300, rng=11)
+    function = scene.collision_model.obstacle_clearance_function(scene.obstacle_arrays)
+    per_obstacle, overall = function(Q), function(Q, overall=True)
+    assert overall.shape == (300, 1)
+    np.testing.assert_array_equal(overall[:, 0], per_obstacle.min(axis=1))
+    assert 0 < np.sum(overall < 0) < 300  # both kinds of configuration are covered
+    np.testing.assert_array_equal(scene.batch_min_distance(Q), scene.batch_obstacle_distances(Q).min(axis=1))
+    assert function(np.full((2, robot.nq), np.nan)) is None
