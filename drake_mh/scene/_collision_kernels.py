@@ -589,28 +589,32 @@ def _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g
 
 
 ONE_SIGNATURE = (numba.types.Array(numba.float64, 1, "A"), numba.float64, numba.float64,
-                 numba.types.Array(numba.int64, 1, "C"), numba.types.Array(numba.float64, 1, "C"),
                  numba.types.Array(numba.float64, 1, "C"))
 """The one signature :func:`collision_free_one` is called with (``q`` of any strides)."""
 
 
 def one_entry_point():
     """The compiled entry point of :func:`collision_free_one` for :data:`ONE_SIGNATURE`: a call
-    skips numba's type dispatch (about 0.15 µs of 0.6 for six arguments), so its caller must
-    pass exactly those types (:meth:`drake_mh.scene.batch.CollisionModel.free_function`)."""
+    skips numba's type dispatch (about 0.15 µs of 0.6 when it took six arguments), so its caller
+    must pass exactly those types (:meth:`drake_mh.scene.batch.CollisionModel.free_function`)."""
     return collision_free_one.compile(ONE_SIGNATURE)  # the compiled entry point (numba Dispatcher.compile)
 
 
-def one_workspace(ints) -> np.ndarray:
-    """The float64 buffer :func:`collision_free_one` works in, for the arrays of :func:`pack`."""
+def one_buffer(ints, floats) -> np.ndarray:
+    """The one float64 buffer :func:`collision_free_one` reads: ``[len(ints), len(floats)]``,
+    the bits of :func:`pack`'s ``ints``, its ``floats``, then the workspace it writes (one
+    array argument instead of three: each costs about 50 ns of a call's unboxing)."""
     F, G, S = int(ints[0]), int(ints[1]), int(ints[2])
-    return np.empty(12 * F + 2 + 3 * G + 4 * S)
+    work = np.empty(12 * F + 2 + 3 * G + 4 * S)
+    head = np.array([len(ints), len(floats)], dtype=np.float64)
+    return np.ascontiguousarray(np.concatenate([head, np.ascontiguousarray(ints, np.int64).view(np.float64),
+                                                floats, work]))
 
 
 @numba.njit(cache=True)
-def collision_free_one(q, clearance, self_clearance, ints, floats, work):
-    """:func:`collision_free` of one configuration ``q (nq,)`` on the buffers of :func:`pack`
-    and :func:`one_workspace`, allocating nothing (clearances >= 0; 0 counts touching as a
+def collision_free_one(q, clearance, self_clearance, buf):
+    """:func:`collision_free` of one configuration ``q (nq,)`` on the buffer of
+    :func:`one_buffer`, allocating nothing (clearances >= 0; 0 counts touching as a
     collision, as :meth:`drake_mh.scene.Scene.collision_free`).
 
     Returns:
@@ -623,6 +627,10 @@ def collision_free_one(q, clearance, self_clearance, ints, floats, work):
         if not math.isfinite(q[j]):
             return -1
     clearance, self_clearance = max(clearance, 1e-12), max(self_clearance, 1e-12)  # squared tests
+    n_ints, n_floats = int(buf[0]), int(buf[1])
+    ints = buf[2:2 + n_ints].view(np.int64)
+    floats = buf[2 + n_ints:2 + n_ints + n_floats]
+    work = buf[2 + n_ints + n_floats:]
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset,
      u_radius) = _unpack_views(ints, floats)

@@ -219,10 +219,10 @@ class CollisionModel:
             return out
 
         def make_one():  # compiled on first need (about 7 s from an empty numba cache)
-            entry, work = K.one_entry_point(), K.one_workspace(ints)
+            entry, buf = K.one_entry_point(), K.one_buffer(ints, floats)
 
             def one(q, clearance, self_clearance):
-                return entry(q, clearance, self_clearance, ints, floats, work)
+                return entry(q, clearance, self_clearance, buf)
 
             return one
 
