@@ -35,7 +35,16 @@ from drake_mh.spheres import DEFAULT_TOLERANCE, SphereModel
 
 __all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule"]
 
-_F8, _NDARRAY = np.dtype(np.float64), np.ndarray  # Scene.collision_free's one-configuration path
+_F8, _NDARRAY, _INF = np.dtype(np.float64), np.ndarray, float("inf")  # Scene.collision_free's fast paths
+
+
+@functools.cache
+def _segments():
+    """:mod:`drake_mh.scene.segments`, imported on first use (it loads the segment kernels): a
+    ``from ... import`` in a method costs about 0.7 µs a call, 15 % of a short segment's check."""
+    from drake_mh.scene import segments
+
+    return segments
 
 
 def _vector3(value, what: str) -> np.ndarray:
@@ -405,11 +414,11 @@ class Scene:
         Raises:
             SceneError: the robot has no collision geometry.
         """
-        from drake_mh.scene.penetration import corrected_min
-
         Q, out = self._sphere_clearances(Q, overall=False)
         deep_rows = np.flatnonzero((out < 0).any(axis=1)) if out.size else np.zeros(0, int)
         if len(deep_rows):  # a sphere penetrates: the union's value may be too shallow there
+            from drake_mh.scene.penetration import corrected_min
+
             model = self.sphere_model
             Q_deep = np.ascontiguousarray(Q[deep_rows])
             centres_W = self.sphere_centres(Q_deep)
@@ -440,9 +449,9 @@ class Scene:
     @property
     def obstacle_arrays(self) -> tuple:
         """The obstacles as the compiled kernels read them (rebuilt after add/move/remove)."""
-        from drake_mh.scene.batch import obstacle_arrays
-
         if self._obstacle_arrays is None:
+            from drake_mh.scene.batch import obstacle_arrays  # here: an import costs about 0.7 µs a call
+
             self._obstacle_arrays = obstacle_arrays(self._obstacles.values())
             self._free_function = self._free_one = self._clearance_function = None
         return self._obstacle_arrays
@@ -483,11 +492,11 @@ class Scene:
             free = entry(Q, clearance, self_clearance, buffer)  # one configuration: ~0.9 µs in all
             if free >= 0:
                 return free > 0  # else a NaN in Q or a bad clearance: the checks below raise
-        from drake_mh.scene.segments import check_clearance
-
         if not self._robot_ids:
             self._require_geometry()
-        if clearance != 0.0 or self_clearance != 0.0 or type(clearance) is not float:
+        if type(clearance) is not float or type(self_clearance) is not float \
+                or not (0.0 <= clearance < _INF and 0.0 <= self_clearance < _INF):
+            check_clearance = _segments().check_clearance
             clearance = check_clearance(clearance, "clearance")
             self_clearance = check_clearance(self_clearance, "self_clearance")
         free = self._free()
@@ -510,23 +519,17 @@ class Scene:
     def segment_free(self, q_a, q_b, clearance: float = 0.0, self_clearance: float = 0.0) -> bool:
         """Whether the straight joint-space motion ``q_a -> q_b`` is certified free *for every
         configuration on it* (:func:`drake_mh.scene.segments.certify_segments`)."""
-        from drake_mh.scene.segments import certify_segments
-
-        return bool(certify_segments(self, q_a, q_b, clearance, self_clearance).certified[0])
+        return bool(_segments().certify_segments(self, q_a, q_b, clearance, self_clearance).certified[0])
 
     def certify_segments(self, QA, QB, clearance: float = 0.0, self_clearance: float = 0.0, **options):
         """Certify many straight segments ``QA[i] -> QB[i]``: see
         :func:`drake_mh.scene.segments.certify_segments`."""
-        from drake_mh.scene.segments import certify_segments
-
-        return certify_segments(self, QA, QB, clearance, self_clearance, **options)
+        return _segments().certify_segments(self, QA, QB, clearance, self_clearance, **options)
 
     def certify_path(self, Q, clearance: float = 0.0, self_clearance: float = 0.0, **options):
         """Certify the piecewise-linear joint-space motion through the rows of ``Q (M, nq)``:
         see :func:`drake_mh.scene.segments.certify_path`."""
-        from drake_mh.scene.segments import certify_path
-
-        return certify_path(self, Q, clearance, self_clearance, **options)
+        return _segments().certify_path(self, Q, clearance, self_clearance, **options)
 
     def batch_min_distance(self, Q) -> np.ndarray:
         """Conservative minimum clearance ``(N,)`` to the obstacles [m] (``inf`` if there is none).

@@ -123,13 +123,15 @@ def test_self_collision_pairs_follow_drakes_filter():
     np.testing.assert_array_equal(free, values[:, G:].min(axis=1) >= 1e-12)
 
 
-@pytest.mark.parametrize("bad", [-0.1, np.nan, np.inf, True, "0.1", None])
+@pytest.mark.parametrize("bad", [-0.1, np.nan, np.inf, True, False, "0.1", None])
 def test_bad_clearance_is_a_scene_error(bad):
     scene = cluttered(1, 2)
     with pytest.raises(SceneError, match="clearance"):
         scene.collision_free(PANDA.home, bad)
     with pytest.raises(SceneError, match="self_clearance"):
         scene.collision_free(PANDA.home, 0.0, bad)
+    with pytest.raises(SceneError, match="self_clearance"):  # the batch path too
+        scene.collision_free(np.vstack([PANDA.home, PANDA.home]), 0.0, bad)
 
 
 def test_no_geometry_is_a_scene_error():
