@@ -49,7 +49,9 @@ class RRTConnectConfig:
             batched boolean checks at halving margins; 1.4x faster than the other among
             obstacles) or ``"bisection"`` (the scene's
             :func:`drake_mh.scene.segments.certify_segments` on clearance values; 20 % faster
-            with self-collision pairs that nearly touch everywhere).
+            with self-collision pairs that nearly touch everywhere). Each is a compiled
+            variant of the kernel: the first ``"bisection"`` plan of a machine compiles its
+            own (about a minute from an empty numba cache; cached on disk after).
         goal_bias: probability of sampling a root of the other tree (a goal configuration when
             the start tree grows, the start when the goal tree grows) instead of a uniform
             sample.
