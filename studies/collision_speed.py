@@ -38,7 +38,6 @@ Run: ``drake-mh study collision_speed [--quick]`` or ``python studies/collision_
 from __future__ import annotations
 
 import time
-from itertools import cycle
 
 import numpy as np
 
@@ -116,7 +115,7 @@ def run(case: Case) -> dict:
     n_exact = 10 if case.quick else N_EXACT
     n_segments = 20 if case.quick else N_SEGMENTS
     Q = robot.random_configurations(n_batch, rng=rng)
-    rows = cycle(list(Q[:N_ONE]))  # N = 1: a sample is ONE_CALLS calls cycling through N_ONE configurations
+    one_rows = [Q[i % N_ONE] for i in range(ONE_CALLS)]  # N = 1: ONE_CALLS calls cycling through N_ONE rows
     exact_Q = Q[:n_exact]
     free_Q = Q[scene.collision_free(Q)]
     segments = {}
@@ -128,9 +127,9 @@ def run(case: Case) -> dict:
     methods = {
         "collision_free": (lambda: scene.collision_free(Q), n_batch),
         "collision_free warm": (lambda: scene.collision_free(Q), n_batch),
-        "collision_free N=1": (lambda: scene.collision_free(next(rows)), 1),
+        "collision_free N=1": (lambda: [scene.collision_free(q) for q in one_rows], ONE_CALLS),
         "batch_min_distance": (lambda: scene.batch_min_distance(Q), n_batch),
-        "batch_min_distance N=1": (lambda: scene.batch_min_distance(next(rows)[None]), 1),
+        "batch_min_distance N=1": (lambda: [scene.batch_min_distance(q[None]) for q in one_rows], ONE_CALLS),
         "previous (numpy)": (lambda: _previous(scene, Q), n_batch),
         "Drake HasCollisions": (lambda: [drake_bool(q) for q in exact_Q], n_exact),
         "Drake distance": (lambda: [drake_distance(q) for q in exact_Q], n_exact),
@@ -144,8 +143,7 @@ def run(case: Case) -> dict:
     samples = {name: [] for name in methods}
     for _ in range(rounds):  # interleaved: each method once per round
         for name, (function, count) in methods.items():
-            # N = 1: a sample is ONE_CALLS calls; "warm": WARM_CALLS consecutive calls (a planner's use)
-            calls = ONE_CALLS if count == 1 else WARM_CALLS if name.endswith("warm") else 1
+            calls = WARM_CALLS if name.endswith("warm") else 1  # "warm": consecutive calls (a planner's use)
             wall, cpu = _timed(lambda: [function() for _ in range(calls)], 1)
             samples[name].append((wall / (count * calls), cpu / (count * calls)))
     per_call = {name: (float(np.median([w for w, _ in v])), float(np.median([c for _, c in v])))
