@@ -85,7 +85,7 @@ def _unpack(ints, floats):
 def _unpack_views(ints, floats):
     """:func:`_unpack` with ``as_strided`` views instead of reshapes (about 1 ns instead of
     200 for all of them; any-layout array types): for
-    :func:`drake_mh.scene._collision_kernels.collision_free_one`."""
+    :func:`drake_mh.scene._entry_kernels.collision_free_one`."""
     (F, G, S, K, P, T, U, i_parent, i_perm, i_kind, i_qidx, i_anchor, i_start, i_kinds, i_a, i_b, i_meta, i_ustart,
      i_ustart_s, f_KR, f_Kp, f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_grid, f_vals,
      f_caps, f_uoffset, f_uradius) = _offsets(ints)

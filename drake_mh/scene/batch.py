@@ -25,6 +25,7 @@ import functools
 import numpy as np
 
 from drake_mh.scene import _collision_kernels as K
+from drake_mh.scene import _entry_kernels as E
 from drake_mh.scene._packing import pack
 from drake_mh.scene.pair_table import empty_tables
 from drake_mh.shapes import Box, Capsule, Cylinder, Sphere
@@ -200,7 +201,7 @@ class CollisionModel:
 
         ``f.make_one()`` returns ``(entry, buffer)``: ``entry(q (nq,) float64, clearance,
         self_clearance, buffer) -> 1 / 0 / -1 / -2`` (free / not / not finite / a clearance not in
-        [0, inf)) checks one configuration (:func:`._collision_kernels.collision_free_one`)
+        [0, inf)) checks one configuration (:func:`._entry_kernels.collision_free_one`)
         through the compiled entry point of its one signature: no type dispatch, no allocation
         (about 0.3 µs in the kernel and 0.15 µs of call). ``q`` must be a float64 array of shape
         ``(nq,)`` (any strides), the clearances Python floats: the caller checks those types
@@ -209,7 +210,7 @@ class CollisionModel:
         kinds, R_WO, p_WO, _, dims = obstacles
         ints, floats = pack(*self._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(obstacles),
                               *self.pair_arrays)
-        kernel, empty, boolean = K.collision_free_packed, np.empty, np.bool_
+        kernel, empty, boolean = E.collision_free_packed, np.empty, np.bool_
 
         def free(Q, clearance, self_clearance):
             out = empty(Q.shape[0], boolean)
@@ -219,7 +220,7 @@ class CollisionModel:
             return out
 
         def make_one():  # compiled on first need (about 7 s from an empty numba cache)
-            return K.one_entry_point(), K.one_buffer(ints, floats)
+            return E.one_entry_point(), E.one_buffer(ints, floats)
 
         free.make_one = make_one
         return free
@@ -236,14 +237,14 @@ class CollisionModel:
         """``f(Q (N, nq), overall=False) -> (N, K)`` clearance per obstacle, or ``(N, 1)`` the
         smallest over them with ``overall`` (None if ``Q`` is not finite): :meth:`clearances`
         with ``per_obstacle`` for the obstacles where they are, every array packed and bound once
-        (:func:`._collision_kernels.obstacle_clearances_packed`). ``Q`` must be a C-contiguous
+        (:func:`._entry_kernels.obstacle_clearances_packed`). ``Q`` must be a C-contiguous
         float64 array: the caller checks it."""
         kinds, R_WO, p_WO, v_WO, dims = obstacles
         ints, floats = pack(*self._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(obstacles),
                             np.zeros(0, np.int64), np.zeros(0, np.int64), *empty_tables(), self.capsules,
                             *self.group_arrays)
         v_WO = np.ascontiguousarray(v_WO, dtype=float)
-        kernel, empty, K_obstacles = K.obstacle_clearances_packed, np.empty, len(kinds)
+        kernel, empty, K_obstacles = E.obstacle_clearances_packed, np.empty, len(kinds)
 
         def clearance(Q, overall=False):
             out = empty((Q.shape[0], 1 if overall else K_obstacles))
