@@ -181,6 +181,12 @@ class CollisionModel:
         tables = pair_tables(self) if self._use_tables else empty_tables(self.num_pairs)
         return self.pair_index + tables + (self.capsules,) + self.group_arrays
 
+    @functools.cached_property
+    def no_pair_arrays(self) -> tuple:
+        """:attr:`pair_arrays` without link pairs (and no tables to build): for the queries per
+        obstacle."""
+        return (np.zeros(0, np.int64), np.zeros(0, np.int64), *empty_tables(), self.capsules, *self.group_arrays)
+
     @property
     def num_links(self) -> int:
         return len(self.link_names)
@@ -241,8 +247,7 @@ class CollisionModel:
         float64 array: the caller checks it."""
         kinds, R_WO, p_WO, v_WO, dims = obstacles
         ints, floats = pack(*self._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(obstacles),
-                            np.zeros(0, np.int64), np.zeros(0, np.int64), *empty_tables(), self.capsules,
-                            *self.group_arrays)
+                            *self.no_pair_arrays)
         v_WO = np.ascontiguousarray(v_WO, dtype=float)
         kernel, empty, K_obstacles = E.obstacle_clearances_packed, np.empty, len(kinds)
 
@@ -260,10 +265,7 @@ class CollisionModel:
         width = len(obstacles[0]) if per_obstacle else self.num_links + self.num_pairs
         out = np.empty((N, width))
         tau = np.zeros(N) if tau is None else np.ascontiguousarray(tau, dtype=float)
-        if per_obstacle:  # no pairs (and no tables to build)
-            pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64), *empty_tables(), self.capsules, *self.group_arrays)
-        else:
-            pairs = self.pair_arrays
+        pairs = self.no_pair_arrays if per_obstacle else self.pair_arrays
         pair_fine = np.full(len(pairs[0]), float(fine_below))
         mode = K.PER_OBSTACLE if per_obstacle else K.PER_LINK
         K.link_clearances(QT, tau, float(fine_below), pair_fine, mode, *self._kernel_args(), *obstacles,

@@ -387,6 +387,12 @@ class Scene:
         """World positions ``(N, S, 3)`` of the sphere model's centres."""
         return self.robot.batch.points(Q, *self._compiled_spheres)
 
+    def _kernel_batch(self, Q) -> bool:
+        """Whether ``Q`` is a C-contiguous float64 ``(N, nq)`` batch that the compiled entry points
+        read as it is (they check its finiteness while transposing it)."""
+        return (type(Q) is _NDARRAY and Q.dtype is _F8 and Q.ndim == 2 and Q.shape[1] == self._nq
+                and Q.flags.c_contiguous)
+
     def _sphere_clearances(self, Q, overall: bool) -> tuple:
         """``(Q (N, nq) checked, values)``: the sphere model's clearance per obstacle ``(N, K)``,
         or the smallest over them ``(N, 1)`` with ``overall``, before any penetration correction
@@ -395,8 +401,7 @@ class Scene:
         arrays = self.obstacle_arrays
         if self._clearance_function is None:
             self._clearance_function = self.collision_model.obstacle_clearance_function(arrays)
-        if type(Q) is np.ndarray and Q.dtype is _F8 and Q.ndim == 2 and Q.shape[1] == self._q_shape[0] \
-                and Q.flags.c_contiguous:
+        if self._kernel_batch(Q):
             out = self._clearance_function(Q, overall)  # the kernel checks finiteness as it transposes
             if out is not None:
                 return Q, out
@@ -500,18 +505,17 @@ class Scene:
             clearance = check_clearance(clearance, "clearance")
             self_clearance = check_clearance(self_clearance, "self_clearance")
         free = self._free()
-        if type(Q) is np.ndarray and Q.dtype is _F8 and Q.flags.c_contiguous:
-            if Q.shape == self._q_shape:
-                if self._free_one is None:  # the next one-configuration calls take the path above
-                    self._free_one = free.make_one()
-                out = free(Q.reshape(1, -1), clearance, self_clearance)  # one configuration: no copy
-                if out is not None:
-                    return bool(out[0])
-                self.robot.check_q(Q)  # raises, naming the joints
-            elif Q.ndim == 2 and Q.shape[1] == self._q_shape[0]:
-                out = free(Q, clearance, self_clearance)  # the kernel checks finiteness as it transposes
-                if out is not None:
-                    return out
+        if self._kernel_batch(Q):
+            out = free(Q, clearance, self_clearance)  # the kernel checks finiteness as it transposes
+            if out is not None:
+                return out
+        elif type(Q) is _NDARRAY and Q.dtype is _F8 and Q.shape == self._q_shape and Q.flags.c_contiguous:
+            if self._free_one is None:  # the next one-configuration calls take the path above
+                self._free_one = free.make_one()
+            out = free(Q.reshape(1, -1), clearance, self_clearance)  # one configuration: no copy
+            if out is not None:
+                return bool(out[0])
+            self.robot.check_q(Q)  # raises, naming the joints
         one = np.ndim(Q) == 1
         out = free(self.robot.check_Q(Q), clearance, self_clearance)  # raises on bad input
         return bool(out[0]) if one else out
