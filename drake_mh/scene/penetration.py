@@ -29,6 +29,12 @@ than ``d``:
 
 A cylinder obstacle is replaced by its circumscribed 16-gon prism (it contains the cylinder,
 so ``v`` stays a lower bound, up to 2 % of the radius low).
+
+All of it is compiled (:func:`correct_clearances`, numba): a (configuration, obstacle) pair at
+a time, a geometry skipped where its bounding sphere keeps out of the obstacle. Against ten
+obstacles it corrects a penetrating configuration in 3.8 µs on the capsule Panda and 12 µs on
+the Panda with its hand (meshes: 17 polytope cores, up to 300 facets), where the numpy version
+it replaced took 9 and 70 µs.
 """
 
 from __future__ import annotations
@@ -38,8 +44,9 @@ import functools
 import numba
 import numpy as np
 
-from drake_mh.scene.segment_distance import CAPSULE, SPHERE, primitive_code, segment_min_sdf
-from drake_mh.shapes import Box, Capsule, Sphere
+from drake_mh.scene._exact_kernels import _closest_segments
+from drake_mh.scene.segment_distance import CAPSULE, SPHERE, _sdf, primitive_code, segment_min_sdf
+from drake_mh.shapes import Box, Cylinder
 
 _PRISM_SIDES = 16
 
@@ -73,39 +80,219 @@ def _sat_segment(a, b, corners, normals, edges):
 
 
 @numba.njit(cache=True)
-def _segment_core_kernel(kind, dims, R_WO, p_WO, pts, half_length, radius, corners, normals, edges):
-    """For each pair m, a lower bound of the signed distance between the capsule core (axis z of
-    G with ``half_length[m]``, ``radius[m]``; ``pts (m, 4, 3)`` the origin and unit-axis tips of G
-    in W) and the obstacle: ``min_t sdf_O(axis(t)) - radius`` while the axis stays outside the
-    obstacle, the separating-axis value against ``corners`` (box or prism) once it enters."""
-    m_count = pts.shape[0]
-    out = np.empty(m_count)
-    a = np.empty(3)
-    b = np.empty(3)
-    for m in range(m_count):
-        for i in range(3):
-            c = 0.0
-            z = 0.0
+def _segment_bound(kind, dims, R_WO, p_WO, pts, half_length, radius, corners, normals, edges):
+    """A lower bound of the signed distance between a capsule core (axis z of G with
+    ``half_length``, ``radius``; ``pts (4, 3)`` the origin and unit-axis tips of G in W) and the
+    obstacle: against a ball or a capsule the distance of the axis to the obstacle's core
+    (closest points of two segments) less both radii; against a box or a cylinder
+    ``min_t sdf_O(axis(t)) - radius`` (golden section) while the axis stays outside, the
+    separating-axis value against ``corners`` (box or prism, obstacle frame) once it enters."""
+    a, b = np.empty(3), np.empty(3)
+    for i in range(3):
+        c = 0.0
+        z = 0.0
+        for j in range(3):
+            c += R_WO[j, i] * (pts[0, j] - p_WO[j])
+            z += R_WO[j, i] * (pts[3, j] - pts[0, j])
+        a[i] = c - half_length * z
+        b[i] = c + half_length * z
+    if kind == SPHERE or kind == CAPSULE:  # the closest points of the axis and the obstacle's core
+        lo, hi = np.zeros(3), np.zeros(3)
+        lo[2], hi[2] = -dims[1], dims[1]  # a sphere's core is a point (dims[1] = 0)
+        return _closest_segments(a, b, lo, hi, np.empty(3), np.empty(3)) - dims[0] - radius
+    f = segment_min_sdf(kind, dims, a, b)[1]
+    if f <= 0.0:
+        f = _sat_segment(a, b, corners, normals, edges)
+    return f - radius
+
+
+@numba.njit(cache=True, inline="always")
+def _gap(u0, u1, u2, VH, VO):
+    """Gap between the projections of conv(VH) and conv(VO) on the unit axis u."""
+    lo_h, hi_h = np.inf, -np.inf
+    for v in range(VH.shape[0]):
+        p = u0 * VH[v, 0] + u1 * VH[v, 1] + u2 * VH[v, 2]
+        lo_h = min(lo_h, p)
+        hi_h = max(hi_h, p)
+    lo_o, hi_o = np.inf, -np.inf
+    for v in range(VO.shape[0]):
+        p = u0 * VO[v, 0] + u1 * VO[v, 1] + u2 * VO[v, 2]
+        lo_o = min(lo_o, p)
+        hi_o = max(hi_o, p)
+    return max(lo_o - hi_h, lo_h - hi_o)
+
+
+@numba.njit(cache=True)
+def _sat(VH, NH, OH, EH, VO, NO, EO, stop, certain):
+    """Separating-axis lower bound of the signed distance between conv(VH) and conv(VO), or
+    ``+inf`` where it cannot lower ``stop`` (then the spheres' value stands).
+
+    Every axis gives a lower bound and the best one is kept, so the scan stops as soon as the
+    best reaches ``stop`` (it can no longer lower ``min(stop, v)``; a non-negative gap also
+    proves separation). Facet planes of H (``NH @ p + OH <= 0``) and face normals ``NO`` of O come
+    first; the edge x edge axes (``EH`` x ``EO``) follow unless the pair is ``certain`` to
+    overlap (the face bound is valid there, only looser). With all axes scanned, the best gap is
+    minus the exact penetration depth.
+    """
+    best = -np.inf
+    for m in range(NH.shape[0]):  # H's facet planes: O beyond facet m (H's side is known)
+        lo_o = np.inf
+        for v in range(VO.shape[0]):
+            lo_o = min(lo_o, NH[m, 0] * VO[v, 0] + NH[m, 1] * VO[v, 1] + NH[m, 2] * VO[v, 2])
+        best = max(best, lo_o + OH[m])
+        if best >= stop:
+            return np.inf
+    for m in range(NO.shape[0]):
+        best = max(best, _gap(NO[m, 0], NO[m, 1], NO[m, 2], VH, VO))
+        if best >= stop:
+            return np.inf
+    if not certain:
+        for e in range(EH.shape[0]):
+            for f in range(EO.shape[0]):
+                u0 = EH[e, 1] * EO[f, 2] - EH[e, 2] * EO[f, 1]
+                u1 = EH[e, 2] * EO[f, 0] - EH[e, 0] * EO[f, 2]
+                u2 = EH[e, 0] * EO[f, 1] - EH[e, 1] * EO[f, 0]
+                norm = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+                if norm <= 1e-9:
+                    continue
+                best = max(best, _gap(u0 / norm, u1 / norm, u2 / norm, VH, VO))
+                if best >= stop:
+                    return np.inf
+    return best
+
+
+@numba.njit(cache=True)
+def _segment_hits(a, b, NH, OH):
+    """Whether the segment a -> b meets the polytope ``NH @ p + OH <= 0`` (clipping the
+    parameter interval facet by facet)."""
+    lo, hi = 0.0, 1.0
+    for m in range(NH.shape[0]):
+        fa = NH[m, 0] * a[0] + NH[m, 1] * a[1] + NH[m, 2] * a[2] + OH[m]
+        fb = NH[m, 0] * b[0] + NH[m, 1] * b[1] + NH[m, 2] * b[2] + OH[m]
+        if fb < fa:  # entering
+            lo = max(lo, fa / (fa - fb))
+        elif fb > fa:  # leaving
+            hi = min(hi, fa / (fa - fb))
+        elif fa > 0:  # parallel, outside
+            return False
+    return lo <= hi
+
+
+@numba.njit(cache=True)
+def _polytope_bound(kind, dims, R_WO, p_WO, R_WG, p_WG, VH, NH, OH, EH, excess, corners, normals, edges,
+                    sphere_value, VO, NO, EO):
+    """A lower bound of the signed distance between a polytope core (``VH, NH, OH, EH`` in G, at
+    ``R_WG, p_WG``) and an obstacle, or ``+inf`` where the spheres' value ``sphere_value`` (< 0)
+    needs no correction (module docstring); ``VO, NO, EO`` workspaces of at least the
+    obstacle polytope's sizes."""
+    R_GO, p_GO = np.empty((3, 3)), np.empty(3)
+    for i in range(3):
+        p_GO[i] = 0.0
+        for j in range(3):
+            p_GO[i] += R_WG[j, i] * (p_WO[j] - p_WG[j])
+        for k in range(3):
+            R_GO[i, k] = 0.0
             for j in range(3):
-                c += R_WO[j, i] * (pts[m, 0, j] - p_WO[j])
-                z += R_WO[j, i] * (pts[m, 3, j] - pts[m, 0, j])
-            a[i] = c - half_length[m] * z
-            b[i] = c + half_length[m] * z
-        f = segment_min_sdf(kind, dims, a, b)[1]
-        if f <= 0.0 and corners.shape[0] > 0:
-            f = _sat_segment(a, b, corners, normals, edges)
-        out[m] = f - radius[m]
-    return out
+                R_GO[i, k] += R_WG[j, i] * R_WO[j, k]
+    if kind == SPHERE:  # exact depth of a centre inside; one outside needs nothing
+        depth = -np.inf
+        for m in range(NH.shape[0]):
+            depth = max(depth, NH[m, 0] * p_GO[0] + NH[m, 1] * p_GO[1] + NH[m, 2] * p_GO[2] + OH[m])
+        return depth - dims[0] if depth < 0 else np.inf
+    if kind == CAPSULE:  # an axis that misses H meets s <= d already, as a ball centred outside
+        for i in range(3):
+            VO[0, i] = p_GO[i] - dims[1] * R_GO[i, 2]
+            VO[1, i] = p_GO[i] + dims[1] * R_GO[i, 2]
+            EO[0, i] = VO[1, i] - VO[0, i]
+        if not _segment_hits(VO[0], VO[1], NH, OH):
+            return np.inf
+        return _sat(VH, NH, OH, EH, VO[:2], NO[:0], EO[:1], sphere_value + dims[0], False) - dims[0]
+    for v in range(corners.shape[0]):  # box, cylinder prism: both polytopes' axes
+        for i in range(3):
+            VO[v, i] = p_GO[i] + R_GO[i, 0] * corners[v, 0] + R_GO[i, 1] * corners[v, 1] + R_GO[i, 2] * corners[v, 2]
+    for m in range(normals.shape[0]):
+        for i in range(3):
+            NO[m, i] = R_GO[i, 0] * normals[m, 0] + R_GO[i, 1] * normals[m, 1] + R_GO[i, 2] * normals[m, 2]
+    for m in range(edges.shape[0]):
+        for i in range(3):
+            EO[m, i] = R_GO[i, 0] * edges[m, 0] + R_GO[i, 1] * edges[m, 1] + R_GO[i, 2] * edges[m, 2]
+    return _sat(VH, NH, OH, EH, VO[:corners.shape[0]], NO[:normals.shape[0]], EO[:edges.shape[0]], sphere_value,
+                sphere_value < -excess)
+
+
+@numba.njit(cache=True)
+def correct_clearances(values, points_W, radii, c_G, g_bound, g_start, g_kind, half_length, radius, VH, v_start, NH,
+                       OH, f_start, EH, e_start, excess, kinds, R_WO, p_WO, dims, corners, n_corners, normals,
+                       n_normals, edges, n_edges):
+    """``values (n, K)`` in place: each negative one (the sphere model's clearance to obstacle k,
+    or any negative number to have it computed) becomes ``min_g min(s_g, v_g)`` over the
+    geometries g whose spheres' value ``s_g`` is negative, ``v_g`` the lower bound of g
+    (:func:`_segment_bound`, :func:`_polytope_bound`); ``+inf`` if there is none.
+
+    A geometry whose bounding sphere (about its origin, radius ``g_bound``) keeps out of the
+    obstacle is skipped: its ``s_g >= 0`` (signed distances are 1-Lipschitz), so it cannot hold
+    a negative minimum. ``points_W (n, 4G, 3)`` (:func:`core_points`) give each geometry's
+    pose, and with it the world centres of its spheres (``c_G (S, 3)`` in the geometry frame);
+    the geometries' arrays are those of :func:`core_arrays`, the obstacles' those of
+    :func:`drake_mh.scene.batch.obstacle_arrays` and :func:`obstacle_polytopes`.
+    """
+    n, K, G = values.shape[0], values.shape[1], g_kind.shape[0]
+    VO, NO, EO = np.empty((max(corners.shape[1], 2), 3)), np.empty((normals.shape[1], 3)), np.empty(
+        (max(edges.shape[1], 1), 3))
+    R_WG, p_WG = np.empty((G, 3, 3)), np.empty((G, 3))
+    for r in range(n):
+        for g in range(G):
+            for i in range(3):
+                p_WG[g, i] = points_W[r, 4 * g, i]
+                for c in range(3):
+                    R_WG[g, i, c] = points_W[r, 4 * g + 1 + c, i] - points_W[r, 4 * g, i]
+        for k in range(K):
+            if not values[r, k] < 0.0:
+                continue
+            kind, d, R, p = kinds[k], dims[k], R_WO[k], p_WO[k]
+            ck, nk, ek = corners[k, :n_corners[k]], normals[k, :n_normals[k]], edges[k, :n_edges[k]]
+            best = np.inf
+            for g in range(G):
+                dx, dy, dz = p_WG[g, 0] - p[0], p_WG[g, 1] - p[1], p_WG[g, 2] - p[2]
+                u = R[0, 0] * dx + R[1, 0] * dy + R[2, 0] * dz
+                v = R[0, 1] * dx + R[1, 1] * dy + R[2, 1] * dz
+                w = R[0, 2] * dx + R[1, 2] * dy + R[2, 2] * dz
+                if _sdf(kind, d, u, v, w) >= g_bound[g]:
+                    continue
+                s_g = np.inf
+                for s in range(g_start[g], g_start[g + 1]):
+                    x = p_WG[g, 0] + R_WG[g, 0, 0] * c_G[s, 0] + R_WG[g, 0, 1] * c_G[s, 1] + R_WG[g, 0, 2] * c_G[s, 2]
+                    y = p_WG[g, 1] + R_WG[g, 1, 0] * c_G[s, 0] + R_WG[g, 1, 1] * c_G[s, 1] + R_WG[g, 1, 2] * c_G[s, 2]
+                    z = p_WG[g, 2] + R_WG[g, 2, 0] * c_G[s, 0] + R_WG[g, 2, 1] * c_G[s, 1] + R_WG[g, 2, 2] * c_G[s, 2]
+                    dx, dy, dz = x - p[0], y - p[1], z - p[2]
+                    u = R[0, 0] * dx + R[1, 0] * dy + R[2, 0] * dz
+                    v = R[0, 1] * dx + R[1, 1] * dy + R[2, 1] * dz
+                    w = R[0, 2] * dx + R[1, 2] * dy + R[2, 2] * dz
+                    s_g = min(s_g, _sdf(kind, d, u, v, w) - radii[s])
+                if not s_g < 0.0:
+                    continue
+                if g_kind[g] == 0:  # SEGMENT (drake_mh.spheres)
+                    v_g = _segment_bound(kind, d, R, p, points_W[r, 4 * g:4 * g + 4], half_length[g], radius[g], ck,
+                                         nk, ek)
+                else:
+                    v_g = _polytope_bound(kind, d, R, p, R_WG[g], p_WG[g], VH[v_start[g]:v_start[g + 1]],
+                                          NH[f_start[g]:f_start[g + 1]], OH[f_start[g]:f_start[g + 1]],
+                                          EH[e_start[g]:e_start[g + 1]], excess[g], ck, nk, ek, s_g, VO, NO, EO)
+                best = min(best, s_g, v_g)
+            values[r, k] = best
 
 
 @functools.lru_cache(maxsize=256)
 def _obstacle_polytope(shape):
     """``(vertices_O (V, 3), face normals_O (F, 3), edge directions_O (E, 3))`` of a box, or of
-    the prism with ``_PRISM_SIDES`` sides circumscribing a cylinder (it contains the cylinder)."""
+    the prism with ``_PRISM_SIDES`` sides circumscribing a cylinder (it contains the cylinder);
+    empty for a sphere or a capsule (their cores are a point and a segment)."""
     if isinstance(shape, Box):
         h = 0.5 * np.asarray(shape.size)
         corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * h
         return corners, np.eye(3), np.eye(3)
+    if not isinstance(shape, Cylinder):
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))
     k = _PRISM_SIDES
     angles = 2.0 * np.pi * (np.arange(k) + 0.5) / k  # corner directions; faces at multiples of 2pi/k
     ring = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(k)]) * (shape.radius / np.cos(np.pi / k))
@@ -118,140 +305,80 @@ def _obstacle_polytope(shape):
     return corners, normals, edges
 
 
-def _to_obstacle_frame(R_WG, p_WG, obstacle):
-    """``(R_GO (n, 3, 3), p_GO (n, 3))``: the obstacle's pose in each geometry frame."""
-    R_WO, p_WO = obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3]
-    R_GO = np.einsum("nji,jk->nik", R_WG, R_WO)  # R_WG^T R_WO
-    p_GO = np.einsum("nji,nj->ni", R_WG, p_WO - p_WG)
-    return R_GO, p_GO
+def obstacle_polytopes(obstacles) -> tuple:
+    """``(corners (K, V, 3), n_corners (K,), normals (K, F, 3), n_normals, edges (K, E, 3),
+    n_edges)``: each obstacle's :func:`_obstacle_polytope` in its frame, zero-padded."""
+    polys = [_obstacle_polytope(o.shape) for o in obstacles]
+    out = []
+    for i in range(3):
+        counts = np.array([len(p[i]) for p in polys], dtype=np.int64)
+        packed = np.zeros((len(polys), max(counts, default=0), 3))
+        for k, p in enumerate(polys):
+            packed[k, :len(p[i])] = p[i]
+        out += [packed, counts]
+    return tuple(out)
+
+
+def core_arrays(model) -> tuple:
+    """The geometries of a :class:`drake_mh.spheres.SphereModel` as :func:`correct_clearances`
+    reads them: ``(radii (S,), c_G (S, 3), g_bound (G,), g_start (G+1,), g_kind, half_length, radius,
+    VH, v_start, NH, OH, f_start, EH, e_start, excess)``: the sphere centres in their geometry's
+    frame, each geometry's bounding radius about its origin, the polytopes' vertices, facets and
+    edges (in G) stacked."""
+    starts, kind, half_length, radius = model.core_arrays
+    cores = model.geometries
+
+    def stacked(name, width):
+        parts = [np.asarray(getattr(c, name), dtype=float).reshape(-1, *width) for c in cores]
+        return (np.ascontiguousarray(np.concatenate(parts)) if parts else np.zeros((0, *width)),
+                np.r_[0, np.cumsum([len(p) for p in parts])].astype(np.int64))
+
+    (VH, v_start), (NH, f_start), (OH, _), (EH, e_start) = (stacked("vertices_G", (3,)), stacked("normals_G", (3,)),
+                                                            stacked("offsets", ()), stacked("edges_G", (3,)))
+    g_start = np.r_[starts, model.num_spheres].astype(np.int64)
+    radii = np.ascontiguousarray(model.radii, dtype=float)
+    c_G = np.empty((model.num_spheres, 3))  # the centres in their geometry's frame
+    g_bound = np.empty(len(cores))
+    for g, core in enumerate(cores):
+        sl = slice(g_start[g], g_start[g + 1])
+        c_G[sl] = (model.centres_B[sl] - core.X_BG[:3, 3]) @ core.X_BG[:3, :3]
+        g_bound[g] = (np.linalg.norm(c_G[sl], axis=1) + radii[sl]).max(initial=0.0)
+    return (radii, c_G, g_bound, g_start, kind.astype(np.int64), half_length.astype(float), radius.astype(float),
+            VH, v_start, NH, OH, f_start, EH, e_start, np.array([c.excess for c in cores], dtype=float))
 
 
 def segment_lower_bound(half_length, radius, pts_W, obstacle) -> np.ndarray:
     """``v (n,)`` <= the signed distance [m] between capsules (``half_length (n,)``, ``radius (n,)``,
     axis z of G; ``pts_W (n, 4, 3)`` the origin and unit-axis tips of G in W) and an obstacle
     (module docstring)."""
-    shape = obstacle.shape
-    kind, dims = primitive_code(shape)
-    if kind in (SPHERE, CAPSULE):  # segment to a point / segment core: exact
-        corners = normals = edges = np.zeros((0, 3))
-    else:  # the axis may enter the obstacle: separating axes (complete for a box)
-        corners, normals, edges = _obstacle_polytope(shape)
-    return _segment_core_kernel(kind, dims, obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3],
-                                np.ascontiguousarray(pts_W), half_length, radius, corners, normals, edges)
-
-
-def _segment_hits_polytope(a, b, normals, offsets) -> np.ndarray:
-    """Whether each segment ``a_n -> b_n`` meets the polytope ``normals @ p + offsets <= 0``
-    (clipping the parameter interval facet by facet)."""
-    fa = a @ normals.T + offsets
-    fb = b @ normals.T + offsets
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = fa / (fa - fb)  # where the segment crosses each facet plane
-    lo = np.where(fb < fa, t, -np.inf).max(axis=1, initial=0.0)  # entering facets
-    hi = np.where(fb > fa, t, np.inf).min(axis=1, initial=1.0)  # leaving facets
-    parallel_out = ((fa == fb) & (fa > 0)).any(axis=1)
-    return (np.maximum(lo, 0.0) <= np.minimum(hi, 1.0)) & ~parallel_out
-
-
-@numba.njit(cache=True, inline="always")
-def _gap(u0, u1, u2, VH, VO, n):
-    """Gap between the projections of conv(VH) and conv(VO[n]) on the unit axis u."""
-    lo_h, hi_h = np.inf, -np.inf
-    for v in range(VH.shape[0]):
-        p = u0 * VH[v, 0] + u1 * VH[v, 1] + u2 * VH[v, 2]
-        lo_h = min(lo_h, p)
-        hi_h = max(hi_h, p)
-    lo_o, hi_o = np.inf, -np.inf
-    for v in range(VO.shape[1]):
-        p = u0 * VO[n, v, 0] + u1 * VO[n, v, 1] + u2 * VO[n, v, 2]
-        lo_o = min(lo_o, p)
-        hi_o = max(hi_o, p)
-    return max(lo_o - hi_h, lo_h - hi_o)
-
-
-@numba.njit(cache=True)
-def _polytope_sat_kernel(VH, NH, OH, EH, VO, NO, EO, sphere_value, certain):
-    """Separating-axis lower bound of the signed distance between conv(VH) and each conv(VO[n]),
-    or ``+inf`` where it cannot lower ``sphere_value[n]`` (then the spheres' value stands).
-
-    Every axis gives a lower bound and the best one is kept, so the scan stops as soon as the
-    best reaches ``sphere_value`` (it can no longer lower ``min(sphere_value, v)``; a
-    non-negative gap also proves separation). Facet planes of H (``NH @ p + OH <= 0``) and face
-    normals of O come first; the edge x edge axes follow unless the pair is ``certain`` to
-    overlap (its sphere value below minus the link's excess: the face bound is valid there,
-    only looser). With all axes scanned, the best gap is minus the exact penetration depth.
-    """
-    out = np.empty(VO.shape[0])
-    for n in range(VO.shape[0]):
-        stop = sphere_value[n]
-        best = -np.inf
-        for m in range(NH.shape[0]):  # H's facet planes: O beyond facet m (H's side is known)
-            lo_o = np.inf
-            for v in range(VO.shape[1]):
-                lo_o = min(lo_o, NH[m, 0] * VO[n, v, 0] + NH[m, 1] * VO[n, v, 1] + NH[m, 2] * VO[n, v, 2])
-            best = max(best, lo_o + OH[m])
-            if best >= stop:
-                break
-        if best < stop:
-            for m in range(NO.shape[1]):
-                best = max(best, _gap(NO[n, m, 0], NO[n, m, 1], NO[n, m, 2], VH, VO, n))
-                if best >= stop:
-                    break
-        if best < stop and not certain[n]:
-            for e in range(EH.shape[0]):
-                for f in range(EO.shape[1]):
-                    u0 = EH[e, 1] * EO[n, f, 2] - EH[e, 2] * EO[n, f, 1]
-                    u1 = EH[e, 2] * EO[n, f, 0] - EH[e, 0] * EO[n, f, 2]
-                    u2 = EH[e, 0] * EO[n, f, 1] - EH[e, 1] * EO[n, f, 0]
-                    norm = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
-                    if norm <= 1e-9:
-                        continue
-                    best = max(best, _gap(u0 / norm, u1 / norm, u2 / norm, VH, VO, n))
-                    if best >= stop:
-                        break
-                if best >= stop:
-                    break
-        out[n] = np.inf if best >= stop else best
-    return out
+    kind, dims = primitive_code(obstacle.shape)
+    corners, normals, edges = _obstacle_polytope(obstacle.shape)
+    R_WO, p_WO = obstacle.X_WO[:3, :3].copy(), obstacle.X_WO[:3, 3].copy()
+    pts_W = np.asarray(pts_W, dtype=float)
+    return np.array([_segment_bound(kind, dims, R_WO, p_WO, np.ascontiguousarray(pts), float(h), float(r), corners,
+                                    normals, edges) for h, r, pts in zip(half_length, radius, pts_W)])
 
 
 def polytope_lower_bound(core, R_WG: np.ndarray, p_WG: np.ndarray, obstacle, sphere_value: np.ndarray) -> np.ndarray:
     """``v (n,)`` <= the signed distance [m] between a polytope core (a
-    :class:`drake_mh.spheres.GeometryCore`) at poses ``R_WG, p_WG`` and an obstacle; ``+inf``
-    where the sphere value needs no correction (module docstring).
+    :class:`drake_mh.spheres.GeometryCore`) at poses ``R_WG (n, 3, 3), p_WG (n, 3)`` and an
+    obstacle; ``+inf`` where the sphere value needs no correction (module docstring).
 
     Args:
         sphere_value: ``(n,)`` the spheres' value for this geometry (< 0); below ``-core.excess``
             the pair certainly overlaps, and the edge x edge axes are skipped (the face-normal
             bound is valid, only looser).
     """
-    shape = obstacle.shape
-    R_GO, p_GO = _to_obstacle_frame(R_WG, p_WG, obstacle)
-    N, off = core.normals_G, core.offsets
-    if isinstance(shape, Sphere):
-        depth = (p_GO @ N.T + off).max(axis=1)
-        return np.where(depth < 0, depth - shape.radius, np.inf)
-    certain = sphere_value < -core.excess
-    n = len(p_GO)
-    if isinstance(shape, Capsule):
-        # a capsule whose axis misses P meets s <= d already (as a ball centred outside P does)
-        half = 0.5 * shape.length * R_GO[:, :, 2]
-        a, b = p_GO - half, p_GO + half
-        hits = _segment_hits_polytope(a, b, N, off)
-        v = np.full(n, np.inf)
-        if hits.any():
-            seg = np.ascontiguousarray(np.stack([a[hits], b[hits]], axis=1))
-            direction = np.ascontiguousarray((seg[:, 1] - seg[:, 0])[:, None, :])
-            v[hits] = _polytope_sat_kernel(core.vertices_G, N, off, core.edges_G, seg, np.zeros((len(seg), 0, 3)),
-                                           direction, sphere_value[hits] + shape.radius,
-                                           np.zeros(len(seg), np.bool_)) - shape.radius
-        return v
-    corners, normals, edges = _obstacle_polytope(shape)
-    corners_G = np.ascontiguousarray(np.einsum("nij,vj->nvi", R_GO, corners) + p_GO[:, None, :])
-    normals_G = np.ascontiguousarray(np.einsum("nij,mj->nmi", R_GO, normals))
-    edges_G = np.ascontiguousarray(np.einsum("nij,mj->nmi", R_GO, edges))
-    return _polytope_sat_kernel(core.vertices_G, N, off, core.edges_G, corners_G, normals_G, edges_G,
-                                np.ascontiguousarray(sphere_value, dtype=float), certain)
+    kind, dims = primitive_code(obstacle.shape)
+    corners, normals, edges = _obstacle_polytope(obstacle.shape)
+    R_WO, p_WO = obstacle.X_WO[:3, :3].copy(), obstacle.X_WO[:3, 3].copy()
+    VO, NO, EO = np.empty((max(len(corners), 2), 3)), np.empty((len(normals), 3)), np.empty((max(len(edges), 1), 3))
+    arrays = [np.ascontiguousarray(a, dtype=float) for a in (core.vertices_G, core.normals_G, core.offsets,
+                                                               core.edges_G)]
+    return np.array([_polytope_bound(kind, dims, R_WO, p_WO, np.ascontiguousarray(R, dtype=float),
+                                     np.ascontiguousarray(p, dtype=float), *arrays, float(core.excess), corners,
+                                     normals, edges, float(s), VO, NO, EO)
+                     for R, p, s in zip(R_WG, p_WG, sphere_value)])
 
 
 def core_points(model) -> tuple[list, np.ndarray]:
@@ -265,38 +392,5 @@ def core_points(model) -> tuple[list, np.ndarray]:
     return links, np.asarray(offsets, dtype=float).reshape(-1, 3)
 
 
-def corrected_min(model, per_sphere: np.ndarray, geometry_points_W: np.ndarray, obstacle) -> np.ndarray:
-    """``(n,)`` the model's clearance to ``obstacle`` with penetrating geometries corrected.
-
-    Args:
-        model: the :class:`drake_mh.spheres.SphereModel`.
-        per_sphere: ``(n, S)`` per-sphere signed distances to the obstacle [m].
-        geometry_points_W: ``(n, 4G, 3)`` world positions of :func:`core_points`.
-        obstacle: the :class:`drake_mh.scene.Obstacle`.
-    """
-    from drake_mh.spheres import SEGMENT
-
-    starts, kind, half_length, radius = model.core_arrays
-    per_geometry = np.minimum.reduceat(per_sphere, starts, axis=1)  # (n, G)
-    rows, geoms = np.nonzero(per_geometry < 0)
-    if not len(rows):
-        return per_geometry.min(axis=1)
-    pts = geometry_points_W.reshape(len(per_sphere), -1, 4, 3)[rows, geoms]  # (m, 4, 3)
-    seg = kind[geoms] == SEGMENT
-    if seg.all():
-        v = segment_lower_bound(half_length[geoms], radius[geoms], pts, obstacle)
-    else:
-        v = np.full(len(rows), np.inf)
-        if seg.any():
-            v[seg] = segment_lower_bound(half_length[geoms[seg]], radius[geoms[seg]], pts[seg], obstacle)
-        p_WG = pts[:, 0]
-        R_WG = np.stack([pts[:, 1] - p_WG, pts[:, 2] - p_WG, pts[:, 3] - p_WG], axis=2)
-        for g in np.unique(geoms[~seg]):
-            sel = geoms == g
-            v[sel] = polytope_lower_bound(model.geometries[g], R_WG[sel], p_WG[sel], obstacle,
-                                          per_geometry[rows[sel], g])
-    per_geometry[rows, geoms] = np.minimum(per_geometry[rows, geoms], v)
-    return per_geometry.min(axis=1)
-
-
-__all__ = ["segment_lower_bound", "polytope_lower_bound", "corrected_min", "core_points"]
+__all__ = ["segment_lower_bound", "polytope_lower_bound", "correct_clearances", "core_arrays", "core_points",
+           "obstacle_polytopes"]

@@ -47,6 +47,14 @@ def _segments():
     return segments
 
 
+@functools.cache
+def _penetration():
+    """:mod:`drake_mh.scene.penetration`, imported on first use (as :func:`_segments`)."""
+    from drake_mh.scene import penetration
+
+    return penetration
+
+
 def _vector3(value, what: str) -> np.ndarray:
     if isinstance(value, (str, bytes)) or np.iscomplexobj(value):
         raise SceneError(f"{what} must be 3 finite numbers, got {value!r}")
@@ -117,6 +125,7 @@ class Scene:
         self._free_function = None
         self._free_one = None  # its one-configuration entry and buffer (batch.CollisionModel.free_function)
         self._clearance_function = None  # batch_obstacle_distances' (batch.CollisionModel.obstacle_clearance_function)
+        self._polytopes = None  # the obstacles' polytopes for its penetration correction (penetration.py)
         self._q_shape, self._nq = (robot.nq,), robot.nq
         self._self_capsule_pairs: list = []
         self._always_close: tuple = ()
@@ -379,9 +388,28 @@ class Scene:
 
     @functools.cached_property
     def _compiled_cores(self):
-        from drake_mh.scene.penetration import core_points
+        return self.robot.batch.compile_points(*_penetration().core_points(self.sphere_model))
 
-        return self.robot.batch.compile_points(*core_points(self.sphere_model))
+    @functools.cached_property
+    def _core_arrays(self) -> tuple:
+        """The sphere model's geometries as the penetration correction reads them."""
+        return _penetration().core_arrays(self.sphere_model)
+
+    def _correct_penetrations(self, Q, values) -> None:
+        """``values (n, K)`` in place, for ``Q (n, nq)``: the negative ones corrected where the
+        sphere model's value can be too shallow (:func:`drake_mh.scene.penetration.correct_clearances`)."""
+        _penetration().correct_clearances(values, self.robot.batch.points(np.ascontiguousarray(Q),
+                                                                           *self._compiled_cores),
+                                          *self._core_arrays, *self.obstacle_arrays[:3], self.obstacle_arrays[4],
+                                          *self._obstacle_polytopes)
+
+    @property
+    def _obstacle_polytopes(self) -> tuple:
+        """The obstacles' polytopes as the penetration correction reads them (rebuilt after
+        add/move/remove)."""
+        if self._polytopes is None:
+            self._polytopes = _penetration().obstacle_polytopes(self._obstacles.values())
+        return self._polytopes
 
     def sphere_centres(self, Q) -> np.ndarray:
         """World positions ``(N, S, 3)`` of the sphere model's centres."""
@@ -422,19 +450,9 @@ class Scene:
         Q, out = self._sphere_clearances(Q, overall=False)
         deep_rows = np.flatnonzero((out < 0).any(axis=1)) if out.size else np.zeros(0, int)
         if len(deep_rows):  # a sphere penetrates: the union's value may be too shallow there
-            from drake_mh.scene.penetration import corrected_min
-
-            model = self.sphere_model
-            Q_deep = np.ascontiguousarray(Q[deep_rows])
-            centres_W = self.sphere_centres(Q_deep)
-            points_W = self.robot.batch.points(Q_deep, *self._compiled_cores)
-            for k, obstacle in enumerate(self._obstacles.values()):
-                rows = np.flatnonzero(out[deep_rows, k] < 0)
-                if not len(rows):
-                    continue
-                R, p = obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3]
-                per_sphere = obstacle.shape.signed_distance((centres_W[rows] - p) @ R) - model.radii
-                out[deep_rows[rows], k] = corrected_min(model, per_sphere, points_W[rows], obstacle)
+            deep = out[deep_rows]
+            self._correct_penetrations(Q[deep_rows], deep)
+            out[deep_rows] = deep
         return out
 
     # --- batched boolean queries and certified segments (sphere model, compiled) ---------------
@@ -450,6 +468,7 @@ class Scene:
     def _obstacles_changed(self) -> None:
         """Drop what was bound to the obstacles (rebuilt on the next query)."""
         self._obstacle_arrays = self._free_function = self._free_one = self._clearance_function = None
+        self._polytopes = None
 
     @property
     def obstacle_arrays(self) -> tuple:
@@ -553,7 +572,9 @@ class Scene:
         out = out[:, 0]
         deep = np.flatnonzero(out < 0)  # a sphere penetrates: per obstacle, corrected
         if len(deep):
-            out[deep] = self.batch_obstacle_distances(Q[deep]).min(axis=1)
+            values = np.full((len(deep), len(self._obstacles)), -1.0)  # all obstacles: the negative ones count
+            self._correct_penetrations(Q[deep], values)
+            out[deep] = values.min(axis=1)
         return out
 
     def __repr__(self) -> str:
