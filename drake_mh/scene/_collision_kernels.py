@@ -224,12 +224,14 @@ def _groups_free(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, 
 @numba.njit(cache=True, fastmath=FASTMATH)
 def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx,
                    g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-                   kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart,
-                   u_start, u_offset, u_radius, out):
+                   kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule,
+                   g_ustart, u_start, u_offset, u_radius, out):
     """``out (N,)``: every sphere at least ``clearance`` from every obstacle and every checked
     link pair at least ``self_clearance`` apart (both > 0: the tests compare squares; the pairs'
     floor tables ``t_meta, t_grid, t_vals`` of :mod:`drake_mh.scene.pair_table` and the links'
-    bounding capsules ``g_capsule`` of :class:`drake_mh.scene.batch.CollisionModel`)."""
+    bounding capsules ``g_capsule`` of :class:`drake_mh.scene.batch.CollisionModel`). A (link,
+    obstacle) pair whose static gap ``o_gap[g, k]`` (:meth:`~drake_mh.scene.batch.CollisionModel.static_gaps`:
+    no configuration brings the two bounding spheres closer) keeps the clearance is skipped."""
     F, G, N, K = parent.shape[0], g_anchor.shape[0], QT.shape[1], kinds.shape[0]
     L = min(LANES, N)  # one configuration allocates one lane
     R, p = np.empty((F, 3, 3, L)), np.empty((F, 3, L))
@@ -255,6 +257,8 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
             for b in range(m):
                 Gx[g, b], Gy[g, b], Gz[g, b] = cx[b], cy[b], cz[b]
             for k in range(K):
+                if o_gap[g, k] >= clearance:  # no configuration brings them near
+                    continue
                 # the link's bounding sphere vs the obstacle's: most pairs end here
                 lim = clearance + g_radius[g] + o_radius[k]
                 lim *= lim

@@ -45,11 +45,11 @@ def collision_free_packed(Q, clearance, self_clearance, ints, floats, out):
     if not _transposed_finite(Q, QT):
         return False
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset,
-     u_radius) = _unpack(ints, floats)
+     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
+     u_offset, u_radius) = _unpack(ints, floats)
     collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius,
-                   g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid,
-                   t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius, out)
+                   g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta,
+                   t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius, out)
     return True
 
 
@@ -66,8 +66,8 @@ def obstacle_clearances_packed(Q, mode, ints, floats, v_WO, out):
     if not _transposed_finite(Q, QT):
         return False
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset,
-     u_radius) = _unpack(ints, floats)
+     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
+     u_offset, u_radius) = _unpack(ints, floats)
     link_clearances(QT, np.zeros(N), np.inf, np.zeros(0), mode, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset,
                     g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta,
                     t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius, out)
@@ -76,7 +76,7 @@ def obstacle_clearances_packed(Q, mode, ints, floats, v_WO, out):
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
 def _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius,
-              g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, pairs, R, p, sn, cs, gc, pbuf):
+              g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, o_gap, pairs, R, p, sn, cs, gc, pbuf):
     """:func:`collision_free` of the one configuration ``QT (nq, 1)``, scalar (no lane arrays,
     no allocation: ``R, p, sn, cs``, ``gc (G, 3)`` and ``pbuf (S, 4)`` are the caller's),
     stopping at the first sphere below the clearance. Same tests in the same order, so the same
@@ -89,6 +89,8 @@ def _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g
         gc[g, 0], gc[g, 1], gc[g, 2] = x, y, z
         reach = clearance + g_radius[g]
         for k in range(kinds.shape[0]):
+            if o_gap[g, k] >= clearance:  # no configuration brings them near
+                continue
             dx, dy, dz = x - p_WO[k, 0], y - p_WO[k, 1], z - p_WO[k, 2]
             lim = reach + o_radius[k]
             if dx * dx + dy * dy + dz * dz >= lim * lim:  # bounding spheres apart
@@ -159,8 +161,8 @@ def collision_free_one(q, clearance, self_clearance, buf):
     floats = buf[2 + n_ints:2 + n_ints + n_floats]
     work = buf[2 + n_ints + n_floats:]
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset,
-     u_radius) = _unpack_views(ints, floats)
+     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
+     u_offset, u_radius) = _unpack_views(ints, floats)
     F, G = parent.shape[0], g_anchor.shape[0]
     R = as_strided(work[:9 * F], shape=(F, 3, 3, 1), strides=(72, 24, 8, 8))
     p = as_strided(work[9 * F:12 * F], shape=(F, 3, 1), strides=(24, 8, 8))
@@ -169,7 +171,7 @@ def collision_free_one(q, clearance, self_clearance, buf):
     pbuf = _rows(work, 12 * F + 2 + 3 * G, s_radius.shape[0], 4)
     QT = as_strided(q, shape=(q.shape[0], 1), strides=(q.strides[0], 8))  # (nq, 1), q's own strides
     free = _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius,
-                     g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius,
+                     g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, o_gap,
                      (pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius), R, p,
                      sn, cs, gc, pbuf)
     return 1 if free else 0

@@ -1,7 +1,7 @@
 """The arrays of the collision kernels (:mod:`drake_mh.scene._collision_kernels`) in two
 buffers, one of int64 and one of float64 (:func:`pack`), and their views again inside compiled
 code (:func:`_unpack`, :func:`_unpack_views`): a call from Python then passes 6 arguments
-instead of 31 (numba's dispatch costs per argument), and planners hand one tuple around.
+instead of 32 (numba's dispatch costs per argument), and planners hand one tuple around.
 """
 
 from __future__ import annotations
@@ -50,14 +50,15 @@ def _offsets(ints):
     f_pWO = f_RWO + 9 * K
     f_dims = f_pWO + 3 * K
     f_orad = f_dims + 3 * K
-    f_grid = f_orad + K
+    f_ogap = f_orad + K
+    f_grid = f_ogap + G * K
     f_vals = f_grid + 4 * P
     f_caps = f_vals + T
     f_uoffset = f_caps + 7 * G
     f_uradius = f_uoffset + 3 * U
     return (F, G, S, K, P, T, U, i_parent, i_perm, i_kind, i_qidx, i_anchor, i_start, i_kinds, i_a, i_b, i_meta,
             i_ustart, i_ustart_s, f_KR, f_Kp, f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad,
-            f_grid, f_vals, f_caps, f_uoffset, f_uradius)
+            f_ogap, f_grid, f_vals, f_caps, f_uoffset, f_uradius)
 
 
 @numba.njit(cache=True, inline="always")
@@ -65,8 +66,8 @@ def _unpack(ints, floats):
     """Views of the arrays :func:`pack` laid out in two buffers (no copies), C-ordered: the
     array types a call from Python passes too, so the kernels they reach compile once."""
     (F, G, S, K, P, T, U, i_parent, i_perm, i_kind, i_qidx, i_anchor, i_start, i_kinds, i_a, i_b, i_meta, i_ustart,
-     i_ustart_s, f_KR, f_Kp, f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_grid, f_vals,
-     f_caps, f_uoffset, f_uradius) = _offsets(ints)
+     i_ustart_s, f_KR, f_Kp, f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_ogap, f_grid,
+     f_vals, f_caps, f_uoffset, f_uradius) = _offsets(ints)
     return (ints[i_parent:i_parent + F], floats[f_KR:f_KR + 9 * F].reshape((F, 3, 3)),
             floats[f_Kp:f_Kp + 3 * F].reshape((F, 3)), ints[i_perm:i_perm + 3 * F].reshape((F, 3)),
             ints[i_kind:i_kind + F], ints[i_qidx:i_qidx + F], ints[i_anchor:i_anchor + G],
@@ -74,8 +75,9 @@ def _unpack(ints, floats):
             ints[i_start:i_start + G + 1], floats[f_soffset:f_soffset + 3 * S].reshape((S, 3)),
             floats[f_sradius:f_sradius + S], ints[i_kinds:i_kinds + K], floats[f_RWO:f_RWO + 9 * K].reshape((K, 3, 3)),
             floats[f_pWO:f_pWO + 3 * K].reshape((K, 3)), floats[f_dims:f_dims + 3 * K].reshape((K, 3)),
-            floats[f_orad:f_orad + K], ints[i_a:i_a + P], ints[i_b:i_b + P],
-            ints[i_meta:i_meta + 6 * P].reshape((P, 6)), floats[f_grid:f_grid + 4 * P].reshape((P, 4)),
+            floats[f_orad:f_orad + K], floats[f_ogap:f_ogap + G * K].reshape((G, K)), ints[i_a:i_a + P],
+            ints[i_b:i_b + P], ints[i_meta:i_meta + 6 * P].reshape((P, 6)),
+            floats[f_grid:f_grid + 4 * P].reshape((P, 4)),
             floats[f_vals:f_vals + T], floats[f_caps:f_caps + 7 * G].reshape((G, 7)), ints[i_ustart:i_ustart + G + 1],
             ints[i_ustart_s:i_ustart_s + U + 1], floats[f_uoffset:f_uoffset + 3 * U].reshape((U, 3)),
             floats[f_uradius:f_uradius + U])
@@ -87,21 +89,22 @@ def _unpack_views(ints, floats):
     200 for all of them; any-layout array types): for
     :func:`drake_mh.scene._entry_kernels.collision_free_one`."""
     (F, G, S, K, P, T, U, i_parent, i_perm, i_kind, i_qidx, i_anchor, i_start, i_kinds, i_a, i_b, i_meta, i_ustart,
-     i_ustart_s, f_KR, f_Kp, f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_grid, f_vals,
-     f_caps, f_uoffset, f_uradius) = _offsets(ints)
+     i_ustart_s, f_KR, f_Kp, f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_ogap, f_grid,
+     f_vals, f_caps, f_uoffset, f_uradius) = _offsets(ints)
     return (ints[i_parent:i_parent + F], _mats(floats, f_KR, F), _rows(floats, f_Kp, F, 3), _rows(ints, i_perm, F, 3),
             ints[i_kind:i_kind + F], ints[i_qidx:i_qidx + F], ints[i_anchor:i_anchor + G],
             _rows(floats, f_offset, G, 3), floats[f_radius:f_radius + G], ints[i_start:i_start + G + 1],
             _rows(floats, f_soffset, S, 3), floats[f_sradius:f_sradius + S], ints[i_kinds:i_kinds + K],
             _mats(floats, f_RWO, K), _rows(floats, f_pWO, K, 3), _rows(floats, f_dims, K, 3),
-            floats[f_orad:f_orad + K], ints[i_a:i_a + P], ints[i_b:i_b + P], _rows(ints, i_meta, P, 6),
+            floats[f_orad:f_orad + K], _rows(floats, f_ogap, G, K), ints[i_a:i_a + P], ints[i_b:i_b + P],
+            _rows(ints, i_meta, P, 6),
             _rows(floats, f_grid, P, 4), floats[f_vals:f_vals + T], _rows(floats, f_caps, G, 7),
             ints[i_ustart:i_ustart + G + 1], ints[i_ustart_s:i_ustart_s + U + 1], _rows(floats, f_uoffset, U, 3),
             floats[f_uradius:f_uradius + U])
 
 
 def pack(parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-         kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
+         kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
          u_offset, u_radius):
     """``(ints, floats)``: the arrays of :func:`drake_mh.scene._collision_kernels.collision_free`
     in two buffers (module docstring)."""
@@ -109,6 +112,6 @@ def pack(parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start
     ints = np.concatenate([np.asarray(sizes), parent, np.ravel(perm), kind, qidx, g_anchor, g_start, kinds,
                            pair_a, pair_b, np.ravel(t_meta), g_ustart, u_start]).astype(np.int64)
     floats = np.concatenate([np.ravel(a) for a in (KR, Kp, g_offset, g_radius, s_offset, s_radius, R_WO, p_WO,
-                                                     dims, o_radius, t_grid, t_vals, g_capsule, u_offset,
+                                                     dims, o_radius, o_gap, t_grid, t_vals, g_capsule, u_offset,
                                                      u_radius)]).astype(np.float64)
     return np.ascontiguousarray(ints), np.ascontiguousarray(floats)

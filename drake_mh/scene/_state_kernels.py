@@ -114,8 +114,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
         the inputs only (not on the order of the tests), so results are deterministic.
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset,
-     u_radius) = arrays
+     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
+     u_offset, u_radius) = arrays
     R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf = ws
     G, K = g_anchor.shape[0], kinds.shape[0]
     nw = (m + 7) // 8
@@ -131,6 +131,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
         for b in range(m):
             Gx[g, b], Gy[g, b], Gz[g, b] = cx[b], cy[b], cz[b]
         for k in range(K):
+            if o_gap[g, k] >= margin:  # no configuration brings them near (plain <= margin)
+                continue
             lim = margin + g_radius[g] + o_radius[k]  # bounding sphere vs bounding sphere
             lim *= lim
             px, py, pz = p_WO[k, 0], p_WO[k, 1], p_WO[k, 2]

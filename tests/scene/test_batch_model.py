@@ -61,3 +61,51 @@ def test_overall_clearance_is_the_smallest_per_obstacle(robot_name):
     assert 0 < np.sum(overall < 0) < 300  # both kinds of configuration are covered
     np.testing.assert_array_equal(scene.batch_min_distance(Q), scene.batch_obstacle_distances(Q).min(axis=1))
     assert function(np.full((2, robot.nq), np.nan)) is None
+
+
+@pytest.mark.parametrize("prismatic_every", [0, 1, 2])
+def test_reach_balls_hold_every_links_bounding_centre(prismatic_every):
+    """The static gaps stand on these balls: random chains with arbitrary axes, prismatic joints
+    (the root one too) and a side branch, configurations at random and at the joint limits."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from random_models import random_chain_urdf
+
+    from drake_mh.robot import Robot
+
+    for seed in range(3):
+        robot = Robot(random_chain_urdf(5, seed, prismatic_every=prismatic_every, branch=True), ee_frame="tip")
+        model = Scene(robot).collision_model
+        centre, radius = model.reach_balls
+        g_anchor, g_offset = model.model_arrays[:2]
+        rng = np.random.default_rng(seed)
+        Q = np.vstack([robot.random_configurations(500, rng=seed),
+                       np.where(rng.random((500, robot.nq)) < 0.5, robot.lower, robot.upper)])
+        C = robot.batch.points(Q, g_anchor, g_offset)  # (N, G, 3)
+        assert np.all(np.linalg.norm(C - centre, axis=2) <= radius + 1e-9)
+
+
+def test_static_gaps_change_no_answer(scene):
+    """collision_free with the static gaps as built and with none (every pair tested)."""
+    from drake_mh.scene import _entry_kernels as E
+    from drake_mh.scene.benchmark import benchmark_scene
+
+    bench = benchmark_scene(scene.robot, "10 mixed")
+    model, obstacles = bench.collision_model, bench.obstacle_arrays
+    gaps = model.static_gaps(obstacles)
+    assert 0.2 < np.mean(gaps > 0.0) < 1.0  # the links near the base never reach some obstacles
+    Q = scene.robot.random_configurations(2048, rng=3)
+    answers = []
+    for skip in (True, False):
+        if not skip:
+            model.static_gaps = lambda obstacles: np.full(gaps.shape, -np.inf)
+        ints, floats = model.packed(obstacles, model.pair_arrays)
+        for clearance in (1e-12, 0.05):
+            out = np.empty(len(Q), np.bool_)
+            assert E.collision_free_packed(Q, clearance, 1e-12, ints, floats, out)
+            answers.append(out)
+    del model.static_gaps
+    assert np.array_equal(answers[0], answers[2]) and np.array_equal(answers[1], answers[3])
+    assert 0 < answers[0].sum() < len(Q)

@@ -247,8 +247,8 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
        second: 35 s less from an empty numba cache.
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset,
-     u_radius) = arrays
+     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
+     u_offset, u_radius) = arrays
     t0 = now(clock, buf) if profile else 0.0
     nq = qa.shape[0]
     G, C = g_anchor.shape[0], reach.shape[0]

@@ -125,9 +125,6 @@ _PREPARED = False
 
 def _arguments(scene) -> tuple:
     """``(ints, floats, v_WO, reach)`` of the scene's current obstacles (cached until they change)."""
-    from drake_mh.scene._packing import pack
-    from drake_mh.scene.batch import bounding_radii
-
     arrays = getattr(scene, "_obstacle_arrays", None)  # None after add/move/remove: the property rebuilds it
     if arrays is None:
         arrays = scene.obstacle_arrays
@@ -135,9 +132,8 @@ def _arguments(scene) -> tuple:
     if cached is not None and cached[0] is arrays:
         return cached[1]
     model = scene.collision_model
-    kinds, R_WO, p_WO, v_WO, dims = arrays
-    ints, floats = pack(*model._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(arrays), *model.pair_arrays)
-    bound = (ints, floats, np.ascontiguousarray(v_WO, dtype=float), np.ascontiguousarray(model.reach))
+    ints, floats = model.packed(arrays, model.pair_arrays)
+    bound = (ints, floats, np.ascontiguousarray(arrays[3], dtype=float), np.ascontiguousarray(model.reach))
     _BOUND[scene] = (arrays, bound)
     return bound
 
