@@ -36,7 +36,8 @@ OPTIONAL_DEMO_STUDIES: tuple[str, ...] = ("ik_comparison", "motion_benchmark")
 #: (:mod:`drake_mh.study.warmup`): from an empty numba cache the demo took 195-199 s without them,
 #: 171 s with them (2026-11-24); 181.6 s on 11-25, 121.5 s after rrt_connect's kernel stopped
 #: compiling its unused certification mode, 146 s for that code and 160 s for 472e1b9 later that
-#: day (18 s with a warm cache throughout)
+#: day, 145 and 133 s after the compiled penetration correction (its kernel compiles 5 s longer)
+#: and the static gaps (18 s with a warm cache throughout)
 BACKGROUND_COMPILE = "motion_benchmark"
 #: figures of a study report shown on the demo page, in order of preference (at most two)
 KEY_FIGURES: tuple[str, ...] = ("boxplots", "convergence")
