@@ -10,6 +10,8 @@ import numba
 import numpy as np
 from numpy.lib.stride_tricks import as_strided
 
+from drake_mh.scene.pair_table import GRID_COLUMNS
+
 
 @numba.njit(cache=True, inline="always")
 def _rows(buf, i, n, width):
@@ -52,7 +54,7 @@ def _offsets(ints):
     f_orad = f_dims + 3 * K
     f_ogap = f_orad + K
     f_grid = f_ogap + G * K
-    f_vals = f_grid + 4 * P
+    f_vals = f_grid + GRID_COLUMNS * P
     f_caps = f_vals + T
     f_uoffset = f_caps + 7 * G
     f_uradius = f_uoffset + 3 * U
@@ -77,7 +79,7 @@ def _unpack(ints, floats):
             floats[f_pWO:f_pWO + 3 * K].reshape((K, 3)), floats[f_dims:f_dims + 3 * K].reshape((K, 3)),
             floats[f_orad:f_orad + K], floats[f_ogap:f_ogap + G * K].reshape((G, K)), ints[i_a:i_a + P],
             ints[i_b:i_b + P], ints[i_meta:i_meta + 6 * P].reshape((P, 6)),
-            floats[f_grid:f_grid + 4 * P].reshape((P, 4)),
+            floats[f_grid:f_grid + GRID_COLUMNS * P].reshape((P, GRID_COLUMNS)),
             floats[f_vals:f_vals + T], floats[f_caps:f_caps + 7 * G].reshape((G, 7)), ints[i_ustart:i_ustart + G + 1],
             ints[i_ustart_s:i_ustart_s + U + 1], floats[f_uoffset:f_uoffset + 3 * U].reshape((U, 3)),
             floats[f_uradius:f_uradius + U])
@@ -98,7 +100,7 @@ def _unpack_views(ints, floats):
             _mats(floats, f_RWO, K), _rows(floats, f_pWO, K, 3), _rows(floats, f_dims, K, 3),
             floats[f_orad:f_orad + K], _rows(floats, f_ogap, G, K), ints[i_a:i_a + P], ints[i_b:i_b + P],
             _rows(ints, i_meta, P, 6),
-            _rows(floats, f_grid, P, 4), floats[f_vals:f_vals + T], _rows(floats, f_caps, G, 7),
+            _rows(floats, f_grid, P, GRID_COLUMNS), floats[f_vals:f_vals + T], _rows(floats, f_caps, G, 7),
             ints[i_ustart:i_ustart + G + 1], ints[i_ustart_s:i_ustart_s + U + 1], _rows(floats, f_uoffset, U, 3),
             floats[f_uradius:f_uradius + U])
 

@@ -50,6 +50,8 @@ CELLS_2D = 128
 MIN_PRODUCT = 256
 """Pairs with fewer sphere pairs than this get no table (comparing them costs less than the
 table's memory traffic)."""
+GRID_COLUMNS = 5
+"""Columns of ``t_grid``: ``[lower1, 1/width1, lower2, 1/width2, lowest floor]`` (:func:`pair_tables`)."""
 VERSION = "pair-table-1"
 """Bump when the construction changes (part of the disk cache key)."""
 
@@ -57,22 +59,27 @@ _CACHE: dict = {}  # (id(model), pair) -> (model, (joints, lower, inverse width,
 
 
 def empty_tables(num_pairs: int = 0) -> tuple:
-    """``(t_meta (P, 6), t_grid (P, 4), t_vals (0,))`` of ``P`` pairs without tables (see
+    """``(t_meta (P, 6), t_grid (P, 5), t_vals (0,))`` of ``P`` pairs without tables (see
     :func:`pair_tables`)."""
-    return np.zeros((num_pairs, 6), np.int64), np.zeros((num_pairs, 4)), np.zeros(0)
+    grid = np.zeros((num_pairs, GRID_COLUMNS))
+    grid[:, 4] = -np.inf
+    return np.zeros((num_pairs, 6), np.int64), grid, np.zeros(0)
 
 
 def pair_tables(model) -> tuple:
     """The floor tables of a :class:`drake_mh.scene.batch.CollisionModel`'s checked pairs.
 
     Returns:
-        ``(t_meta (P, 6) int64, t_grid (P, 4), t_vals (T,))``: per pair ``[dims, j1, j2, n1, n2,
+        ``(t_meta (P, 6) int64, t_grid (P, 5), t_vals (T,))``: per pair ``[dims, j1, j2, n1, n2,
         offset]`` (``dims`` 0: no table; joints ``j1, j2`` of ``q``, cells per joint, start of the
-        pair's row-major floors in ``t_vals``) and ``[lower1, 1/width1, lower2, 1/width2]``.
+        pair's row-major floors in ``t_vals``) and ``[lower1, 1/width1, lower2, 1/width2,
+        lowest]`` (``lowest``: the smallest floor of the table, a lower bound of the pair's
+        clearance in every configuration within its joints' limits; ``-inf`` without a table).
     """
     pair_a, pair_b = model.pair_index
     P = len(pair_a)
-    meta, grid, values = np.zeros((P, 6), np.int64), np.zeros((P, 4)), []
+    meta, grid, values = np.zeros((P, 6), np.int64), np.zeros((P, GRID_COLUMNS)), []
+    grid[:, 4] = -np.inf
     offset = 0
     for i, (ga, gb) in enumerate(zip(pair_a, pair_b)):
         table = _table(model, int(ga), int(gb))
@@ -80,7 +87,7 @@ def pair_tables(model) -> tuple:
             continue
         joints, lower, inverse_width, cells, floors = table
         meta[i] = (len(joints), joints[0], joints[-1], cells[0], cells[-1], offset)
-        grid[i] = (lower[0], inverse_width[0], lower[-1], inverse_width[-1])
+        grid[i] = (lower[0], inverse_width[0], lower[-1], inverse_width[-1], floors.min())
         values.append(floors.ravel())
         offset += floors.size
     t_vals = np.ascontiguousarray(np.concatenate(values)) if values else np.zeros(0)

@@ -146,3 +146,19 @@ def test_segments_certified_through_tables_are_clear_everywhere(scene):
         assert values.min() >= 0.002
         assert values.min() >= cert.lower_self[i] - 1e-12
 
+
+
+def test_the_lowest_floor_bounds_every_configuration(scene):
+    """``t_grid[:, 4]``: each table's smallest floor (rrt_connect certifies a pair along any motion
+    by it), at most the pair's clearance anywhere within the joint limits; -inf without a table."""
+    model, robot = scene.collision_model, scene.robot
+    t_meta, t_grid, t_vals = model.pair_arrays[2:5]
+    tabled = t_meta[:, 0] > 0
+    assert np.all(np.isneginf(t_grid[~tabled, 4]))
+    for i in np.flatnonzero(tabled):
+        size = t_meta[i, 3] * (t_meta[i, 4] if t_meta[i, 0] == 2 else 1)
+        assert t_grid[i, 4] == t_vals[t_meta[i, 5]:t_meta[i, 5] + size].min()
+    Q = robot.random_configurations(300, rng=np.random.default_rng(5))
+    values = pair_values(scene, Q, [model.self_pairs[i] for i in np.flatnonzero(tabled)])
+    assert np.all(values >= t_grid[tabled, 4])
+    assert np.any(t_grid[tabled, 4] >= 0.0) and np.any(t_grid[tabled, 4] < 0.0)  # both kinds on this robot
