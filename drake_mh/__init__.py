@@ -8,7 +8,11 @@ from __future__ import annotations
 
 import importlib
 
-from drake_mh import errors
+from drake_mh import _numba_cache
+
+_numba_cache.configure()  # before any kernel module is imported: numba's cache, keyed by the sources
+
+from drake_mh import errors  # noqa: E402
 
 __version__ = "0.1.0"
 
