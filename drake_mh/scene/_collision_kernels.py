@@ -43,9 +43,10 @@ PER_LINK, PER_OBSTACLE, OVERALL = 0, 1, 2
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
-def _centre_block(m, a, o, R, p, cx, cy, cz):
-    """World position of offset ``o (3,)`` fixed in moving frame ``a`` (-1: the world)."""
-    o0, o1, o2 = o[0], o[1], o[2]
+def _centre_block(m, a, offsets, i, R, p, cx, cy, cz):
+    """World position of offset ``offsets[i] (3,)`` fixed in moving frame ``a`` (-1: the world),
+    read in place (no view: :func:`._pair_kernel._lane_point`)."""
+    o0, o1, o2 = offsets[i, 0], offsets[i, 1], offsets[i, 2]
     if a < 0:
         for b in range(m):
             cx[b] = o0
@@ -192,7 +193,7 @@ def _range_free(b, a, s0, s1, s_offset, s_radius, clearance, R, p, k, kinds, R_W
     """Whether spheres ``s0 .. s1-1`` (fixed in frame ``a``) of lane ``b`` are all at least
     ``clearance`` from obstacle k; stops at the first that is not."""
     for s in range(s0, s1):
-        x, y, z = _lane_point(a, s_offset[s], R, p, b)
+        x, y, z = _lane_point(a, s_offset, s, 0, R, p, b)
         if not _point_free(k, kinds, R_WO, p_WO, dims, clearance + s_radius[s], x, y, z):
             return False
     return True
@@ -214,7 +215,7 @@ def _groups_free(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, 
     per link and obstacle in the 10-obstacle benchmark), where SIMD loops over compacted lanes
     cost more in loop overhead than they save (measured: 128 -> 115 ns per configuration)."""
     for u in range(u0, u1):
-        x, y, z = _lane_point(a, u_offset[u], R, p, b)
+        x, y, z = _lane_point(a, u_offset, u, 0, R, p, b)
         if not _point_free(k, kinds, R_WO, p_WO, dims, clearance + u_radius[u], x, y, z) and not _range_free(
                 b, a, u_start[u], u_start[u + 1], s_offset, s_radius, clearance, R, p, k, kinds, R_WO, p_WO, dims):
             return False
@@ -253,7 +254,7 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
             alive[b] = True
         for g in range(G):
             a = g_anchor[g]
-            _centre_block(m, a, g_offset[g], R, p, cx, cy, cz)
+            _centre_block(m, a, g_offset, g, R, p, cx, cy, cz)
             for b in range(m):
                 Gx[g, b], Gy[g, b], Gz[g, b] = cx[b], cy[b], cz[b]
             for k in range(K):
@@ -317,13 +318,14 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
-def _compact_centres(c, o, Rc, pc, ccx, ccy, ccz):
-    """World position of offset ``o (3,)`` for the ``c`` compacted lanes of pose ``(Rc, pc)``
-    (:func:`_gather`)."""
+def _compact_centres(c, offsets, r, Rc, pc, ccx, ccy, ccz):
+    """World position of offset ``offsets[r] (3,)`` for the ``c`` compacted lanes of pose
+    ``(Rc, pc)`` (:func:`_gather`), read in place (no view: :func:`._pair_kernel._lane_point`)."""
+    o0, o1, o2 = offsets[r, 0], offsets[r, 1], offsets[r, 2]
     for i in range(c):
-        ccx[i] = pc[0, i] + Rc[0, 0, i] * o[0] + Rc[0, 1, i] * o[1] + Rc[0, 2, i] * o[2]
-        ccy[i] = pc[1, i] + Rc[1, 0, i] * o[0] + Rc[1, 1, i] * o[1] + Rc[1, 2, i] * o[2]
-        ccz[i] = pc[2, i] + Rc[2, 0, i] * o[0] + Rc[2, 1, i] * o[1] + Rc[2, 2, i] * o[2]
+        ccx[i] = pc[0, i] + Rc[0, 0, i] * o0 + Rc[0, 1, i] * o1 + Rc[0, 2, i] * o2
+        ccy[i] = pc[1, i] + Rc[1, 0, i] * o0 + Rc[1, 1, i] * o1 + Rc[1, 2, i] * o2
+        ccz[i] = pc[2, i] + Rc[2, 0, i] * o0 + Rc[2, 1, i] * o1 + Rc[2, 2, i] * o2
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
@@ -331,8 +333,7 @@ def _spheres_sd(c, s0, s1, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, s_offse
     """``sc[i] = min(sc[i], sd_k(c_s) - r_s)`` over spheres ``s0 .. s1-1`` for the ``c``
     compacted lanes of pose ``(Rc, pc)`` (obstacles at ``tc``), SIMD across the lanes."""
     for s in range(s0, s1):
-        o = s_offset[s]
-        _compact_centres(c, o, Rc, pc, ccx, ccy, ccz)
+        _compact_centres(c, s_offset, s, Rc, pc, ccx, ccy, ccz)
         _obstacle_sd(c, k, kinds, R_WO, p_WO, v_WO, dims, tc, ccx, ccy, ccz, sd)
         for i in range(c):
             sc[i] = min(sc[i], sd[i] - s_radius[s])
@@ -353,8 +354,7 @@ def _groups_sd(c, u0, u1, lim, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, u_s
     nu = u1 - u0
     key = np.empty(nu)
     for j in range(nu):
-        o = u_offset[u0 + j]
-        _compact_centres(c, o, Rc, pc, ccx, ccy, ccz)
+        _compact_centres(c, u_offset, u0 + j, Rc, pc, ccx, ccy, ccz)
         _obstacle_sd(c, k, kinds, R_WO, p_WO, v_WO, dims, tc, ccx, ccy, ccz, sd)
         lowest = np.inf
         for i in range(c):
@@ -419,7 +419,7 @@ def link_clearances(QT, tau, fine_below, pair_fine_below, mode, parent, KR, Kp, 
             tb[b] = tau[n0 + b]
         _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
         for g in range(G):  # bounding spheres: a lower bound per link and obstacle
-            _centre_block(m, g_anchor[g], g_offset[g], R, p, cx, cy, cz)
+            _centre_block(m, g_anchor[g], g_offset, g, R, p, cx, cy, cz)
             for b in range(m):
                 Gx[g, b], Gy[g, b], Gz[g, b] = cx[b], cy[b], cz[b]
             for k in range(K):

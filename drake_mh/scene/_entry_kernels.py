@@ -85,7 +85,7 @@ def _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g
     _frames_block(QT, 0, 1, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
     for g in range(g_anchor.shape[0]):
         a = g_anchor[g]
-        x, y, z = _lane_point(a, g_offset[g], R, p, 0)
+        x, y, z = _lane_point(a, g_offset, g, 0, R, p, 0)
         gc[g, 0], gc[g, 1], gc[g, 2] = x, y, z
         reach = clearance + g_radius[g]
         for k in range(kinds.shape[0]):

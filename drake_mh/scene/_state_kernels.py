@@ -63,7 +63,7 @@ def _spheres_state(b, a, s0, s1, s_offset, s_radius, margin, plain, R, p, k, kin
     below ``plain``: returned at once)."""
     answer = CLEAR
     for s in range(s0, s1):
-        x, y, z = _lane_point(a, s_offset[s], R, p, b)
+        x, y, z = _lane_point(a, s_offset, s, 0, R, p, b)
         if not _point_free(k, kinds, R_WO, p_WO, dims, margin + s_radius[s], x, y, z):
             if not _point_free(k, kinds, R_WO, p_WO, dims, plain + s_radius[s], x, y, z):
                 return COLLISION
@@ -78,7 +78,7 @@ def _groups_state(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius,
     sphere keeps the margin passed whole (:func:`drake_mh.scene.batch.sphere_groups`)."""
     answer = CLEAR
     for u in range(u0, u1):
-        x, y, z = _lane_point(a, u_offset[u], R, p, b)
+        x, y, z = _lane_point(a, u_offset, u, 0, R, p, b)
         if _point_free(k, kinds, R_WO, p_WO, dims, margin + u_radius[u], x, y, z):
             continue
         state = _spheres_state(b, a, u_start[u], u_start[u + 1], s_offset, s_radius, margin, plain, R, p, k, kinds,
@@ -127,7 +127,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
     for g in range(G):
         a = g_anchor[g]
         margin, plain = link_margin[g], link_plain[g]
-        _centre_block(m, a, g_offset[g], R, p, cx, cy, cz)
+        _centre_block(m, a, g_offset, g, R, p, cx, cy, cz)
         for b in range(m):
             Gx[g, b], Gy[g, b], Gz[g, b] = cx[b], cy[b], cz[b]
         for k in range(K):
