@@ -26,6 +26,8 @@ import sys
 import time
 from pathlib import Path
 
+from drake_mh.cache import cache_dir, content_hash
+
 log = logging.getLogger(__name__)
 
 KEEP = 3
@@ -40,8 +42,6 @@ checkout tells our choice from a user's ``NUMBA_CACHE_DIR``)."""
 def fingerprint(package: Path | None = None) -> str:
     """A content hash of every ``.py`` file of ``package`` (default: drake_mh) that mentions
     numba, with its path (16 hex digits)."""
-    from drake_mh.cache import content_hash
-
     root = Path(package or Path(__file__).parent)
     parts: list[bytes | str] = []
     for path in sorted(root.rglob("*.py")):
@@ -59,8 +59,6 @@ def configure() -> Path | None:
     if chosen and chosen != os.environ.get(MARKER):
         return None  # the user's choice
     try:
-        from drake_mh.cache import cache_dir
-
         root = cache_dir("numba")
         folder = root / fingerprint()
         folder.mkdir(exist_ok=True)

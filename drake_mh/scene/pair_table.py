@@ -52,6 +52,8 @@ MIN_PRODUCT = 256
 table's memory traffic)."""
 GRID_COLUMNS = 5
 """Columns of ``t_grid``: ``[lower1, 1/width1, lower2, 1/width2, lowest floor]`` (:func:`pair_tables`)."""
+LOWEST = 4
+"""The column of ``t_grid`` holding a table's smallest floor (``-inf`` for a pair without a table)."""
 VERSION = "pair-table-1"
 """Bump when the construction changes (part of the disk cache key)."""
 
@@ -62,7 +64,7 @@ def empty_tables(num_pairs: int = 0) -> tuple:
     """``(t_meta (P, 6), t_grid (P, 5), t_vals (0,))`` of ``P`` pairs without tables (see
     :func:`pair_tables`)."""
     grid = np.zeros((num_pairs, GRID_COLUMNS))
-    grid[:, 4] = -np.inf
+    grid[:, LOWEST] = -np.inf
     return np.zeros((num_pairs, 6), np.int64), grid, np.zeros(0)
 
 
@@ -79,7 +81,7 @@ def pair_tables(model) -> tuple:
     pair_a, pair_b = model.pair_index
     P = len(pair_a)
     meta, grid, values = np.zeros((P, 6), np.int64), np.zeros((P, GRID_COLUMNS)), []
-    grid[:, 4] = -np.inf
+    grid[:, LOWEST] = -np.inf
     offset = 0
     for i, (ga, gb) in enumerate(zip(pair_a, pair_b)):
         table = _table(model, int(ga), int(gb))

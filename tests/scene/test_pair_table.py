@@ -8,6 +8,7 @@ import pytest
 from drake_mh.cache import temporary_cache
 from drake_mh.planning.problems import load_problem_robot
 from drake_mh.scene import Scene, pair_table
+from drake_mh.scene.pair_table import LOWEST
 from drake_mh.scene._pair_kernel import pair_floor
 from drake_mh.scene.batch import CollisionModel
 
@@ -154,11 +155,11 @@ def test_the_lowest_floor_bounds_every_configuration(scene):
     model, robot = scene.collision_model, scene.robot
     t_meta, t_grid, t_vals = model.pair_arrays[2:5]
     tabled = t_meta[:, 0] > 0
-    assert np.all(np.isneginf(t_grid[~tabled, 4]))
+    assert np.all(np.isneginf(t_grid[~tabled, LOWEST]))
     for i in np.flatnonzero(tabled):
         size = t_meta[i, 3] * (t_meta[i, 4] if t_meta[i, 0] == 2 else 1)
-        assert t_grid[i, 4] == t_vals[t_meta[i, 5]:t_meta[i, 5] + size].min()
+        assert t_grid[i, LOWEST] == t_vals[t_meta[i, 5]:t_meta[i, 5] + size].min()
     Q = robot.random_configurations(300, rng=np.random.default_rng(5))
     values = pair_values(scene, Q, [model.self_pairs[i] for i in np.flatnonzero(tabled)])
-    assert np.all(values >= t_grid[tabled, 4])
-    assert np.any(t_grid[tabled, 4] >= 0.0) and np.any(t_grid[tabled, 4] < 0.0)  # both kinds on this robot
+    assert np.all(values >= t_grid[tabled, LOWEST])
+    assert np.any(t_grid[tabled, LOWEST] >= 0.0) and np.any(t_grid[tabled, LOWEST] < 0.0)  # both kinds on this robot

@@ -28,6 +28,7 @@ from drake_mh.scene._pair_kernel import segment_floor
 from drake_mh.scene._segment_kernel import CERTIFIED
 from drake_mh.scene._segment_kernel import certify_segments as _certify_segments
 from drake_mh.scene._state_kernels import CLEAR, COLLISION, check_blocks, state_workspace
+from drake_mh.scene.pair_table import LOWEST
 
 FOUND, BUDGET, TIMEOUT = 0, 1, 2
 """Outcomes of :func:`plan_kernel`."""
@@ -266,7 +267,7 @@ def _motion(qa, qb, arrays, ws, lanes, v_WO, reach, clearance, self_clearance, r
         # table (a call passing five arrays costs about 35 ns), and tables whose lowest floor keeps
         # the clearance everywhere (8 of the hand Panda's 12), are settled here without a walk:
         # the MotionBenchMaker median plan 1.54 -> 1.40 (the first) -> 1.30 ms (both), same trees
-        if c >= G and t_meta[c - G, 0] != 0 and (t_grid[c - G, 4] >= self_clearance + 1e-12 or segment_floor(
+        if c >= G and t_meta[c - G, 0] != 0 and (t_grid[c - G, LOWEST] >= self_clearance + 1e-12 or segment_floor(
                 c - G, qa, qb, t_meta, t_grid, t_vals) >= self_clearance + 1e-12):
             acc = CERTIFIED_ROW
         lam[c] = acc
