@@ -37,6 +37,7 @@ import math
 import numba
 import numpy as np
 
+from drake_mh._borrow import borrow
 from drake_mh._kernels import _frames_block
 from drake_mh.scene._collision_kernels import _centre_block, _obstacle_free, _point_free
 from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
@@ -53,7 +54,17 @@ def state_workspace(F, G, S, lanes):
     hit = np.zeros(8 * ((L + 7) // 8), np.uint8)
     return (np.empty((F, 3, 3, L)), np.empty((F, 3, L)), np.empty(L), np.empty(L), np.empty((G, L)),
             np.empty((G, L)), np.empty((G, L)), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_),
-            np.empty(L, np.bool_), np.empty(L, np.int64), hit, hit.view(np.uint64), np.empty((S, 4)))
+            np.empty(L, np.bool_), np.empty(L, np.int64), hit, hit.view(np.uint64), np.empty((S, 4)),
+            np.arange(G), np.zeros(G, np.int64))
+
+
+@numba.njit(cache=True)
+def borrowed_workspace(ws):
+    """:func:`state_workspace`'s arrays borrowed (:func:`drake_mh._borrow.borrow`: passed on without
+    reference counts); ``ws`` must outlive the result."""
+    return (borrow(ws[0]), borrow(ws[1]), borrow(ws[2]), borrow(ws[3]), borrow(ws[4]), borrow(ws[5]), borrow(ws[6]),
+            borrow(ws[7]), borrow(ws[8]), borrow(ws[9]), borrow(ws[10]), borrow(ws[11]), borrow(ws[12]),
+            borrow(ws[13]), borrow(ws[14]), borrow(ws[15]), borrow(ws[16]), borrow(ws[17]))
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -116,7 +127,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
      u_offset, u_radius) = arrays
-    R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf = ws
+    R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first = ws
     G, K = g_anchor.shape[0], kinds.shape[0]
     nw = (m + 7) // 8
     for b in range(m, 8 * nw):  # lanes past m read 0
@@ -124,13 +135,16 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
     _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
     for b in range(m):
         keep[b] = True
-    for g in range(G):
+    for gi in range(G):
+        g = order[gi]
+        k0 = k_first[g] if k_first[g] < K else 0
         a = g_anchor[g]
         margin, plain = link_margin[g], link_plain[g]
         _centre_block(m, a, g_offset, g, R, p, cx, cy, cz)
         for b in range(m):
             Gx[g, b], Gy[g, b], Gz[g, b] = cx[b], cy[b], cz[b]
-        for k in range(K):
+        for ki in range(K):
+            k = k0 if ki == 0 else (ki - 1 if ki <= k0 else ki)
             if o_gap[g, k] >= margin:  # no configuration brings them near (plain <= margin)
                 continue
             lim = margin + g_radius[g] + o_radius[k]  # bounding sphere vs bounding sphere
@@ -159,6 +173,10 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
                             state = _spheres_state(b, a, g_start[g], g_start[g + 1], s_offset, s_radius, margin,
                                                    plain, R, p, k, kinds, R_WO, p_WO, dims)
                         if state == COLLISION:
+                            k_first[g] = k
+                            for j in range(gi, 0, -1):
+                                order[j] = order[j - 1]
+                            order[0] = g
                             return COLLISION
                         if state == NEAR:
                             keep[b] = False

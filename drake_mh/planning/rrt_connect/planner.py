@@ -17,6 +17,7 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument
 from drake_mh.planning.rrt_connect import _kernels as K
+from drake_mh.planning.rrt_connect import _stats as S
 from drake_mh.planning.rrt_connect._clock import clock_address
 
 DEFAULT_MAX_NODES = 200_000
@@ -112,8 +113,8 @@ class RRTConnectConfig:
 
 
 _CONFIGS: dict = {}
-_COUNTS = K.T_SAMPLE  # counts first, then seconds
-_COUNT_NAMES = K.STAT_NAMES[:_COUNTS]
+_COUNTS = S.T_SAMPLE  # counts first, then seconds
+_COUNT_NAMES = S.STAT_NAMES[:_COUNTS]
 
 
 _CLOCK = clock_address()
@@ -151,7 +152,7 @@ def prepare(problem) -> float:
     if not _PREPARED:
         q = np.ascontiguousarray(problem.q_start, dtype=float)
         robot = problem.robot
-        stats = np.zeros(len(K.STAT_NAMES))
+        stats = np.zeros(len(S.STAT_NAMES))
         K.plan_kernel(q, q[None].copy(), robot.lower.astype(float), robot.upper.astype(float), ints, floats, v_WO,
                       reach, float(problem.clearance), float(problem.self_clearance), np.zeros(1, np.uint64),
                       1.0, 16.0, 0.02, 8, 32, 0.05, True, 1, 1.0, 16, 1, None, _CLOCK, False, stats)
@@ -186,7 +187,7 @@ def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
     # the deadline measures planning, not loading (as solve_ik's timeout)
     time_limit = np.inf if deadline is None else deadline + prepare_time - time.perf_counter()
     max_nodes = DEFAULT_MAX_NODES if budget is None else int(budget)
-    stats = np.zeros(len(K.STAT_NAMES))
+    stats = np.zeros(len(S.STAT_NAMES))
     path, outcome, goal = K.plan_kernel(
         np.ascontiguousarray(problem.q_start, dtype=float), np.ascontiguousarray(goals, dtype=float),
         robot.lower.astype(float), robot.upper.astype(float), ints, floats, v_WO, reach,
@@ -195,9 +196,9 @@ def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
         max_nodes, float(time_limit), int(config.max_certify_evaluations), int(config.shortcut_iterations),
         _by_values(config), _CLOCK, bool(config.profile), stats)
     info = dict(zip(_COUNT_NAMES, map(int, stats[:_COUNTS].tolist())))
-    info["t_total"] = float(stats[K.T_TOTAL])
+    info["t_total"] = float(stats[S.T_TOTAL])
     if config.profile:
-        info.update(zip(K.STAT_NAMES[_COUNTS:], stats[_COUNTS:].tolist()))
+        info.update(zip(S.STAT_NAMES[_COUNTS:], stats[_COUNTS:].tolist()))
     info["prepare_time"] = prepare_time
     if outcome == K.FOUND:
         info["goal"] = int(goal)
@@ -227,4 +228,4 @@ def certify_motions(scene, QA, QB, clearance: float = 0.0, self_clearance: float
                              check_clearance(self_clearance, "self_clearance"), float(config.resolution),
                              float(config.margin), int(config.lanes), int(config.block),
                              int(config.max_certify_evaluations), _by_values(config), _CLOCK,
-                             np.zeros(len(K.STAT_NAMES)))
+                             np.zeros(len(S.STAT_NAMES)))

@@ -1,0 +1,309 @@
+"""Certified straight motions for the compiled RRT-Connect (:mod:`._kernels`).
+
+:func:`certified_motion` decides whether a straight joint-space motion is collision-free over
+its whole length: its interpolated states in batched calls with early exit (the scene's
+:func:`drake_mh.scene._state_kernels.check_states`, VAMP's design: Thomason, Kingston, Kavraki,
+"Motions in Microseconds via Vectorized Sampling-Based Planning", ICRA 2024), at clearances
+raised by a margin that certifies the motion between the states (the Lipschitz bound of
+:mod:`drake_mh.scene._segment_kernel`), refined by bisection only where a state is within the
+margin. The arrays it passes on are borrowed (:mod:`drake_mh._borrow`) and its per-motion
+arrays come from a workspace (:func:`motion_workspace`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from drake_mh._borrow import borrow
+from drake_mh.planning.rrt_connect._clock import now
+from drake_mh.planning.rrt_connect._stats import BY_MARGIN, MOTIONS, REFINE_EVALS, REFINED, REJECTED, STATES, \
+    T_CERTIFY, T_CHECK
+from drake_mh.scene._pair_kernel import segment_floor
+from drake_mh.scene._segment_kernel import CERTIFIED
+from drake_mh.scene._segment_kernel import certify_segments as _certify_segments
+from drake_mh.scene._state_kernels import CLEAR, COLLISION, borrowed_workspace, check_blocks, state_workspace
+from drake_mh.scene.pair_table import LOWEST
+
+CERTIFIED_ROW = -1.0
+"""``Λ_c`` of a link pair certified on the whole motion by its floor table: no state checks it."""
+
+
+@numba.njit(cache=True)
+def motion_workspace(nq, C, G, capacity):
+    """Arrays :func:`certified_motion` writes into, for ``C`` constraint rows (``G`` links) and
+    motions of up to ``capacity`` states (:func:`motion_capacity`; longer ones allocate their own): ``(lam (C,),
+    QT (nq, capacity), order (capacity,), out (capacity,), margin rows (G,), (C - G,), plain
+    rows (G,), (C - G,))``. Allocated once per plan: eight allocations per motion cost more than
+    the motion's setup."""
+    P = C - G
+    return (np.empty(C), np.empty((nq, capacity)), np.empty(capacity, np.int64), np.empty(capacity, np.bool_),
+            np.empty(G), np.empty(P), np.empty(G), np.empty(P))
+
+
+@numba.njit(cache=True)
+def borrowed_motion_workspace(mws):
+    """:func:`motion_workspace`'s arrays borrowed (:mod:`drake_mh._borrow`); ``mws`` must outlive
+    the result."""
+    return (borrow(mws[0]), borrow(mws[1]), borrow(mws[2]), borrow(mws[3]), borrow(mws[4]), borrow(mws[5]),
+            borrow(mws[6]), borrow(mws[7]))
+
+
+@numba.njit(cache=True)
+def workspaces(arrays, nq, C, lanes, capacity):
+    """``(state workspace, motion workspace)`` of a plan (:func:`~drake_mh.scene._state_kernels.state_workspace`,
+    :func:`motion_workspace`) for a scene's unpacked ``arrays``, ``C`` constraint rows and at most
+    ``lanes`` states per batched call."""
+    G = arrays[6].shape[0]
+    return state_workspace(arrays[0].shape[0], G, arrays[11].shape[0], lanes), motion_workspace(nq, C, G, capacity)
+
+
+@numba.njit(cache=True)
+def borrowed_workspaces(owner):
+    """:func:`workspaces`' arrays borrowed (:mod:`drake_mh._borrow`); ``owner`` must outlive the
+    result (pass it as an argument of the call that uses them)."""
+    return borrowed_workspace(owner[0]), borrowed_motion_workspace(owner[1])
+
+
+@numba.njit(cache=True)
+def motion_capacity(span, reach, resolution, margin, most=4096):
+    """States of the longest motion whose joint moves are at most ``span`` (``(nq,)`` [rad or m])
+    as :func:`certified_motion` counts them (ends included), at most ``most``: the capacity of
+    :func:`motion_workspace` (a longer motion allocates its own arrays)."""
+    d, lam = 0.0, 0.0
+    for j in range(span.shape[0]):
+        if not math.isfinite(span[j]):  # a joint without limits
+            return most
+        d += span[j] * span[j]
+    for c in range(reach.shape[0]):
+        acc = 0.0
+        for j in range(span.shape[0]):
+            acc += reach[c, j] * span[j]
+        lam = max(lam, acc)
+    n = max(1.0, math.ceil(math.sqrt(d) * resolution), math.ceil(lam / (2.0 * margin)))
+    return int(min(float(most), n + 1.0))
+
+
+@numba.njit(cache=True)
+def _clearances(lam, scale, G, clearance, self_clearance, link, pair):
+    """``(link (G,), pair (P,))`` written: the required clearance of each constraint row plus
+    ``scale · Λ_c`` (and 1e-12: the kernels compare squares, so "touching" must fail); ``-inf``
+    for a pair row whose ``Λ_c`` is :data:`CERTIFIED_ROW` (``check_states`` skips it)."""
+    for c in range(lam.shape[0]):
+        if c < G:
+            link[c] = clearance + scale * lam[c] + 1e-12
+        elif lam[c] == CERTIFIED_ROW:
+            pair[c - G] = -np.inf
+        else:
+            pair[c - G] = self_clearance + scale * lam[c] + 1e-12
+    return link, pair
+
+
+@numba.njit(cache=True)
+def _refine(qa, qb, out, order, n, lam, plain, clearance, self_clearance, arrays, ws, lanes, max_evals):
+    """Certify ``qa -> qb`` by boolean bisection, or find a collision on it (see :func:`certified_motion`).
+
+    A piece of length ``h`` (in t) is certified when both its ends pass the batched check with
+    every constraint row ``c`` (link, link pair) at its clearance raised by ``Λ_c h / 2``.
+    Level ``L`` halves the pieces of level ``L - 1`` that are not certified: their midpoints
+    are checked at the level's margins and the plain clearances (a collision ends it), their
+    ends again at the smaller margins, every level in one batched call. Stops when every piece
+    is certified, on a collision, or after ``max_evals`` configurations (undecided: not
+    certified).
+
+    ``out[w]``: whether state ``order[w]`` (``t = order[w] / n``) kept the level-0 margins;
+    every state is free at the plain clearances.
+
+    Returns:
+        ``(certified, configurations evaluated)``.
+    """
+    nq = qa.shape[0]
+    G = arrays[6].shape[0]
+    total = n + 1
+    lam_max = 0.0
+    for c in range(lam.shape[0]):
+        lam_max = max(lam_max, lam[c])
+    never = 1 << 30
+    cap = 2 * total + 64
+    ts = np.empty(cap)
+    known = np.full(cap, never, np.int64)  # smallest level whose margins the state kept
+    stamp = np.full(cap, -1, np.int64)
+    for i in range(total):
+        ts[i] = i / n
+    for w in range(total):
+        if out[w]:
+            known[order[w]] = 0
+    e0s, e1s = np.empty(n, np.int64), np.empty(n, np.int64)
+    count = 0
+    for i in range(n):
+        if known[i] > 0 or known[i + 1] > 0:
+            e0s[count], e1s[count] = i, i + 1
+            count += 1
+    stored = total
+    level = 0
+    evals = 0
+    while count > 0:
+        level += 1
+        scale = 1.0 / (2.0 * n * 2.0 ** level)
+        if evals + 2 * count > max_evals or lam_max * scale < 1e-9:
+            return False, evals
+        margins = _clearances(lam, scale, G, clearance, self_clearance, np.empty(G), np.empty(lam.shape[0] - G))
+        if stored + count > cap:
+            cap = 2 * (stored + count)
+            ts2, known2, stamp2 = np.empty(cap), np.full(cap, never, np.int64), np.full(cap, -1, np.int64)
+            ts2[:stored], known2[:stored], stamp2[:stored] = ts[:stored], known[:stored], stamp[:stored]
+            ts, known, stamp = ts2, known2, stamp2
+        # this level's states: the midpoints, then the ends that have not kept its margins yet
+        check = np.empty(3 * count, np.int64)
+        k = 0
+        for r in range(count):
+            mid = stored + r
+            ts[mid] = 0.5 * (ts[e0s[r]] + ts[e1s[r]])
+            check[k] = mid
+            k += 1
+        for r in range(count):
+            for e in (e0s[r], e1s[r]):
+                if known[e] > level and stamp[e] != level:
+                    stamp[e] = level
+                    check[k] = e
+                    k += 1
+        QE = np.empty((nq, k))
+        for w in range(k):
+            t = ts[check[w]]
+            for j in range(nq):
+                QE[j, w] = qa[j] + t * (qb[j] - qa[j])
+        kept = np.empty(k, np.bool_)
+        answer, used = check_blocks(QE, k, (lanes[1], lanes[1]), margins, plain, arrays, ws, kept)
+        evals += used
+        if answer == COLLISION:
+            return False, evals
+        for w in range(k):
+            if answer == CLEAR or kept[w]:
+                known[check[w]] = level
+        n0s, n1s = np.empty(2 * count, np.int64), np.empty(2 * count, np.int64)
+        c2 = 0
+        for r in range(count):
+            mid = stored + r
+            for a, b in ((e0s[r], mid), (mid, e1s[r])):
+                if known[a] > level or known[b] > level:
+                    n0s[c2], n1s[c2] = a, b
+                    c2 += 1
+        stored += count
+        e0s, e1s, count = n0s, n1s, c2
+    return True, evals
+
+
+@numba.njit(cache=True)
+def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance, resolution,
+                     max_margin, max_evals, by_values, stats, clock, buf, profile):
+    """Whether the straight motion ``qa -> qb`` is **certified** collision-free (``qa`` free).
+
+    Every constraint row ``c`` (a link against the obstacles, a checked link pair) changes
+    along the motion no faster than ``Λ_c = Σ_j reach[c, j] |Δq_j|`` per unit of t (the
+    Lipschitz bound of :mod:`drake_mh.scene._segment_kernel`, from
+    :attr:`~drake_mh.scene.batch.CollisionModel.reach`). A link pair with a floor table
+    (:mod:`drake_mh.scene.pair_table`) whose cells along the motion all keep the pair's clearance
+    is certified on the whole motion by them (:func:`drake_mh.scene._pair_kernel.segment_floor`):
+    its ``Λ_c`` is :data:`CERTIFIED_ROW` and no state checks that pair (its clearance rows are
+    ``-inf``: neither its bounding spheres, nor its table, nor its sphere pairs).
+
+    1. ``n`` pieces, ``n >= resolution · |qb - qa|`` and ``n >= max_c Λ_c / (2 max_margin)``;
+       the ``n + 1`` states ``t = i / n`` (ends included), in VAMP's "rake" order (``lanes[0]``
+       states spread over the whole motion first, so that a collision is found early, then
+       blocks of ``lanes[1]``), are checked block by block
+       (:func:`drake_mh.scene._state_kernels.check_states`), each row at its clearance raised
+       by the margin ``Λ_c / (2 n)`` and, where a sphere is below that, at the plain
+       clearance. A state below the plain clearance rejects the motion at once (early exit).
+       If every state keeps the margins, every piece is certified, since
+       ``V_c(t) >= (V0 + V1 - Λ_c / n) / 2 >= clearance`` on it: most motions that are not
+       rejected end here, certified by the boolean check alone.
+    2. Otherwise (free, but within the margins somewhere) a bisection decides, with at most
+       ``max_evals`` configurations (undecided: rejected): with ``by_values`` None,
+       :func:`_refine` (the same bound, batched boolean checks at halving margins), else (any
+       other value, e.g. True) the scene's
+       :func:`drake_mh.scene._segment_kernel.certify_segments` (the bound on clearance values
+       from :func:`~drake_mh.scene._collision_kernels.link_clearances`). The choice is made at
+       compile time from the argument's type, so the default (None) does not compile the
+       second: 35 s less from an empty numba cache.
+    """
+    (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
+     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
+     u_offset, u_radius) = arrays
+    t0 = now(clock, buf) if profile else 0.0
+    nq = qa.shape[0]
+    G, C = g_anchor.shape[0], reach.shape[0]
+    d = 0.0
+    for j in range(nq):
+        d += (qb[j] - qa[j]) ** 2
+    d = math.sqrt(d)
+    lam = mws[0]
+    lam_max = 0.0
+    for c in range(C):
+        acc = 0.0
+        for j in range(nq):
+            acc += reach[c, j] * abs(qb[j] - qa[j])
+        # the pair's table certifies it along the whole motion: no state checks it. Pairs without a
+        # table (a call passing five arrays costs about 35 ns), and tables whose lowest floor keeps
+        # the clearance everywhere (8 of the hand Panda's 12), are settled here without a walk:
+        # the MotionBenchMaker median plan 1.54 -> 1.40 (the first) -> 1.30 ms (both), same trees
+        if c >= G and t_meta[c - G, 0] != 0 and (t_grid[c - G, LOWEST] >= self_clearance + 1e-12 or segment_floor(
+                c - G, qa, qb, t_meta, t_grid, t_vals) >= self_clearance + 1e-12):
+            acc = CERTIFIED_ROW
+        lam[c] = acc
+        lam_max = max(lam_max, acc)
+    n = max(1, int(math.ceil(d * resolution)), int(math.ceil(lam_max / (2.0 * max_margin))))
+    total = n + 1
+    rakes = (total + lanes[0] - 1) // lanes[0]
+    if total <= mws[1].shape[1]:
+        QT, order, out = mws[1], mws[2], mws[3]
+    else:
+        QT, order, out = np.empty((nq, total)), np.empty(total, np.int64), np.empty(total, np.bool_)
+    w = 0
+    for r in range(rakes):  # column w: state i = r + k · rakes
+        i = r
+        while i < total:
+            t = i / n
+            for j in range(nq):
+                QT[j, w] = qa[j] + t * (qb[j] - qa[j])
+            order[w] = i
+            w += 1
+            i += rakes
+    margins = _clearances(lam, 1.0 / (2 * n), G, clearance, self_clearance, mws[4], mws[5])
+    plain = _clearances(lam, 0.0, G, clearance, self_clearance, mws[6], mws[7])
+    answer, used = check_blocks(QT, total, lanes, margins, plain, arrays, ws, out)
+    stats[MOTIONS] += 1
+    stats[STATES] += used
+    if profile:
+        t1 = now(clock, buf)
+        stats[T_CHECK] += t1 - t0
+        t0 = t1
+    if answer == COLLISION:
+        stats[REJECTED] += 1
+        return False
+    if answer == CLEAR:
+        stats[BY_MARGIN] += 1
+        return True
+    if by_values is None:  # a compile-time branch (numba prunes it by the argument's type)
+        certified, evals = _refine(qa, qb, out, order, n, lam, plain, clearance, self_clearance, arrays, ws, lanes,
+                                   max_evals)
+    else:
+        QA = np.empty((1, nq))
+        QB = np.empty((1, nq))
+        QA[0], QB[0] = qa, qb
+        status, t_stop = np.empty(1, np.int64), np.empty(1)
+        lower, lower_self, spent = np.empty(1), np.empty(1), np.empty(1, np.int64)
+        _certify_segments(QA, QB, reach, 0.0, clearance, self_clearance, np.inf, 1e-9, max_evals,
+                          parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
+                          kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart,
+                          u_start, u_offset, u_radius, status, t_stop, lower, lower_self, spent)
+        certified, evals = status[0] == CERTIFIED, spent[0]
+    stats[REFINED] += 1
+    stats[REFINE_EVALS] += evals
+    if profile:
+        stats[T_CERTIFY] += now(clock, buf) - t0
+    if not certified:
+        stats[REJECTED] += 1
+        return False
+    return True

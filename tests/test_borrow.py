@@ -1,0 +1,48 @@
+"""drake_mh._borrow: a borrowed array is the same array (type, data, shape, strides), so the
+kernels that receive it compile once for both, and writes go to the owner's memory."""
+
+import numba
+import numpy as np
+
+from drake_mh._borrow import borrow
+
+
+@numba.njit
+def _row_sums(a):
+    return a.sum(axis=1)
+
+
+@numba.njit
+def _write_through_borrowed(owner, value):
+    """Borrow an argument (held by the caller), write through a view of it, read it back."""
+    b = borrow(owner)
+    b[1, 2] = value
+    row = b[1]
+    return _row_sums(b), row[2], b.shape, b.strides, b.ctypes.data == owner.ctypes.data
+
+
+def test_a_borrowed_array_is_the_same_array():
+    owner = np.arange(12.0).reshape(3, 4)
+    sums, seen, shape, strides, same_data = _write_through_borrowed(owner, 100.0)
+    assert owner[1, 2] == 100.0 and seen == 100.0 and same_data
+    np.testing.assert_array_equal(sums, owner.sum(axis=1))
+    assert shape == owner.shape and strides == owner.strides
+
+
+def test_a_borrowed_array_has_the_owners_type():
+    owner = np.arange(6.0).reshape(2, 3)
+    _row_sums(owner)
+    _write_through_borrowed(owner, 1.0)  # calls _row_sums with the borrowed array
+    assert len(_row_sums.signatures) == 1
+
+
+def test_only_arrays_are_borrowed():
+    @numba.njit
+    def borrow_a_number(x):
+        return borrow(x)
+
+    try:
+        borrow_a_number(1.0)
+    except numba.core.errors.TypingError:
+        return
+    raise AssertionError("borrow accepted a float")
