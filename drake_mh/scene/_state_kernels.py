@@ -55,7 +55,7 @@ def state_workspace(F, G, S, lanes):
     return (np.empty((F, 3, 3, L)), np.empty((F, 3, L)), np.empty(L), np.empty(L), np.empty((G, L)),
             np.empty((G, L)), np.empty((G, L)), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_),
             np.empty(L, np.bool_), np.empty(L, np.int64), hit, hit.view(np.uint64), np.empty((S, 4)),
-            np.arange(G), np.zeros(G, np.int64))
+            np.arange(G), np.zeros(G, np.int64), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_))
 
 
 @numba.njit(cache=True)
@@ -64,7 +64,8 @@ def borrowed_workspace(ws):
     reference counts); ``ws`` must outlive the result."""
     return (borrow(ws[0]), borrow(ws[1]), borrow(ws[2]), borrow(ws[3]), borrow(ws[4]), borrow(ws[5]), borrow(ws[6]),
             borrow(ws[7]), borrow(ws[8]), borrow(ws[9]), borrow(ws[10]), borrow(ws[11]), borrow(ws[12]),
-            borrow(ws[13]), borrow(ws[14]), borrow(ws[15]), borrow(ws[16]), borrow(ws[17]))
+            borrow(ws[13]), borrow(ws[14]), borrow(ws[15]), borrow(ws[16]), borrow(ws[17]), borrow(ws[18]),
+            borrow(ws[19]), borrow(ws[20]), borrow(ws[21]))
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -101,6 +102,35 @@ def _groups_state(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius,
     return answer
 
 
+GROUP_LANES = 4
+"""Lanes near an obstacle from which :func:`check_states` tests a link's sphere groups over all
+lanes at once (SIMD, :func:`_groups_lanes`) rather than lane by lane."""
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def _groups_lanes(m, a, u0, u1, hit, u_start, u_offset, u_radius, s_offset, s_radius, margin, plain, R, p, k, kinds,
+                  R_WO, p_WO, dims, ux, uy, uz, ufree, keep):
+    """:func:`_groups_state` of the lanes with ``hit[b]`` set, a group at a time over all ``m``
+    lanes (the group's centres and its obstacle test vectorize across lanes); the spheres of a
+    group near the obstacle in a hit lane are then tested in that lane. Returns COLLISION at
+    the first sphere below ``plain``, else CLEAR, with ``keep[b]`` cleared for the lanes below
+    ``margin``."""
+    for u in range(u0, u1):
+        _centre_block(m, a, u_offset, u, R, p, ux, uy, uz)
+        for b in range(m):
+            ufree[b] = True
+        _obstacle_free(m, k, kinds, R_WO, p_WO, dims, margin + u_radius[u], ux, uy, uz, ufree)
+        for b in range(m):
+            if hit[b] and not ufree[b]:
+                state = _spheres_state(b, a, u_start[u], u_start[u + 1], s_offset, s_radius, margin, plain, R, p, k,
+                                       kinds, R_WO, p_WO, dims)
+                if state == COLLISION:
+                    return COLLISION
+                if state == NEAR:
+                    keep[b] = False
+    return CLEAR
+
+
 @numba.njit(cache=True, fastmath=FASTMATH)
 def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, arrays, ws, out):
     """Check configurations ``QT[:, n0:n0+m]`` at two clearance levels in one pass.
@@ -127,7 +157,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
      u_offset, u_radius) = arrays
-    R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first = ws
+    R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first, ux, uy, uz, ufree = ws
     G, K = g_anchor.shape[0], kinds.shape[0]
     nw = (m + 7) // 8
     for b in range(m, 8 * nw):  # lanes past m read 0
@@ -159,8 +189,21 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
             for b in range(m):  # the link's bounding sphere vs the obstacle's shape
                 near[b] = True
             _obstacle_free(m, k, kinds, R_WO, p_WO, dims, margin + g_radius[g], cx, cy, cz, near)
+            c = 0
             for b in range(m):  # the lanes still near, as bytes read 8 at a time (few are set)
                 hit[b] = not near[b]
+                c += hit[b]
+            if c >= GROUP_LANES and g_ustart[g + 1] - g_ustart[g] > 1:  # many: each group over all lanes at once
+                state = _groups_lanes(m, a, g_ustart[g], g_ustart[g + 1], hit, u_start, u_offset, u_radius, s_offset,
+                                      s_radius, margin, plain, R, p, k, kinds, R_WO, p_WO, dims, ux, uy, uz, ufree,
+                                      keep)
+                if state == COLLISION:
+                    k_first[g] = k
+                    for j in range(gi, 0, -1):
+                        order[j] = order[j - 1]
+                    order[0] = g
+                    return COLLISION
+                continue
             for w in range(nw):
                 if words[w] == 0:
                     continue
