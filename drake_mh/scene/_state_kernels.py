@@ -21,7 +21,13 @@ The geometry is :mod:`._collision_kernels`' (same sphere model, bounding spheres
 obstacle tests, squared distances, so the same conservative guarantee): forward kinematics of
 the block with the lane index innermost (SIMD), each link's bounding sphere against each
 obstacle's bounding sphere and then its shape over all lanes, and the link's spheres only for
-the few lanes still near, scalar per lane and sphere (first collision returns).
+the lanes still near: a group of spheres at a time over all lanes where four or more are near
+(:func:`_groups_lanes`), else lane by lane; then sphere by sphere (first collision returns).
+
+The workspace remembers the last collision: each link is tested first against the obstacle it
+last collided with, and the links in the order of their last collisions (move to front). A
+planner's rejected motions (three of four) then mostly end at the first test. The order
+changes the cost, never the answer.
 
 Typical use (compiled code; the workspace is allocated once per plan)::
 
@@ -49,7 +55,8 @@ CLEAR, NEAR, COLLISION = 0, 1, 2
 @numba.njit(cache=True)
 def state_workspace(F, G, S, lanes):
     """Arrays :func:`check_states` writes into, for ``F`` moving frames, ``G`` links, ``S``
-    spheres and at most ``lanes`` configurations per call (allocate once, reuse for every call)."""
+    spheres and at most ``lanes`` configurations per call (allocate once per scene, reuse for every
+    call: it remembers where the last collision was)."""
     L = lanes
     hit = np.zeros(8 * ((L + 7) // 8), np.uint8)
     return (np.empty((F, 3, 3, L)), np.empty((F, 3, L)), np.empty(L), np.empty(L), np.empty((G, L)),
@@ -152,7 +159,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
     Returns:
         COLLISION at the first sphere found below its plain clearance (early exit), else NEAR
         if some configuration is below a margin, else CLEAR. The answer and ``out`` depend on
-        the inputs only (not on the order of the tests), so results are deterministic.
+        the inputs only (not on the order of the tests, which the workspace's memory of the
+        last collision sets), so results are deterministic.
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,

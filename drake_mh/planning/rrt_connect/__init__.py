@@ -23,7 +23,7 @@ via Vectorized Sampling-Based Planning", ICRA 2024):
   :func:`drake_mh.scene._state_kernels.check_states`): the interpolated states of a motion go
   through the scene's sphere model in SIMD blocks, the first block spread over the whole
   motion ("rake" order), and a block stops at the first sphere found in collision;
-* **every edge certified** (:func:`._kernels._motion`): each constraint row (a link against
+* **every edge certified** (:func:`._motion.certified_motion`): each constraint row (a link against
   the obstacles, a checked link pair) changes along a motion no faster than
   ``Λ_c = Σ_j reach[c, j] |Δq_j|`` (the Lipschitz bound of
   :mod:`drake_mh.scene.segments`), so the same batched check, asked for each row's clearance

@@ -40,7 +40,7 @@ class RRTConnectConfig:
             the same here, where the margin sets the count.
         margin: [m] largest extra clearance the batched check asks of a motion's states so
             that the motion between them is certified with no further work (states are
-            added while ``Λ_c / 2n`` exceeds it, see :func:`._kernels._motion`); a motion
+            added while ``Λ_c / 2n`` exceeds it, see :func:`._motion.certified_motion`); a motion
             that passes within its margins is refined by bisection. 0.01 and 0.04 measured
             within 15 % of 0.02.
         lanes: states of a motion checked first, in one batched call, spread along it (a
@@ -175,7 +175,7 @@ def plan_smooth(problem, goals, rng, deadline, budget, **options):
 
 def _by_values(config: RRTConnectConfig):
     """The kernels' ``by_values`` argument: None for the boolean bisection (the default), True
-    for the bisection on clearance values (a compile-time choice: :func:`._kernels._motion`)."""
+    for the bisection on clearance values (a compile-time choice: :func:`._motion.certified_motion`)."""
     return None if config.certify == "boolean" else True
 
 
