@@ -26,6 +26,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from drake_mh._borrow import borrow
 from drake_mh.scene._collision_kernels import FASTMATH, PER_LINK, link_clearances
 from drake_mh.scene._pair_kernel import segment_floor
 
@@ -58,6 +59,14 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
     ``lower`` / ``lower_self`` (certified lower bound of the link / pair rows over the whole
     segment, where certified), ``evals`` (configurations evaluated).
     """
+    # the arrays are the caller's for the whole call: passed on without reference counts (drake_mh._borrow)
+    (reach, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO,
+     p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius) = (
+        borrow(reach), borrow(parent), borrow(KR), borrow(Kp), borrow(perm), borrow(kind), borrow(qidx),
+        borrow(g_anchor), borrow(g_offset), borrow(g_radius), borrow(g_start), borrow(s_offset), borrow(s_radius),
+        borrow(kinds), borrow(R_WO), borrow(p_WO), borrow(v_WO), borrow(dims), borrow(pair_a), borrow(pair_b),
+        borrow(t_meta), borrow(t_grid), borrow(t_vals), borrow(g_capsule), borrow(g_ustart), borrow(u_start),
+        borrow(u_offset), borrow(u_radius))
     G = g_anchor.shape[0]
     C = reach.shape[0]
     nq = QA.shape[1]
