@@ -109,6 +109,17 @@ def _groups_state(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius,
     return answer
 
 
+@numba.njit(cache=True, inline="always")
+def _remember(order, k_first, gi, k):
+    """A collision of link ``order[gi]`` with obstacle ``k``: that link is tested first from now
+    on (move to front), and first against ``k``."""
+    g = order[gi]
+    k_first[g] = k
+    for j in range(gi, 0, -1):
+        order[j] = order[j - 1]
+    order[0] = g
+
+
 GROUP_LANES = 4
 """Lanes near an obstacle from which :func:`check_states` tests a link's sphere groups over all
 lanes at once (SIMD, :func:`_groups_lanes`) rather than lane by lane."""
@@ -206,10 +217,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
                                       s_radius, margin, plain, R, p, k, kinds, R_WO, p_WO, dims, ux, uy, uz, ufree,
                                       keep)
                 if state == COLLISION:
-                    k_first[g] = k
-                    for j in range(gi, 0, -1):
-                        order[j] = order[j - 1]
-                    order[0] = g
+                    _remember(order, k_first, gi, k)
                     return COLLISION
                 continue
             for w in range(nw):
@@ -224,10 +232,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
                             state = _spheres_state(b, a, g_start[g], g_start[g + 1], s_offset, s_radius, margin,
                                                    plain, R, p, k, kinds, R_WO, p_WO, dims)
                         if state == COLLISION:
-                            k_first[g] = k
-                            for j in range(gi, 0, -1):
-                                order[j] = order[j - 1]
-                            order[0] = g
+                            _remember(order, k_first, gi, k)
                             return COLLISION
                         if state == NEAR:
                             keep[b] = False
