@@ -338,9 +338,9 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
                         g = _root(P, a, ia)
                     stats[NODES] += added
                     path = _drop_collinear(path)
-                    path = _shortcut(path, shortcut_iterations, rng, arrays, ws, mws, lanes, v_WO, reach, clearance,
-                                     self_clearance, resolution, margin, max_evals, by_values, stats, clock, buf, profile,
-                                     start, time_limit)
+                    path = _shortcut(path, shortcut_iterations, rng, arrays, ws, mws, lanes, v_WO, reach,
+                                     clearance, self_clearance, resolution, margin, max_evals, by_values, stats, clock,
+                                     buf, profile, start, time_limit)
                     stats[T_TOTAL] += now(clock, buf) - start
                     return path, FOUND, g
                 jn = count[b]

