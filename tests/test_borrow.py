@@ -46,3 +46,16 @@ def test_only_arrays_are_borrowed():
     except numba.core.errors.TypingError:
         return
     raise AssertionError("borrow accepted a float")
+
+
+@numba.njit
+def _borrow_nested(a, b, c):
+    (x, (y, z)) = borrow((a, (b, c)))
+    y[0] = 7
+    return x.sum() + z.sum(), y.ctypes.data == b.ctypes.data
+
+
+def test_a_tuple_of_arrays_is_borrowed_element_by_element():
+    a, b, c = np.ones(3), np.zeros(2, np.int64), np.full((2, 2), 2.0)
+    total, same_data = _borrow_nested(a, b, c)
+    assert total == 11.0 and same_data and b[0] == 7

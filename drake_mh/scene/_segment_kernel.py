@@ -61,12 +61,9 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
     """
     # the arrays are the caller's for the whole call: passed on without reference counts (drake_mh._borrow)
     (reach, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO,
-     p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius) = (
-        borrow(reach), borrow(parent), borrow(KR), borrow(Kp), borrow(perm), borrow(kind), borrow(qidx),
-        borrow(g_anchor), borrow(g_offset), borrow(g_radius), borrow(g_start), borrow(s_offset), borrow(s_radius),
-        borrow(kinds), borrow(R_WO), borrow(p_WO), borrow(v_WO), borrow(dims), borrow(pair_a), borrow(pair_b),
-        borrow(t_meta), borrow(t_grid), borrow(t_vals), borrow(g_capsule), borrow(g_ustart), borrow(u_start),
-        borrow(u_offset), borrow(u_radius))
+     p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius) = borrow(
+        (reach, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO,
+         p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius))
     G = g_anchor.shape[0]
     C = reach.shape[0]
     nq = QA.shape[1]

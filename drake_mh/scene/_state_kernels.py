@@ -43,7 +43,6 @@ import math
 import numba
 import numpy as np
 
-from drake_mh._borrow import borrow
 from drake_mh._kernels import _frames_block
 from drake_mh.scene._collision_kernels import _centre_block, _obstacle_free, _point_free
 from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
@@ -63,16 +62,6 @@ def state_workspace(F, G, S, lanes):
             np.empty((G, L)), np.empty((G, L)), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_),
             np.empty(L, np.bool_), np.empty(L, np.int64), hit, hit.view(np.uint64), np.empty((S, 4)),
             np.arange(G), np.zeros(G, np.int64), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_))
-
-
-@numba.njit(cache=True)
-def borrowed_workspace(ws):
-    """:func:`state_workspace`'s arrays borrowed (:func:`drake_mh._borrow.borrow`: passed on without
-    reference counts); ``ws`` must outlive the result."""
-    return (borrow(ws[0]), borrow(ws[1]), borrow(ws[2]), borrow(ws[3]), borrow(ws[4]), borrow(ws[5]), borrow(ws[6]),
-            borrow(ws[7]), borrow(ws[8]), borrow(ws[9]), borrow(ws[10]), borrow(ws[11]), borrow(ws[12]),
-            borrow(ws[13]), borrow(ws[14]), borrow(ws[15]), borrow(ws[16]), borrow(ws[17]), borrow(ws[18]),
-            borrow(ws[19]), borrow(ws[20]), borrow(ws[21]))
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")

@@ -18,7 +18,7 @@ import numpy as np
 
 from drake_mh._borrow import borrow
 from drake_mh.planning.rrt_connect._clock import now
-from drake_mh.planning.rrt_connect._motion import borrowed_workspaces, certified_motion, motion_capacity, workspaces
+from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capacity, workspaces
 from drake_mh.planning.rrt_connect._stats import ITERATIONS, NN_SCANS, NODES, SHORTCUTS_KEPT, SHORTCUTS_TRIED, \
     T_NN, T_SAMPLE, T_SHORTCUT, T_TOTAL
 from drake_mh.scene._packing import _unpack
@@ -232,8 +232,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
           time_limit, max_evals, shortcut_iterations, by_values, clock, profile, stats_owner):
     """:func:`plan_kernel` on its workspace ``owner``. The arrays that every motion passes on are
     borrowed from the arguments (held by the caller for the whole call: :mod:`drake_mh._borrow`)."""
-    (ws, mws), buf, v_WO, reach, stats = (borrowed_workspaces(owner), borrow(buf_owner), borrow(v_WO_owner),
-                                          borrow(reach_owner), borrow(stats_owner))
+    (ws, mws), buf, v_WO, reach, stats = borrow((owner, buf_owner, v_WO_owner, reach_owner, stats_owner))
     lanes = (first_lanes, block_lanes)
     nq, G = q_start.shape[0], goals.shape[0]
     rng = seed
@@ -378,8 +377,7 @@ def certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance
 def _certify_all(owner, buf_owner, arrays, QA, QB, v_WO_owner, reach_owner, clearance, self_clearance, resolution,
                  margin, lanes, max_evals, by_values, clock, stats_owner):
     """:func:`certify_motions` on its workspace ``owner`` (borrowed as in :func:`_plan`)."""
-    (ws, mws), buf, v_WO, reach, stats = (borrowed_workspaces(owner), borrow(buf_owner), borrow(v_WO_owner),
-                                          borrow(reach_owner), borrow(stats_owner))
+    (ws, mws), buf, v_WO, reach, stats = borrow((owner, buf_owner, v_WO_owner, reach_owner, stats_owner))
     out = np.empty(QA.shape[0], np.bool_)
     for i in range(QA.shape[0]):
         out[i] = certified_motion(QA[i], QB[i], arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance,

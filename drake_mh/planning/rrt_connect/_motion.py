@@ -6,7 +6,7 @@ its whole length: its interpolated states in batched calls with early exit (the 
 "Motions in Microseconds via Vectorized Sampling-Based Planning", ICRA 2024), at clearances
 raised by a margin that certifies the motion between the states (the Lipschitz bound of
 :mod:`drake_mh.scene._segment_kernel`), refined by bisection only where a state is within the
-margin. The arrays it passes on are borrowed (:mod:`drake_mh._borrow`) and its per-motion
+margin. Its callers pass the arrays borrowed (:mod:`drake_mh._borrow`), and its per-motion
 arrays come from a workspace (:func:`motion_workspace`).
 """
 
@@ -17,14 +17,13 @@ import math
 import numba
 import numpy as np
 
-from drake_mh._borrow import borrow
 from drake_mh.planning.rrt_connect._clock import now
 from drake_mh.planning.rrt_connect._stats import BY_MARGIN, MOTIONS, REFINE_EVALS, REFINED, REJECTED, STATES, \
     T_CERTIFY, T_CHECK
 from drake_mh.scene._pair_kernel import segment_floor
 from drake_mh.scene._segment_kernel import CERTIFIED
 from drake_mh.scene._segment_kernel import certify_segments as _certify_segments
-from drake_mh.scene._state_kernels import CLEAR, COLLISION, borrowed_workspace, check_blocks, state_workspace
+from drake_mh.scene._state_kernels import CLEAR, COLLISION, check_blocks, state_workspace
 from drake_mh.scene.pair_table import LOWEST
 
 CERTIFIED_ROW = -1.0
@@ -44,27 +43,12 @@ def motion_workspace(nq, C, G, capacity):
 
 
 @numba.njit(cache=True)
-def borrowed_motion_workspace(mws):
-    """:func:`motion_workspace`'s arrays borrowed (:mod:`drake_mh._borrow`); ``mws`` must outlive
-    the result."""
-    return (borrow(mws[0]), borrow(mws[1]), borrow(mws[2]), borrow(mws[3]), borrow(mws[4]), borrow(mws[5]),
-            borrow(mws[6]), borrow(mws[7]))
-
-
-@numba.njit(cache=True)
 def workspaces(arrays, nq, C, lanes, capacity):
     """``(state workspace, motion workspace)`` of a plan
     (:func:`~drake_mh.scene._state_kernels.state_workspace`, :func:`motion_workspace`) for a
     scene's unpacked ``arrays``, ``C`` constraint rows and at most ``lanes`` states per call."""
     G = arrays[6].shape[0]
     return state_workspace(arrays[0].shape[0], G, arrays[11].shape[0], lanes), motion_workspace(nq, C, G, capacity)
-
-
-@numba.njit(cache=True)
-def borrowed_workspaces(owner):
-    """:func:`workspaces`' arrays borrowed (:mod:`drake_mh._borrow`); ``owner`` must outlive the
-    result (pass it as an argument of the call that uses them)."""
-    return borrowed_workspace(owner[0]), borrowed_motion_workspace(owner[1])
 
 
 @numba.njit(cache=True)
