@@ -32,7 +32,7 @@ changes the cost, never the answer.
 Typical use (compiled code; the workspace is allocated once per plan)::
 
     arrays = _packing._unpack(ints, floats)                  # a scene's packed arrays
-    ws = state_workspace(F, G, S, lanes)
+    ws = state_workspace(F, G, S, P, lanes)
     answer = check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, arrays, ws, out)
 """
 
@@ -52,16 +52,19 @@ CLEAR, NEAR, COLLISION = 0, 1, 2
 
 
 @numba.njit(cache=True)
-def state_workspace(F, G, S, lanes):
+def state_workspace(F, G, S, P, lanes):
     """Arrays :func:`check_states` writes into, for ``F`` moving frames, ``G`` links, ``S``
-    spheres and at most ``lanes`` configurations per call (allocate once per scene, reuse for every
-    call: it remembers where the last collision was)."""
+    spheres, ``P`` checked link pairs and at most ``lanes`` configurations per call (allocate
+    once per scene, reuse for every call: it remembers where the last collision was). The last,
+    ``rows_near (G + P,)`` bool, is set for each constraint row (link, then pair) found below
+    its margin in some configuration; the caller clears it."""
     L = lanes
     hit = np.zeros(8 * ((L + 7) // 8), np.uint8)
     return (np.empty((F, 3, 3, L)), np.empty((F, 3, L)), np.empty(L), np.empty(L), np.empty((G, L)),
             np.empty((G, L)), np.empty((G, L)), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_),
             np.empty(L, np.bool_), np.empty(L, np.int64), hit, hit.view(np.uint64), np.empty((S, 4)),
-            np.arange(G), np.zeros(G, np.int64), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_))
+            np.arange(G), np.zeros(G, np.int64), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_),
+            np.zeros(G + P, np.bool_))
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -120,8 +123,9 @@ def _groups_lanes(m, a, u0, u1, hit, u_start, u_offset, u_radius, s_offset, s_ra
     """:func:`_groups_state` of the lanes with ``hit[b]`` set, a group at a time over all ``m``
     lanes (the group's centres and its obstacle test vectorize across lanes); the spheres of a
     group near the obstacle in a hit lane are then tested in that lane. Returns COLLISION at
-    the first sphere below ``plain``, else CLEAR, with ``keep[b]`` cleared for the lanes below
-    ``margin``."""
+    the first sphere below ``plain``, else NEAR if it cleared ``keep[b]`` for a lane below
+    ``margin``, else CLEAR."""
+    answer = CLEAR
     for u in range(u0, u1):
         _centre_block(m, a, u_offset, u, R, p, ux, uy, uz)
         for b in range(m):
@@ -135,7 +139,8 @@ def _groups_lanes(m, a, u0, u1, hit, u_start, u_offset, u_radius, s_offset, s_ra
                     return COLLISION
                 if state == NEAR:
                     keep[b] = False
-    return CLEAR
+                    answer = NEAR
+    return answer
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
@@ -146,7 +151,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
         QT: ``(nq, N)`` configurations, one per column.
         n0, m: the first column and how many (``m`` at most the workspace's lanes).
         link_margin, pair_margin: ``(G,)`` / ``(P,)`` clearances [m] each link must keep from
-            every obstacle and each checked link pair between its links, with a margin (a pair
+            every obstacle and each checked link pair between its links, with a margin (a row
             at ``-inf`` is not checked: the caller knows it clear on these configurations).
         link_plain, pair_plain: the same without the margin (each at most its margin value;
             all > 0: the tests compare squares, so pass 1e-12 for "touching collides").
@@ -155,6 +160,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
         ws: :func:`state_workspace`.
         out: ``(N,)`` bool; ``out[n0 + b]`` is set to whether configuration ``n0 + b`` keeps
             every margin (unless the answer is COLLISION: then ``out`` is not written).
+            The workspace's ``rows_near[c]`` is set for each row below its margin (a link or a
+            pair at ``-inf`` is not checked at all).
 
     Returns:
         COLLISION at the first sphere found below its plain clearance (early exit), else NEAR
@@ -165,7 +172,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
      u_offset, u_radius) = arrays
-    R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first, ux, uy, uz, ufree = ws
+    (R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first, ux, uy, uz, ufree,
+     rows_near) = ws
     G, K = g_anchor.shape[0], kinds.shape[0]
     nw = (m + 7) // 8
     for b in range(m, 8 * nw):  # lanes past m read 0
@@ -208,6 +216,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
                 if state == COLLISION:
                     _remember(order, k_first, gi, k)
                     return COLLISION
+                if state == NEAR:
+                    rows_near[g] = True
                 continue
             for w in range(nw):
                 if words[w] == 0:
@@ -225,6 +235,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
                             return COLLISION
                         if state == NEAR:
                             keep[b] = False
+                            rows_near[g] = True
     for i in range(pair_a.shape[0]):
         if pair_margin[i] == -math.inf:
             continue  # the caller has certified the pair on these configurations (rrt_connect: its floor table)
@@ -249,6 +260,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
                 return COLLISION
             if value < pair_margin[i]:
                 keep[b] = False
+                rows_near[G + i] = True
     answer = CLEAR
     for b in range(m):
         out[n0 + b] = keep[b]

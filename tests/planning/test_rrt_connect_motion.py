@@ -63,3 +63,27 @@ def test_a_motion_longer_than_the_workspace_gets_the_same_answer():
     np.testing.assert_array_equal(big, small)
     np.testing.assert_array_equal(stats_big, stats_small)
     np.testing.assert_array_equal(big, planner.certify_motions(scene, QA, QB))
+
+
+def test_the_bisection_refines_the_rows_that_came_near_and_never_certifies_a_collision():
+    """Motions that come within their margins are refined on the rows that did (the others kept
+    theirs at every state): the certified ones keep the clearance under the scene's own
+    certificate and dense exact sampling, and some are rejected only by the bisection."""
+    scene = shelf_scene()
+    rng = np.random.default_rng(7)
+    QA = PANDA.random_configurations(600, rng=rng)
+    QA = np.ascontiguousarray(QA[scene.collision_free(QA)][:200])
+    QB = np.ascontiguousarray(np.clip(QA + rng.normal(0.0, 0.3, QA.shape), PANDA.lower, PANDA.upper))
+    ints, floats, v_WO, reach = planner._arguments(scene)
+    refined, outcome = [], []
+    for a, b in zip(QA, QB):
+        ok, stats = _answers(a[None], b[None], ints, floats, v_WO, reach, 4096, planner._CLOCK)
+        refined.append(stats[STAT_NAMES.index("refined")] > 0)
+        outcome.append(ok[0])
+    refined, outcome = np.array(refined), np.array(outcome)
+    assert np.sum(refined & outcome) >= 3 and np.sum(refined & ~outcome) >= 1
+    sure = refined & outcome
+    assert np.all(scene.certify_segments(QA[sure], QB[sure], 0.0).status != 0)  # never found blocked
+    t = np.linspace(0.0, 1.0, 200)[:, None]
+    for a, b in zip(QA[sure][:10], QB[sure][:10]):
+        assert scene.exact_min_distance(a + t * (b - a)).min() >= -1e-9

@@ -27,7 +27,9 @@ from drake_mh.scene._state_kernels import CLEAR, COLLISION, check_blocks, state_
 from drake_mh.scene.pair_table import LOWEST
 
 CERTIFIED_ROW = -1.0
-"""``Λ_c`` of a link pair certified on the whole motion by its floor table: no state checks it."""
+"""``Λ_c`` of a row certified on the whole motion (a link pair by its floor table, any row that
+kept its margins at every state of the first pass, see :func:`certified_motion`): no state
+checks it."""
 
 
 @numba.njit(cache=True)
@@ -48,7 +50,8 @@ def workspaces(arrays, nq, C, lanes, capacity):
     (:func:`~drake_mh.scene._state_kernels.state_workspace`, :func:`motion_workspace`) for a
     scene's unpacked ``arrays``, ``C`` constraint rows and at most ``lanes`` states per call."""
     G = arrays[6].shape[0]
-    return state_workspace(arrays[0].shape[0], G, arrays[11].shape[0], lanes), motion_workspace(nq, C, G, capacity)
+    return (state_workspace(arrays[0].shape[0], G, arrays[11].shape[0], C - G, lanes),
+            motion_workspace(nq, C, G, capacity))
 
 
 @numba.njit(cache=True)
@@ -74,12 +77,15 @@ def motion_capacity(span, reach, resolution, margin, most=4096):
 def _clearances(lam, scale, G, clearance, self_clearance, link, pair):
     """``(link (G,), pair (P,))`` written: the required clearance of each constraint row plus
     ``scale · Λ_c`` (and 1e-12: the kernels compare squares, so "touching" must fail); ``-inf``
-    for a pair row whose ``Λ_c`` is :data:`CERTIFIED_ROW` (``check_states`` skips it)."""
+    for a row whose ``Λ_c`` is :data:`CERTIFIED_ROW` (``check_states`` skips it)."""
     for c in range(lam.shape[0]):
-        if c < G:
+        if lam[c] == CERTIFIED_ROW:
+            if c < G:
+                link[c] = -np.inf
+            else:
+                pair[c - G] = -np.inf
+        elif c < G:
             link[c] = clearance + scale * lam[c] + 1e-12
-        elif lam[c] == CERTIFIED_ROW:
-            pair[c - G] = -np.inf
         else:
             pair[c - G] = self_clearance + scale * lam[c] + 1e-12
     return link, pair
@@ -206,7 +212,10 @@ def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, sel
        rejected end here, certified by the boolean check alone.
     2. Otherwise (free, but within the margins somewhere) a bisection decides, with at most
        ``max_evals`` configurations (undecided: rejected): with ``by_values`` None,
-       :func:`_refine` (the same bound, batched boolean checks at halving margins), else (any
+       :func:`_refine` (the same bound, batched boolean checks at halving margins) on the rows
+       that came within their margins only: a row that kept them at every state is certified
+       on every piece, so no later state checks it (replayed certified motions of the
+       MotionBenchMaker plans: 27 -> 24 µs each, rejected ones 3.5 -> 3.0 µs), else (any
        other value, e.g. True) the scene's
        :func:`drake_mh.scene._segment_kernel.certify_segments` (the bound on clearance values
        from :func:`~drake_mh.scene._collision_kernels.link_clearances`). The choice is made at
@@ -257,6 +266,8 @@ def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, sel
             i += rakes
     margins = _clearances(lam, 1.0 / (2 * n), G, clearance, self_clearance, mws[4], mws[5])
     plain = _clearances(lam, 0.0, G, clearance, self_clearance, mws[6], mws[7])
+    rows_near = ws[22]
+    rows_near[:] = False
     answer, used = check_blocks(QT, total, lanes, margins, plain, arrays, ws, out)
     stats[MOTIONS] += 1
     stats[STATES] += used
@@ -271,6 +282,11 @@ def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, sel
         stats[BY_MARGIN] += 1
         return True
     if by_values is None:  # a compile-time branch (numba prunes it by the argument's type)
+        # a row that kept its margins at every state is certified on the whole motion
+        for c in range(C):
+            if not rows_near[c]:
+                lam[c] = CERTIFIED_ROW
+        plain = _clearances(lam, 0.0, G, clearance, self_clearance, mws[6], mws[7])
         certified, evals = _refine(qa, qb, out, order, n, lam, plain, clearance, self_clearance, arrays, ws, lanes,
                                    max_evals)
     else:
