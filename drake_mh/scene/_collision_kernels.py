@@ -189,6 +189,28 @@ def _point_free(k, kinds, R_WO, p_WO, dims, reach, x, y, z):
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
+def _point_distance(k, kinds, R_WO, p_WO, dims, x, y, z):
+    """Distance [m] of point ``(x, y, z)`` outside obstacle k (0 or less inside: the value
+    :func:`_point_free` compares with its reach, with a square root)."""
+    kind = kinds[k]
+    dx, dy, dz = x - p_WO[k, 0], y - p_WO[k, 1], z - p_WO[k, 2]
+    d0 = dims[k, 0]
+    if kind == SPHERE:
+        return math.sqrt(dx * dx + dy * dy + dz * dz) - d0
+    u = R_WO[k, 0, 0] * dx + R_WO[k, 1, 0] * dy + R_WO[k, 2, 0] * dz
+    v = R_WO[k, 0, 1] * dx + R_WO[k, 1, 1] * dy + R_WO[k, 2, 1] * dz
+    w = R_WO[k, 0, 2] * dx + R_WO[k, 1, 2] * dy + R_WO[k, 2, 2] * dz
+    if kind == BOX:
+        ox, oy, oz = max(abs(u) - d0, 0.0), max(abs(v) - dims[k, 1], 0.0), max(abs(w) - dims[k, 2], 0.0)
+        return math.sqrt(ox * ox + oy * oy + oz * oz)
+    if kind == CYLINDER:
+        orr, oa = max(math.sqrt(u * u + v * v) - d0, 0.0), max(abs(w) - dims[k, 1], 0.0)
+        return math.sqrt(orr * orr + oa * oa)
+    w = w - min(max(w, -dims[k, 1]), dims[k, 1])  # CAPSULE
+    return math.sqrt(u * u + v * v + w * w) - d0
+
+
+@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
 def _range_free(b, a, s0, s1, s_offset, s_radius, clearance, R, p, k, kinds, R_WO, p_WO, dims):
     """Whether spheres ``s0 .. s1-1`` (fixed in frame ``a``) of lane ``b`` are all at least
     ``clearance`` from obstacle k; stops at the first that is not."""

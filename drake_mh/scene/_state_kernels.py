@@ -6,7 +6,8 @@
   returns at the first one found (VAMP's early exit: Thomason, Kingston, Kavraki, "Motions in
   Microseconds via Vectorized Sampling-Based Planning", ICRA 2024);
 * ``NEAR`` — no collision, but some configuration is below a *margin* clearance (``out[n]``
-  tells which configurations kept every margin);
+  tells which configurations kept every margin, ``tau[n]`` how far each certifies the motion
+  around it from the clearance values of the rows below their margins);
 * ``CLEAR`` — every sphere of every configuration keeps its link's margin from every obstacle
   and every checked link pair keeps its pair's margin.
 
@@ -33,7 +34,8 @@ Typical use (compiled code; the workspace is allocated once per plan)::
 
     arrays = _packing._unpack(ints, floats)                  # a scene's packed arrays
     ws = state_workspace(F, G, S, P, lanes)
-    answer = check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, arrays, ws, out)
+    answer = check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, inv_lam, arrays, ws, out,
+                          tau)
 """
 
 from __future__ import annotations
@@ -44,7 +46,7 @@ import numba
 import numpy as np
 
 from drake_mh._kernels import _frames_block
-from drake_mh.scene._collision_kernels import _centre_block, _obstacle_free, _point_free
+from drake_mh.scene._collision_kernels import _centre_block, _obstacle_free, _point_distance, _point_free
 from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
 CLEAR, NEAR, COLLISION = 0, 1, 2
@@ -64,41 +66,44 @@ def state_workspace(F, G, S, P, lanes):
             np.empty((G, L)), np.empty((G, L)), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_),
             np.empty(L, np.bool_), np.empty(L, np.int64), hit, hit.view(np.uint64), np.empty((S, 4)),
             np.arange(G), np.zeros(G, np.int64), np.empty(L), np.empty(L), np.empty(L), np.empty(L, np.bool_),
-            np.zeros(G + P, np.bool_))
+            np.zeros(G + P, np.bool_), np.empty(L))
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
 def _spheres_state(b, a, s0, s1, s_offset, s_radius, margin, plain, R, p, k, kinds, R_WO, p_WO, dims):
-    """Spheres ``s0 .. s1-1`` (fixed in frame ``a``) of lane ``b`` against obstacle k: CLEAR (all
-    at least ``margin``), NEAR (some below ``margin``, none below ``plain``) or COLLISION (one
-    below ``plain``: returned at once)."""
-    answer = CLEAR
+    """Spheres ``s0 .. s1-1`` (fixed in frame ``a``) of lane ``b`` against obstacle k:
+    ``(answer, value)``, the answer CLEAR (all at least ``margin``), NEAR (some below ``margin``,
+    none below ``plain``) or COLLISION (one below ``plain``: returned at once), the value the
+    smallest clearance [m] of the spheres below ``margin`` (``inf`` if none)."""
+    answer, low = CLEAR, math.inf
     for s in range(s0, s1):
         x, y, z = _lane_point(a, s_offset, s, 0, R, p, b)
         if not _point_free(k, kinds, R_WO, p_WO, dims, margin + s_radius[s], x, y, z):
             if not _point_free(k, kinds, R_WO, p_WO, dims, plain + s_radius[s], x, y, z):
-                return COLLISION
+                return COLLISION, low
             answer = NEAR
-    return answer
+            low = min(low, _point_distance(k, kinds, R_WO, p_WO, dims, x, y, z) - s_radius[s])
+    return answer, low
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)  # not inlined: a second copy in check_states slowed its loop
 def _groups_state(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, margin, plain, R, p, k, kinds,
                   R_WO, p_WO, dims):
     """:func:`_spheres_state` of the spheres of groups ``u0 .. u1-1``, a group whose bounding
-    sphere keeps the margin passed whole (:func:`drake_mh.scene.batch.sphere_groups`)."""
-    answer = CLEAR
+    sphere keeps the margin passed whole (:func:`drake_mh.scene.batch.sphere_groups`):
+    ``(answer, value)``."""
+    answer, low = CLEAR, math.inf
     for u in range(u0, u1):
         x, y, z = _lane_point(a, u_offset, u, 0, R, p, b)
         if _point_free(k, kinds, R_WO, p_WO, dims, margin + u_radius[u], x, y, z):
             continue
-        state = _spheres_state(b, a, u_start[u], u_start[u + 1], s_offset, s_radius, margin, plain, R, p, k, kinds,
-                               R_WO, p_WO, dims)
+        state, value = _spheres_state(b, a, u_start[u], u_start[u + 1], s_offset, s_radius, margin, plain, R, p, k,
+                                      kinds, R_WO, p_WO, dims)
         if state == COLLISION:
-            return COLLISION
+            return COLLISION, value
         if state == NEAR:
-            answer = NEAR
-    return answer
+            answer, low = NEAR, min(low, value)
+    return answer, low
 
 
 @numba.njit(cache=True, inline="always")
@@ -118,13 +123,13 @@ lanes at once (SIMD, :func:`_groups_lanes`) rather than lane by lane."""
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def _groups_lanes(m, a, u0, u1, hit, u_start, u_offset, u_radius, s_offset, s_radius, margin, plain, R, p, k, kinds,
-                  R_WO, p_WO, dims, ux, uy, uz, ufree, keep):
+def _groups_lanes(m, a, u0, u1, hit, u_start, u_offset, u_radius, s_offset, s_radius, margin, plain, inv_lam, R, p,
+                  k, kinds, R_WO, p_WO, dims, ux, uy, uz, ufree, keep, tau):
     """:func:`_groups_state` of the lanes with ``hit[b]`` set, a group at a time over all ``m``
     lanes (the group's centres and its obstacle test vectorize across lanes); the spheres of a
     group near the obstacle in a hit lane are then tested in that lane. Returns COLLISION at
     the first sphere below ``plain``, else NEAR if it cleared ``keep[b]`` for a lane below
-    ``margin``, else CLEAR."""
+    ``margin`` (and lowered ``tau[b]``, see :func:`check_states`), else CLEAR."""
     answer = CLEAR
     for u in range(u0, u1):
         _centre_block(m, a, u_offset, u, R, p, ux, uy, uz)
@@ -133,18 +138,19 @@ def _groups_lanes(m, a, u0, u1, hit, u_start, u_offset, u_radius, s_offset, s_ra
         _obstacle_free(m, k, kinds, R_WO, p_WO, dims, margin + u_radius[u], ux, uy, uz, ufree)
         for b in range(m):
             if hit[b] and not ufree[b]:
-                state = _spheres_state(b, a, u_start[u], u_start[u + 1], s_offset, s_radius, margin, plain, R, p, k,
-                                       kinds, R_WO, p_WO, dims)
+                state, value = _spheres_state(b, a, u_start[u], u_start[u + 1], s_offset, s_radius, margin, plain, R,
+                                              p, k, kinds, R_WO, p_WO, dims)
                 if state == COLLISION:
                     return COLLISION
                 if state == NEAR:
                     keep[b] = False
+                    tau[b] = min(tau[b], (value - plain) * inv_lam)
                     answer = NEAR
     return answer
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, arrays, ws, out):
+def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, inv_lam, arrays, ws, out, tau):
     """Check configurations ``QT[:, n0:n0+m]`` at two clearance levels in one pass.
 
     Args:
@@ -155,6 +161,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
             at ``-inf`` is not checked: the caller knows it clear on these configurations).
         link_plain, pair_plain: the same without the margin (each at most its margin value;
             all > 0: the tests compare squares, so pass 1e-12 for "touching collides").
+        inv_lam: ``(G + P,)`` per row (links, then pairs) ``1 / Λ_c``, for ``tau``.
         arrays: the scene's unpacked arrays (:func:`drake_mh.scene._packing._unpack`
             of :func:`~drake_mh.scene._packing.pack`'s buffers).
         ws: :func:`state_workspace`.
@@ -162,6 +169,10 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
             every margin (unless the answer is COLLISION: then ``out`` is not written).
             The workspace's ``rows_near[c]`` is set for each row below its margin (a link or a
             pair at ``-inf`` is not checked at all).
+        tau: ``(N,)``; ``tau[n0 + b]`` is set (unless COLLISION) to the smallest
+            ``(v_c - plain_c) / Λ_c`` over the rows below their margins in configuration
+            ``n0 + b`` (``v_c``: the row's clearance value), ``inf`` if none: how far (in the
+            motion's parameter) the configuration certifies its neighbourhood on those rows.
 
     Returns:
         COLLISION at the first sphere found below its plain clearance (early exit), else NEAR
@@ -173,7 +184,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
      kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
      u_offset, u_radius) = arrays
     (R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first, ux, uy, uz, ufree,
-     rows_near) = ws
+     rows_near, tau_l) = ws
     G, K = g_anchor.shape[0], kinds.shape[0]
     nw = (m + 7) // 8
     for b in range(m, 8 * nw):  # lanes past m read 0
@@ -181,6 +192,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
     _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
     for b in range(m):
         keep[b] = True
+        tau_l[b] = math.inf
     for gi in range(G):
         g = order[gi]
         k0 = k_first[g] if k_first[g] < K else 0
@@ -211,8 +223,8 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
                 c += hit[b]
             if c >= GROUP_LANES and g_ustart[g + 1] - g_ustart[g] > 1:  # many: each group over all lanes at once
                 state = _groups_lanes(m, a, g_ustart[g], g_ustart[g + 1], hit, u_start, u_offset, u_radius, s_offset,
-                                      s_radius, margin, plain, R, p, k, kinds, R_WO, p_WO, dims, ux, uy, uz, ufree,
-                                      keep)
+                                      s_radius, margin, plain, inv_lam[g], R, p, k, kinds, R_WO, p_WO, dims, ux, uy,
+                                      uz, ufree, keep, tau_l)
                 if state == COLLISION:
                     _remember(order, k_first, gi, k)
                     return COLLISION
@@ -225,17 +237,19 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
                 for b in range(8 * w, 8 * w + 8):
                     if hit[b]:  # the link's spheres
                         if g_ustart[g + 1] - g_ustart[g] > 1:  # the link's spheres a group at a time
-                            state = _groups_state(b, a, g_ustart[g], g_ustart[g + 1], u_start, u_offset, u_radius,
-                                                  s_offset, s_radius, margin, plain, R, p, k, kinds, R_WO, p_WO, dims)
+                            state, value = _groups_state(b, a, g_ustart[g], g_ustart[g + 1], u_start, u_offset,
+                                                         u_radius, s_offset, s_radius, margin, plain, R, p, k, kinds,
+                                                         R_WO, p_WO, dims)
                         else:  # one group: the link's bounding sphere, known to be near
-                            state = _spheres_state(b, a, g_start[g], g_start[g + 1], s_offset, s_radius, margin,
-                                                   plain, R, p, k, kinds, R_WO, p_WO, dims)
+                            state, value = _spheres_state(b, a, g_start[g], g_start[g + 1], s_offset, s_radius,
+                                                          margin, plain, R, p, k, kinds, R_WO, p_WO, dims)
                         if state == COLLISION:
                             _remember(order, k_first, gi, k)
                             return COLLISION
                         if state == NEAR:
                             keep[b] = False
                             rows_near[g] = True
+                            tau_l[b] = min(tau_l[b], (value - plain) * inv_lam[g])
     for i in range(pair_a.shape[0]):
         if pair_margin[i] == -math.inf:
             continue  # the caller has certified the pair on these configurations (rrt_connect: its floor table)
@@ -261,31 +275,34 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, ar
             if value < pair_margin[i]:
                 keep[b] = False
                 rows_near[G + i] = True
+                tau_l[b] = min(tau_l[b], (value - pair_plain[i]) * inv_lam[G + i])
     answer = CLEAR
     for b in range(m):
         out[n0 + b] = keep[b]
+        tau[n0 + b] = tau_l[b]
         if not keep[b]:
             answer = NEAR
     return answer
 
 
 @numba.njit(cache=True)
-def check_blocks(QT, n, lanes, margins, plain, arrays, ws, out):
+def check_blocks(QT, n, lanes, margins, plain, inv_lam, arrays, ws, out, tau):
     """Columns ``0 .. n-1`` of ``QT`` in blocks (:func:`check_states`): the first of ``lanes[0]``
     columns (VAMP's "rake": states spread over a motion, so a collision is found early), the
     others of ``lanes[1]``.
 
-    ``margins``, ``plain``: ``(link clearances (G,), pair clearances (P,))``.
+    ``margins``, ``plain``: ``(link clearances (G,), pair clearances (P,))``; ``inv_lam``,
+    ``tau``: as :func:`check_states`'.
 
     Returns:
         ``(answer, configurations checked)``: COLLISION (stops there), NEAR (``out[w]``: column
-        ``w`` kept the margins), or CLEAR.
+        ``w`` kept the margins; ``tau[w]``), or CLEAR.
     """
     answer = CLEAR
     n0 = 0
     while n0 < n:
         m = min(lanes[0] if n0 == 0 else lanes[1], n - n0)
-        r = check_states(QT, n0, m, margins[0], margins[1], plain[0], plain[1], arrays, ws, out)
+        r = check_states(QT, n0, m, margins[0], margins[1], plain[0], plain[1], inv_lam, arrays, ws, out, tau)
         if r == COLLISION:
             return COLLISION, n0 + m
         if r == NEAR:

@@ -11,6 +11,7 @@ from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capac
 from drake_mh.planning.rrt_connect._stats import STAT_NAMES
 from drake_mh.scene import Box, Scene, Sphere
 from drake_mh.scene._packing import _unpack
+from drake_mh.scene._state_kernels import check_blocks
 
 PANDA = drake_mh.load_robot("panda")
 
@@ -87,3 +88,47 @@ def test_the_bisection_refines_the_rows_that_came_near_and_never_certifies_a_col
     t = np.linspace(0.0, 1.0, 200)[:, None]
     for a, b in zip(QA[sure][:10], QB[sure][:10]):
         assert scene.exact_min_distance(a + t * (b - a)).min() >= -1e-9
+
+
+@numba.njit
+def _taus(QA, QB, t, lam, ints, floats, margin_scale):
+    """``(kept, tau)`` of ``check_blocks`` for the states ``QA + t (QB - QA)``, rows at the
+    clearance 0 plus ``margin_scale · Λ_c`` (the motion's ``Λ_c`` in ``lam (M, C)``)."""
+    arrays = _unpack(ints, floats)
+    G = arrays[6].shape[0]
+    C = lam.shape[1]
+    ws, _ = workspaces(arrays, QA.shape[1], C, 1, 4)
+    kept, tau = np.empty(QA.shape[0], np.bool_), np.empty(QA.shape[0])
+    for i in range(QA.shape[0]):
+        QT = np.empty((QA.shape[1], 1))
+        QT[:, 0] = QA[i] + t[i] * (QB[i] - QA[i])
+        margins = (margin_scale * lam[i, :G] + 1e-12, margin_scale * lam[i, G:] + 1e-12)
+        plain = (np.full(G, 1e-12), np.full(C - G, 1e-12))
+        inv = 1.0 / lam[i]
+        k, tv = np.empty(1, np.bool_), np.empty(1)
+        check_blocks(QT, 1, (1, 1), margins, plain, inv, arrays, ws, k, tv)
+        kept[i], tau[i] = k[0], tv[0]
+    return kept, tau
+
+
+def test_a_states_tau_certifies_the_motion_around_it():
+    """``check_states``' ``tau``: a state within its margins certifies ``[t - τ, t + τ]`` of the
+    motion (dense exact sampling finds no collision there), and one that keeps them reports none."""
+    scene = shelf_scene()
+    rng = np.random.default_rng(3)
+    QA = PANDA.random_configurations(800, rng=rng)
+    QA = np.ascontiguousarray(QA[scene.collision_free(QA, 0.01)][:300])
+    QB = np.ascontiguousarray(np.clip(QA + rng.normal(0.0, 0.4, QA.shape), PANDA.lower, PANDA.upper))
+    ints, floats, v_WO, reach = planner._arguments(scene)
+    lam = np.ascontiguousarray(np.abs(QB - QA) @ reach.T)
+    t = np.zeros(len(QA))
+    kept, tau = _taus(QA, QB, t, lam, ints, floats, 0.05)
+    assert np.all(np.isinf(tau[kept])) and np.all(np.isfinite(tau[~kept]))
+    near = np.flatnonzero(~kept & (tau > 0.0))
+    assert len(near) >= 5
+    for i in near[:8]:
+        s = np.linspace(0.0, min(tau[i], 1.0), 60)[:, None]
+        assert scene.exact_min_distance(QA[i] + s * (QB[i] - QA[i])).min() >= -1e-9
+        # and tau is the row values' bound: a state asked for tau's margin keeps it
+        k2, _ = _taus(QA[i:i + 1], QB[i:i + 1], t[:1], lam[i:i + 1], ints, floats, 0.999 * tau[i])
+        assert k2[0]

@@ -30,9 +30,10 @@ via Vectorized Sampling-Based Planning", ICRA 2024):
   plus the margin ``Λ_c / 2n``, certifies the whole motion between its ``n + 1`` states. One
   pass tells three outcomes apart: a collision (rejected at once), every state clear of its
   margins (certified: most accepted motions end here), or free but within a margin
-  somewhere — then a bisection on the same bound decides (boolean checks at halving
-  margins, or the scene's :func:`~drake_mh.scene.segments.certify_segments` with
-  ``certify="bisection"``). The returned path therefore consists of certified segments, and
+  somewhere — then the same bound decides on the rows that came near: conservative advancement
+  from both ends of each uncertain piece on the clearance values that the check reports for
+  those rows (default), or the scene's :func:`~drake_mh.scene.segments.certify_segments` with
+  ``certify="bisection"``. The returned path therefore consists of certified segments, and
   :func:`drake_mh.planning.verify_motion` re-certifies it independently.
 
 :func:`prepare` loads the kernel once per process (numba's cache: about 0.2 s; after a change
