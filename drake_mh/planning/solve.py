@@ -187,10 +187,10 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
     wall, cpu = time.perf_counter(), time.process_time()
     deadline = None if timeout is None else wall + float(timeout)
     path, info = function(problem, goals, rng, deadline, budget, **options)
-    result = MotionResult(method, seed=seed, info=dict(info or {}), goal_time=goal_time)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    result = MotionResult(method, seed=seed, info=dict(info or {}), goal_time=goal_time, planning_time=wall,
+                          cpu_time=cpu)
     result.info.setdefault("prepare_time", prepare_time)
-    result.planning_time = time.perf_counter() - wall
-    result.cpu_time = time.process_time() - cpu
     if path is None:
         result.message = result.info.pop("message", "no path found")
         return result

@@ -117,6 +117,7 @@ class RRTConnectConfig:
 _CONFIGS: dict = {}
 _COUNTS = S.T_SAMPLE  # counts first, then seconds
 _COUNT_NAMES = S.STAT_NAMES[:_COUNTS]
+_NSTATS = len(S.STAT_NAMES)
 
 
 _CLOCK = clock_address()
@@ -185,11 +186,11 @@ def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
     prepare_time = prepare(problem) if not _PREPARED else 0.0
     ints, floats, v_WO, reach = _arguments(problem.scene)
     robot = problem.robot
-    seed = np.array([rng.bit_generator.random_raw()], dtype=np.uint64)  # the splitmix64 state
+    seed = rng.bit_generator.random_raw(1)  # (1,) uint64: the splitmix64 state
     # the deadline measures planning, not loading (as solve_ik's timeout)
     time_limit = np.inf if deadline is None else deadline + prepare_time - time.perf_counter()
     max_nodes = DEFAULT_MAX_NODES if budget is None else int(budget)
-    stats = np.zeros(len(S.STAT_NAMES))
+    stats = np.zeros(_NSTATS)
     path, outcome, goal = K.plan_kernel(
         np.ascontiguousarray(problem.q_start, dtype=float), np.ascontiguousarray(goals, dtype=float),
         robot.lower.astype(float), robot.upper.astype(float), ints, floats, v_WO, reach,
