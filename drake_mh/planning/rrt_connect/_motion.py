@@ -5,8 +5,9 @@ its whole length: its interpolated states in batched calls with early exit (the 
 :func:`drake_mh.scene._state_kernels.check_states`, VAMP's design: Thomason, Kingston, Kavraki,
 "Motions in Microseconds via Vectorized Sampling-Based Planning", ICRA 2024), at clearances
 raised by a margin that certifies the motion between the states (the Lipschitz bound of
-:mod:`drake_mh.scene._segment_kernel`), refined only where a state is within the margin. Its callers pass the arrays borrowed (:mod:`drake_mh._borrow`), and its per-motion
-arrays come from a workspace (:func:`motion_workspace`).
+:mod:`drake_mh.scene._segment_kernel`), refined only where a state is within the margin. Its
+callers pass the arrays borrowed (:mod:`drake_mh._borrow`), and its per-motion arrays come from a
+workspace (:func:`motion_workspace`).
 """
 
 from __future__ import annotations
@@ -36,8 +37,9 @@ def motion_workspace(nq, C, G, capacity):
     """Arrays :func:`certified_motion` writes into, for ``C`` constraint rows (``G`` links) and
     motions of up to ``capacity`` states (:func:`motion_capacity`; longer ones allocate their
     own): ``(lam (C,), QT (nq, capacity), order (capacity,), out (capacity,), margin rows (G,),
-    (C - G,), plain rows (G,), (C - G,), inv_lam (C,), tau (capacity,))``. Allocated once per plan: the eight allocations were
-    about 0.15 µs of a motion's 1.2 µs of setup (a replay of 132,349 MotionBenchMaker motions)."""
+    (C - G,), plain rows (G,), (C - G,), inv_lam (C,), tau (capacity,))``. Allocated once per
+    plan: the first eight allocations were about 0.15 µs of a motion's 1.2 µs of setup (a replay
+    of 132,349 MotionBenchMaker motions)."""
     P = C - G
     return (np.empty(C), np.empty((nq, capacity)), np.empty(capacity, np.int64), np.empty(capacity, np.bool_),
             np.empty(G), np.empty(P), np.empty(G), np.empty(P), np.empty(C), np.empty(capacity))
