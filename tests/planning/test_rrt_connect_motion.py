@@ -23,6 +23,15 @@ def shelf_scene() -> Scene:
     return scene
 
 
+def free_motions(scene, seed, samples, count, sigma, clearance=0.0):
+    """``(QA, QB)``: ``count`` starts free at ``clearance`` among ``samples`` random
+    configurations, each moved by a normal step of ``sigma`` rad within the limits."""
+    rng = np.random.default_rng(seed)
+    QA = PANDA.random_configurations(samples, rng=rng)
+    QA = np.ascontiguousarray(QA[scene.collision_free(QA, clearance)][:count])
+    return QA, np.ascontiguousarray(np.clip(QA + rng.normal(0.0, sigma, QA.shape), PANDA.lower, PANDA.upper))
+
+
 def panda_reach():
     return np.ascontiguousarray(shelf_scene().collision_model.reach)
 
@@ -53,10 +62,7 @@ def test_the_capacity_bounds_every_motion_within_the_limits():
 
 def test_a_motion_longer_than_the_workspace_gets_the_same_answer():
     scene = shelf_scene()
-    rng = np.random.default_rng(1)
-    QA = PANDA.random_configurations(300, rng=rng)
-    QA = np.ascontiguousarray(QA[scene.collision_free(QA)][:40])
-    QB = np.ascontiguousarray(np.clip(QA + rng.normal(0.0, 0.5, QA.shape), PANDA.lower, PANDA.upper))
+    QA, QB = free_motions(scene, 1, 300, 40, 0.5)
     ints, floats, v_WO, reach = planner._arguments(scene)
     big, stats_big = _answers(QA, QB, ints, floats, v_WO, reach, 4096, planner._CLOCK)
     small, stats_small = _answers(QA, QB, ints, floats, v_WO, reach, 2, planner._CLOCK)
@@ -66,15 +72,12 @@ def test_a_motion_longer_than_the_workspace_gets_the_same_answer():
     np.testing.assert_array_equal(big, planner.certify_motions(scene, QA, QB))
 
 
-def test_the_bisection_refines_the_rows_that_came_near_and_never_certifies_a_collision():
+def test_the_refinement_of_the_rows_that_came_near_never_certifies_a_collision():
     """Motions that come within their margins are refined on the rows that did (the others kept
     theirs at every state): the certified ones keep the clearance under the scene's own
-    certificate and dense exact sampling, and some are rejected only by the bisection."""
+    certificate and dense exact sampling, and some are rejected only by the refinement."""
     scene = shelf_scene()
-    rng = np.random.default_rng(7)
-    QA = PANDA.random_configurations(600, rng=rng)
-    QA = np.ascontiguousarray(QA[scene.collision_free(QA)][:200])
-    QB = np.ascontiguousarray(np.clip(QA + rng.normal(0.0, 0.3, QA.shape), PANDA.lower, PANDA.upper))
+    QA, QB = free_motions(scene, 7, 600, 200, 0.3)
     ints, floats, v_WO, reach = planner._arguments(scene)
     refined, outcome = [], []
     for a, b in zip(QA, QB):
@@ -115,10 +118,7 @@ def test_a_states_tau_certifies_the_motion_around_it():
     """``check_states``' ``tau``: a state within its margins certifies ``[t - τ, t + τ]`` of the
     motion (dense exact sampling finds no collision there), and one that keeps them reports none."""
     scene = shelf_scene()
-    rng = np.random.default_rng(3)
-    QA = PANDA.random_configurations(800, rng=rng)
-    QA = np.ascontiguousarray(QA[scene.collision_free(QA, 0.01)][:300])
-    QB = np.ascontiguousarray(np.clip(QA + rng.normal(0.0, 0.4, QA.shape), PANDA.lower, PANDA.upper))
+    QA, QB = free_motions(scene, 3, 800, 300, 0.4, clearance=0.01)
     ints, floats, v_WO, reach = planner._arguments(scene)
     lam = np.ascontiguousarray(np.abs(QB - QA) @ reach.T)
     t = np.zeros(len(QA))
