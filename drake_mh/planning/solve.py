@@ -187,9 +187,9 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
     wall, cpu = time.perf_counter(), time.process_time()
     deadline = None if timeout is None else wall + float(timeout)
     path, info = function(problem, goals, rng, deadline, budget, **options)
-    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-    result = MotionResult(method, seed=seed, info=dict(info or {}), goal_time=goal_time, planning_time=wall,
-                          cpu_time=cpu)
+    planning_time, cpu_time = time.perf_counter() - wall, time.process_time() - cpu
+    result = MotionResult(method, seed=seed, info=dict(info or {}), goal_time=goal_time, planning_time=planning_time,
+                          cpu_time=cpu_time)
     result.info.setdefault("prepare_time", prepare_time)
     if path is None:
         result.message = result.info.pop("message", "no path found")

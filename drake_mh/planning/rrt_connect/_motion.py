@@ -132,17 +132,18 @@ def _refine(qa, qb, tau, order, n, lam, inv_lam, plain, clearance, self_clearanc
             count += 1
     evals = 0
     while count > 0:
+        # each piece's middle state tm and the τ it needs (half its gap); margins for the largest
+        tm, half_gap = np.empty(count), np.empty(count)
         need = 0.0
         for r in range(count):
-            need = max(need, 0.5 * ((P1[r] - V1[r]) - (P0[r] + V0[r])))
+            a, b = P0[r] + V0[r], P1[r] - V1[r]
+            tm[r], half_gap[r] = 0.5 * (a + b), 0.5 * (b - a)
+            need = max(need, half_gap[r])
         if evals + count > max_evals or lam_max * need < 1e-9:
             return False, evals
         margins = _clearances(lam, need, G, clearance, self_clearance, np.empty(G), np.empty(lam.shape[0] - G))
         QE = np.empty((nq, count))
-        tm = np.empty(count)
         for r in range(count):
-            a, b = P0[r] + V0[r], P1[r] - V1[r]
-            tm[r] = 0.5 * (a + b)
             for j in range(nq):
                 QE[j, r] = qa[j] + tm[r] * (qb[j] - qa[j])
         kept, tau_m = np.empty(count, np.bool_), np.empty(count)
@@ -154,7 +155,7 @@ def _refine(qa, qb, tau, order, n, lam, inv_lam, plain, clearance, self_clearanc
         c2 = 0
         for r in range(count):
             vm = tau_m[r]
-            if vm >= 0.5 * ((P1[r] - V1[r]) - (P0[r] + V0[r])):  # it certifies half the gap on each side
+            if vm >= half_gap[r]:  # it certifies half the gap on each side
                 continue
             N0[c2], W0[c2], N1[c2], W1[c2] = P0[r], V0[r], tm[r], vm
             N0[c2 + 1], W0[c2 + 1], N1[c2 + 1], W1[c2 + 1] = tm[r], vm, P1[r], V1[r]
