@@ -37,9 +37,9 @@ def panda_reach():
 
 
 @numba.njit
-def _answers(QA, QB, ints, floats, v_WO, reach, capacity, clock):
+def _answers(QA, QB, ints, floats, v_WO, reach, capacity, clock, probes=0):
     arrays = _unpack(ints, floats)
-    ws, mws = workspaces(arrays, QA.shape[1], reach.shape[0], 32, capacity)  # owned: no borrowing here
+    ws, mws = workspaces(arrays, QA.shape[1], reach.shape[0], 32, capacity, probes, 0.0, 0.0)  # owned: no borrowing
     stats, buf = np.zeros(len(STAT_NAMES)), np.zeros(2, np.int64)
     out = np.empty(QA.shape[0], np.bool_)
     for i in range(QA.shape[0]):
@@ -72,6 +72,25 @@ def test_a_motion_longer_than_the_workspace_gets_the_same_answer():
     np.testing.assert_array_equal(big, planner.certify_motions(scene, QA, QB))
 
 
+def test_probes_reject_colliding_motions_before_their_setup_and_change_no_answer():
+    """The probe states only reject, and only motions that collide: with 0, 1, 4 or 8 probes
+    the same motions are certified; the rejected ones that a probe stopped checked only the
+    probes."""
+    scene = shelf_scene()
+    QA, QB = free_motions(scene, 5, 600, 150, 0.6)
+    ints, floats, v_WO, reach = planner._arguments(scene)
+    none, stats_none = _answers(QA, QB, ints, floats, v_WO, reach, 4096, planner._CLOCK, 0)
+    assert 10 <= none.sum() <= len(none) - 10
+    assert stats_none[STAT_NAMES.index("rejected_by_probes")] == 0
+    for probes in (1, 4, 8):
+        ok, stats = _answers(QA, QB, ints, floats, v_WO, reach, 4096, planner._CLOCK, probes)
+        np.testing.assert_array_equal(ok, none)
+        by_probes = stats[STAT_NAMES.index("rejected_by_probes")]
+        assert 0 < by_probes <= stats[STAT_NAMES.index("rejected")] == stats_none[STAT_NAMES.index("rejected")]
+    ends = scene.collision_free(QB)
+    assert np.all(~ok[~ends])  # a motion whose end collides is never certified
+
+
 def test_the_refinement_of_the_rows_that_came_near_never_certifies_a_collision():
     """Motions that come within their margins are refined on the rows that did (the others kept
     theirs at every state): the certified ones keep the clearance under the scene's own
@@ -100,7 +119,7 @@ def _taus(QA, QB, t, lam, ints, floats, margin_scale):
     arrays = _unpack(ints, floats)
     G = arrays[6].shape[0]
     C = lam.shape[1]
-    ws, _ = workspaces(arrays, QA.shape[1], C, 1, 4)
+    ws, _ = workspaces(arrays, QA.shape[1], C, 1, 4, 0, 0.0, 0.0)
     kept, tau = np.empty(QA.shape[0], np.bool_), np.empty(QA.shape[0])
     for i in range(QA.shape[0]):
         QT = np.empty((QA.shape[1], 1))

@@ -194,7 +194,7 @@ def _shortcut(path, iterations, rng, arrays, ws, mws, lanes, v_WO, reach, cleara
 
 @numba.njit(cache=True)
 def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearance, self_clearance, seed,
-                step, resolution, margin, first_lanes, block_lanes, goal_bias, balance, max_nodes, time_limit,
+                step, resolution, margin, first_lanes, block_lanes, probes, goal_bias, balance, max_nodes, time_limit,
                 max_evals, shortcut_iterations, by_values, clock, profile, stats):
     """RRT-Connect (Kuffner & LaValle, "RRT-Connect: An efficient approach to single-query path
     planning", ICRA 2000) from ``q_start`` to any row of ``goals``, then shortcutting.
@@ -220,7 +220,8 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     start = now(clock, buf)
     arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._borrow)
     capacity = motion_capacity(upper - lower, reach, resolution, margin)
-    owner = workspaces(arrays, q_start.shape[0], reach.shape[0], max(first_lanes, block_lanes), capacity)
+    owner = workspaces(arrays, q_start.shape[0], reach.shape[0], max(first_lanes, block_lanes), capacity, probes,
+                       clearance, self_clearance)
     return _plan(owner, buf, start, arrays, q_start, goals, lower, upper, v_WO, reach,
                  clearance, self_clearance, seed, step, resolution, margin, first_lanes, block_lanes, goal_bias,
                  balance, max_nodes, time_limit, max_evals, shortcut_iterations, by_values, clock, profile, stats)
@@ -358,7 +359,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
 
 @numba.njit(cache=True)
 def certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance, resolution, margin, first_lanes,
-                    block_lanes, max_evals, by_values, clock, stats):
+                    block_lanes, probes, max_evals, by_values, clock, stats):
     """``(M,)`` bool: whether each straight motion ``QA[i] -> QB[i]`` (``QA[i]`` free) is certified
     by :func:`._motion.certified_motion`, the planner's check (for tests and other callers)."""
     buf = np.zeros(2, np.int64)
@@ -368,7 +369,8 @@ def certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance
         for j in range(QA.shape[1]):
             span[j] = max(span[j], abs(QB[i, j] - QA[i, j]))
     capacity = motion_capacity(span, reach, resolution, margin)
-    owner = workspaces(arrays, QA.shape[1], reach.shape[0], max(first_lanes, block_lanes), capacity)
+    owner = workspaces(arrays, QA.shape[1], reach.shape[0], max(first_lanes, block_lanes), capacity, probes,
+                       clearance, self_clearance)
     return _certify_all(owner, buf, arrays, QA, QB, v_WO, reach, clearance, self_clearance, resolution, margin,
                         (first_lanes, block_lanes), max_evals, by_values, clock, stats)
 

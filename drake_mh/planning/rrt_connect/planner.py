@@ -19,6 +19,7 @@ from drake_mh.errors import InvalidArgument
 from drake_mh.planning.rrt_connect import _kernels as K
 from drake_mh.planning.rrt_connect import _stats as S
 from drake_mh.planning.rrt_connect._clock import clock_address
+from drake_mh.planning.rrt_connect._motion import PROBES
 
 DEFAULT_MAX_NODES = 200_000
 """Tree nodes when neither ``budget`` nor a deadline bounds a run (a blocked goal then fails
@@ -43,9 +44,19 @@ class RRTConnectConfig:
             added while ``Λ_c / 2n`` exceeds it, see :func:`._motion.certified_motion`); a motion
             that passes within its margins is refined (``certify``). 0.01 and 0.04 measured
             within 15 % of 0.02.
-        lanes: states of a motion checked first, in one batched call, spread along it (a
-            motion that collides mostly stops there).
-        block: states per batched call after the first (8 / 32 measured as 16 / 16).
+        probes: states of a motion checked first, before any of its setup, at the plain
+            clearances (0-8; t = 1, 1/2, 1/4, 1/8, ...: :data:`._motion.PROBES`): a motion
+            that collides mostly stops there. They only reject; the motion's own states
+            certify.
+        lanes: states of a motion checked next, in one batched call, spread along it (VAMP's
+            "rake": the probes' misses stop there, since a collision found early ends the
+            motion).
+        block: states per batched call after the first. Probes 4 / lanes 64 / block 64 took
+            0.86x the time of probes 0 / lanes 8 / block 32 (the defaults before probes),
+            0.92x with lanes and block 32, 0.91x with 3 probes, and 1.12x with no probes and
+            lanes 64 (median ratio over 99 MotionBenchMaker plans, each plan's best of 4, the
+            options interleaved in one process, so with warm caches; in separate processes,
+            after each plan's verification, about 0.95x).
         certify: how a motion within its margins is certified: ``"boolean"`` (conservative
             advancement on the values that the batched check reports for the rows below their
             margins: 41 configurations per refined MotionBenchMaker motion against 70 for the
@@ -73,8 +84,9 @@ class RRTConnectConfig:
     step: float = 1.0
     resolution: float = 16.0
     margin: float = 0.02
-    lanes: int = 8
-    block: int = 32
+    probes: int = 4
+    lanes: int = 64
+    block: int = 64
     certify: str = "boolean"
     goal_bias: float = 0.05
     balance: bool = True
@@ -92,10 +104,13 @@ class RRTConnectConfig:
         if isinstance(self.goal_bias, bool) or not isinstance(self.goal_bias, numbers.Real) \
                 or not 0.0 <= self.goal_bias <= 1.0:
             raise InvalidArgument(f"rrt_connect: goal_bias must be in [0, 1], got {self.goal_bias!r}")
-        for name, least in (("shortcut_iterations", 0), ("max_certify_evaluations", 2), ("lanes", 1), ("block", 1)):
+        for name, least, most in (("shortcut_iterations", 0, None), ("max_certify_evaluations", 2, None),
+                                  ("lanes", 1, None), ("block", 1, None), ("probes", 0, len(PROBES))):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
-                raise InvalidArgument(f"rrt_connect: {name} must be an integer >= {least}, got {value!r}")
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least \
+                    or (most is not None and value > most):
+                bounds = f">= {least}" if most is None else f"in [{least}, {most}]"
+                raise InvalidArgument(f"rrt_connect: {name} must be an integer {bounds}, got {value!r}")
 
     @classmethod
     def from_options(cls, options: dict, **defaults) -> "RRTConnectConfig":
@@ -158,7 +173,7 @@ def prepare(problem) -> float:
         stats = np.zeros(len(S.STAT_NAMES))
         K.plan_kernel(q, q[None].copy(), robot.lower.astype(float), robot.upper.astype(float), ints, floats, v_WO,
                       reach, float(problem.clearance), float(problem.self_clearance), np.zeros(1, np.uint64),
-                      1.0, 16.0, 0.02, 8, 32, 0.05, True, 1, 1.0, 16, 1, None, _CLOCK, False, stats)
+                      1.0, 16.0, 0.02, 64, 64, 4, 0.05, True, 1, 1.0, 16, 1, None, _CLOCK, False, stats)
         _PREPARED = True
     return time.perf_counter() - start
 
@@ -195,8 +210,9 @@ def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
         np.ascontiguousarray(problem.q_start, dtype=float), np.ascontiguousarray(goals, dtype=float),
         robot.lower.astype(float), robot.upper.astype(float), ints, floats, v_WO, reach,
         float(problem.clearance), float(problem.self_clearance), seed, float(config.step), float(config.resolution),
-        float(config.margin), int(config.lanes), int(config.block), float(config.goal_bias), bool(config.balance),
-        max_nodes, float(time_limit), int(config.max_certify_evaluations), int(config.shortcut_iterations),
+        float(config.margin), int(config.lanes), int(config.block), int(config.probes), float(config.goal_bias),
+        bool(config.balance), max_nodes, float(time_limit), int(config.max_certify_evaluations),
+        int(config.shortcut_iterations),
         _by_values(config), _CLOCK, bool(config.profile), stats)
     info = dict(zip(_COUNT_NAMES, map(int, stats[:_COUNTS].tolist())))
     info["t_total"] = float(stats[S.T_TOTAL])
@@ -216,7 +232,7 @@ def certify_motions(scene, QA, QB, clearance: float = 0.0, self_clearance: float
     """``(M,)`` bool: whether ``rrt_connect``'s motion check certifies each straight joint-space
     motion ``QA[i] -> QB[i]`` collision-free with these clearances (``QA[i]`` must be free: the
     planner only extends from free nodes). ``options``: those of :class:`RRTConnectConfig`
-    that concern the check (``resolution``, ``margin``, ``lanes``, ``block``,
+    that concern the check (``resolution``, ``margin``, ``lanes``, ``block``, ``probes``,
     ``max_certify_evaluations``, ``certify``)."""
     from drake_mh.scene.segments import check_clearance
 
@@ -229,6 +245,6 @@ def certify_motions(scene, QA, QB, clearance: float = 0.0, self_clearance: float
     ints, floats, v_WO, reach = _arguments(scene)
     return K.certify_motions(QA, QB, ints, floats, v_WO, reach, check_clearance(clearance, "clearance"),
                              check_clearance(self_clearance, "self_clearance"), float(config.resolution),
-                             float(config.margin), int(config.lanes), int(config.block),
+                             float(config.margin), int(config.lanes), int(config.block), int(config.probes),
                              int(config.max_certify_evaluations), _by_values(config), _CLOCK,
                              np.zeros(len(S.STAT_NAMES)))
