@@ -245,9 +245,9 @@ def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, sel
     t0 = now(clock, buf) if profile else 0.0
     nq = qa.shape[0]
     G, C = g_anchor.shape[0], reach.shape[0]
+    stats[STATES] += mws[10].shape[1]
     if _probe_collides(qa, qb, arrays, ws, mws):
         stats[MOTIONS] += 1
-        stats[STATES] += mws[10].shape[1]
         stats[REJECTED] += 1
         stats[BY_PROBES] += 1
         if profile:
