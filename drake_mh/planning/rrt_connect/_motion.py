@@ -53,10 +53,10 @@ def motion_workspace(nq, C, G, capacity, probes, clearance, self_clearance):
     allocations were about 0.15 µs of a motion's 1.2 µs of setup (a replay of 132,349
     MotionBenchMaker motions)."""
     P = C - G
+    link_plain, pair_plain = _clearances(np.zeros(C), 0.0, G, clearance, self_clearance, np.empty(G), np.empty(P))
     return (np.empty(C), np.empty((nq, capacity)), np.empty(capacity, np.int64), np.empty(capacity, np.bool_),
             np.empty(G), np.empty(P), np.empty(G), np.empty(P), np.empty(C), np.empty(capacity),
-            np.empty((nq, probes)), np.full(G, clearance + 1e-12), np.full(P, self_clearance + 1e-12),
-            np.empty(probes, np.bool_), np.empty(probes))
+            np.empty((nq, probes)), link_plain, pair_plain, np.empty(probes, np.bool_), np.empty(probes))
 
 
 @numba.njit(cache=True)
