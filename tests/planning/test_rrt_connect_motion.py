@@ -113,9 +113,10 @@ def test_the_refinement_of_the_rows_that_came_near_never_certifies_a_collision()
 
 
 @numba.njit
-def _taus(QA, QB, t, lam, ints, floats, margin_scale):
+def _taus(QA, QB, t, lam, ints, floats, margin_scale, local):
     """``(kept, tau)`` of ``check_blocks`` for the states ``QA + t (QB - QA)``, rows at the
-    clearance 0 plus ``margin_scale · Λ_c`` (the motion's ``Λ_c`` in ``lam (M, C)``)."""
+    clearance 0 plus ``margin_scale · Λ_c`` (the motion's ``Λ_c`` in ``lam (M, C)``); with
+    ``local`` the links' bound from the state's joint axes and the motion's speeds."""
     arrays = _unpack(ints, floats)
     G = arrays[6].shape[0]
     C = lam.shape[1]
@@ -128,26 +129,34 @@ def _taus(QA, QB, t, lam, ints, floats, margin_scale):
         plain = (np.full(G, 1e-12), np.full(C - G, 1e-12))
         inv = 1.0 / lam[i]
         k, tv = np.empty(1, np.bool_), np.empty(1)
-        check_blocks(QT, 1, (1, 1), margins, plain, inv, arrays, ws, k, tv)
+        speeds = np.abs(QB[i] - QA[i]) if local else np.zeros(QA.shape[1])
+        check_blocks(QT, 1, (1, 1), margins, plain, inv, speeds, arrays, ws, k, tv)
         kept[i], tau[i] = k[0], tv[0]
     return kept, tau
 
 
 def test_a_states_tau_certifies_the_motion_around_it():
     """``check_states``' ``tau``: a state within its margins certifies ``[t - τ, t + τ]`` of the
-    motion (dense exact sampling finds no collision there), and one that keeps them reports none."""
+    motion (dense exact sampling finds no collision there), and one that keeps them reports none.
+    Without the motion's speeds ``tau`` is the rows' static bound (a state asked for its margin
+    keeps it); with them a link's local bound is at least that, and certifies as much."""
     scene = shelf_scene()
     QA, QB = free_motions(scene, 3, 800, 300, 0.4, clearance=0.01)
     ints, floats, v_WO, reach = planner._arguments(scene)
     lam = np.ascontiguousarray(np.abs(QB - QA) @ reach.T)
     t = np.zeros(len(QA))
-    kept, tau = _taus(QA, QB, t, lam, ints, floats, 0.05)
+    kept, tau = _taus(QA, QB, t, lam, ints, floats, 0.05, False)
+    kept_local, tau_local = _taus(QA, QB, t, lam, ints, floats, 0.05, True)
+    assert np.array_equal(kept, kept_local) and np.all(tau_local[~kept] >= tau[~kept])
     assert np.all(np.isinf(tau[kept])) and np.all(np.isfinite(tau[~kept]))
     near = np.flatnonzero(~kept & (tau > 0.0))
     assert len(near) >= 5
-    for i in near[:8]:
-        s = np.linspace(0.0, min(tau[i], 1.0), 60)[:, None]
+    tighter = near[tau_local[near] > 1.01 * tau[near]]  # where the local bound is the larger
+    assert len(tighter) >= 3
+    for i in list(near[:5]) + list(tighter[:5]):
+        s = np.linspace(0.0, min(tau_local[i], 1.0), 60)[:, None]
         assert scene.exact_min_distance(QA[i] + s * (QB[i] - QA[i])).min() >= -1e-9
-        # and tau is the row values' bound: a state asked for tau's margin keeps it
-        k2, _ = _taus(QA[i:i + 1], QB[i:i + 1], t[:1], lam[i:i + 1], ints, floats, 0.999 * tau[i])
+    for i in near[:5]:
+        # and the static tau is the row values' bound: a state asked for tau's margin keeps it
+        k2, _ = _taus(QA[i:i + 1], QB[i:i + 1], t[:1], lam[i:i + 1], ints, floats, 0.999 * tau[i], False)
         assert k2[0]

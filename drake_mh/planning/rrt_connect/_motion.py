@@ -48,7 +48,7 @@ def motion_workspace(nq, C, G, capacity, probes, clearance, self_clearance):
     own): ``(lam (C,), QT (nq, capacity), order (capacity,), out (capacity,), margin rows (G,),
     (C - G,), plain rows (G,), (C - G,), inv_lam (C,), tau (capacity,), probe states
     (nq, probes), plain clearances of the probes link (G,), pair (C - G,), probe out
-    (probes,), probe tau (probes,))``, the probes' clearances filled (every pair checked: a
+    (probes,), probe tau (probes,), joint speeds |Δq| (nq,))``, the probes' clearances filled (every pair checked: a
     probe certifies nothing, it may only reject). Allocated once per plan: the first eight
     allocations were about 0.15 µs of a motion's 1.2 µs of setup (a replay of 132,349
     MotionBenchMaker motions)."""
@@ -56,7 +56,8 @@ def motion_workspace(nq, C, G, capacity, probes, clearance, self_clearance):
     link_plain, pair_plain = _clearances(np.zeros(C), 0.0, G, clearance, self_clearance, np.empty(G), np.empty(P))
     return (np.empty(C), np.empty((nq, capacity)), np.empty(capacity, np.int64), np.empty(capacity, np.bool_),
             np.empty(G), np.empty(P), np.empty(G), np.empty(P), np.empty(C), np.empty(capacity),
-            np.empty((nq, probes)), link_plain, pair_plain, np.empty(probes, np.bool_), np.empty(probes))
+            np.empty((nq, probes)), link_plain, pair_plain, np.empty(probes, np.bool_), np.empty(probes),
+            np.zeros(nq))
 
 
 @numba.njit(cache=True)
@@ -109,15 +110,17 @@ def _clearances(lam, scale, G, clearance, self_clearance, link, pair):
 
 
 @numba.njit(cache=True)
-def _refine(qa, qb, tau, order, n, lam, inv_lam, plain, clearance, self_clearance, arrays, ws, lanes, max_evals):
+def _refine(qa, qb, tau, order, n, lam, inv_lam, speeds, plain, clearance, self_clearance, arrays, ws, lanes,
+            max_evals):
     """Certify ``qa -> qb`` by conservative advancement from both ends of each piece, or find a
     collision on it (see :func:`certified_motion`).
 
     A state at ``t`` whose rows keep ``V_c >= clearance_c + Λ_c τ`` certifies ``[t - τ, t + τ]``
     (the Lipschitz bound), so a piece ``[t0, t1]`` is certified when ``τ0 + τ1 >= t1 - t0``.
     ``tau[w]`` is state ``order[w]``'s ``τ`` (:func:`~drake_mh.scene._state_kernels.check_states`:
-    from the clearance values of the rows below their margins; a state that kept every margin
-    has ``τ >= 1 / 2n``). Each round checks, in one batched call, the middle of the gap
+    from the clearance values of the rows below their margins, for a link also from where the
+    joint axes are in that state and the motion's joint ``speeds``; a state that kept every
+    margin has ``τ >= 1 / 2n``). Each round checks, in one batched call, the middle of the gap
     ``[t0 + τ0, t1 - τ1]`` of every piece not yet certified, at margins for half that gap: a
     middle that keeps them certifies both halves, and one that does not shrinks each half's gap
     below half the old one. Every state is evaluated once (no end is checked again at smaller
@@ -163,7 +166,8 @@ def _refine(qa, qb, tau, order, n, lam, inv_lam, plain, clearance, self_clearanc
             for j in range(nq):
                 QE[j, r] = qa[j] + tm[r] * (qb[j] - qa[j])
         kept, tau_m = np.empty(count, np.bool_), np.empty(count)
-        answer, used = check_blocks(QE, count, (lanes[1], lanes[1]), margins, plain, inv_lam, arrays, ws, kept, tau_m)
+        answer, used = check_blocks(QE, count, (lanes[1], lanes[1]), margins, plain, inv_lam, speeds, arrays, ws, kept,
+                                    tau_m)
         evals += used
         if answer == COLLISION:
             return False, evals
@@ -193,7 +197,8 @@ def _probe_collides(qa, qb, arrays, ws, mws):
         for j in range(qa.shape[0]):
             PT[j, w] = qa[j] + t * (qb[j] - qa[j])
     link, pair = mws[11], mws[12]  # margins = plain clearances: the answer is COLLISION or CLEAR
-    return check_states(PT, 0, probes, link, pair, link, pair, mws[8], arrays, ws, mws[13], mws[14]) == COLLISION
+    return check_states(PT, 0, probes, link, pair, link, pair, mws[8], mws[15], arrays, ws, mws[13],
+                        mws[14]) == COLLISION
 
 
 @numba.njit(cache=True)
@@ -232,7 +237,9 @@ def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, sel
        :func:`_refine`: conservative advancement from both ends of each uncertain piece on the
        clearance values the check reports for those rows (41 configurations per refined
        MotionBenchMaker motion, against 84 for the boolean bisection at halving margins it
-       replaced and 70 for the other choice; certified motions 23 -> 18.5 µs), else (any
+       replaced and 70 for the other choice; certified motions 23 -> 18.5 µs; 26 with the
+       links' local bound on ``τ``, :func:`drake_mh.scene._state_kernels._link_tau`: the
+       refinement 15.4 -> 12.4 µs per refined motion), else (any
        other value, e.g. True) the scene's
        :func:`drake_mh.scene._segment_kernel.certify_segments` (the bound on clearance values
        from :func:`~drake_mh.scene._collision_kernels.link_clearances`). The choice is made at
@@ -254,8 +261,10 @@ def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, sel
             stats[T_CHECK] += now(clock, buf) - t0
         return False
     d = 0.0
+    speeds = mws[15]
     for j in range(nq):
         d += (qb[j] - qa[j]) ** 2
+        speeds[j] = abs(qb[j] - qa[j])
     d = math.sqrt(d)
     lam = mws[0]
     lam_max = 0.0
@@ -296,7 +305,7 @@ def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, sel
         inv_lam[c] = 1.0 / lam[c] if lam[c] > 0.0 else 0.0
     rows_near = ws[22]
     rows_near[:] = False
-    answer, used = check_blocks(QT, total, lanes, margins, plain, inv_lam, arrays, ws, out, tau)
+    answer, used = check_blocks(QT, total, lanes, margins, plain, inv_lam, speeds, arrays, ws, out, tau)
     stats[MOTIONS] += 1
     stats[STATES] += used
     if profile:
@@ -315,8 +324,8 @@ def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, sel
             if not rows_near[c]:
                 lam[c] = CERTIFIED_ROW
         plain = _clearances(lam, 0.0, G, clearance, self_clearance, mws[6], mws[7])
-        certified, evals = _refine(qa, qb, tau, order, n, lam, inv_lam, plain, clearance, self_clearance, arrays, ws,
-                                   lanes, max_evals)
+        certified, evals = _refine(qa, qb, tau, order, n, lam, inv_lam, speeds, plain, clearance, self_clearance,
+                                   arrays, ws, lanes, max_evals)
     else:
         QA = np.empty((1, nq))
         QB = np.empty((1, nq))
