@@ -59,7 +59,7 @@ class RRTConnectConfig:
         certify: how a motion within its margins is certified: ``"boolean"`` (conservative
             advancement on the values that the batched check reports for the rows below their
             margins: 41 configurations per refined MotionBenchMaker motion against 70 for the
-            other) or ``"bisection"`` (the scene's
+            other; 26 since a link's ``τ`` also has a local bound) or ``"bisection"`` (the scene's
             :func:`drake_mh.scene.segments.certify_segments` on clearance values; it was 20 %
             faster than the boolean bisection that the default replaced with self-collision
             pairs that nearly touch everywhere, not re-measured since). Each is a compiled
