@@ -48,10 +48,10 @@ def motion_workspace(nq, C, G, capacity, probes, clearance, self_clearance):
     own): ``(lam (C,), QT (nq, capacity), order (capacity,), out (capacity,), margin rows (G,),
     (C - G,), plain rows (G,), (C - G,), inv_lam (C,), tau (capacity,), probe states
     (nq, probes), plain clearances of the probes link (G,), pair (C - G,), probe out
-    (probes,), probe tau (probes,), joint speeds |Δq| (nq,))``, the probes' clearances filled (every pair checked: a
-    probe certifies nothing, it may only reject). Allocated once per plan: the first eight
-    allocations were about 0.15 µs of a motion's 1.2 µs of setup (a replay of 132,349
-    MotionBenchMaker motions)."""
+    (probes,), probe tau (probes,), the motion's joint speeds |Δq| (nq,))``, the probes'
+    clearances filled (every pair checked: a probe certifies nothing, it may only reject).
+    Allocated once per plan: the first eight allocations were about 0.15 µs of a motion's 1.2 µs
+    of setup (a replay of 132,349 MotionBenchMaker motions)."""
     P = C - G
     link_plain, pair_plain = _clearances(np.zeros(C), 0.0, G, clearance, self_clearance, np.empty(G), np.empty(P))
     return (np.empty(C), np.empty((nq, capacity)), np.empty(capacity, np.int64), np.empty(capacity, np.bool_),
@@ -196,7 +196,9 @@ def _probe_collides(qa, qb, arrays, ws, mws):
         t = PROBES[w]
         for j in range(qa.shape[0]):
             PT[j, w] = qa[j] + t * (qb[j] - qa[j])
-    link, pair = mws[11], mws[12]  # margins = plain clearances: the answer is COLLISION or CLEAR
+    # margins = plain clearances: the answer is COLLISION or CLEAR, no tau (so the speeds, still the
+    # previous motion's, are not read)
+    link, pair = mws[11], mws[12]
     return check_states(PT, 0, probes, link, pair, link, pair, mws[8], mws[15], arrays, ws, mws[13],
                         mws[14]) == COLLISION
 
