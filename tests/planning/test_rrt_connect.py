@@ -93,6 +93,22 @@ def test_shortcutting_shortens(table_problems):
     assert smooth.path_length <= raw.path_length + 1e-9
 
 
+def test_shortcut_min_gain_skips_draws_that_save_little(table_problems):
+    problem = table_problems[0]
+    raw = solve_motion(problem, "rrt_connect", seed=3, retime=False, shortcut_iterations=0)
+    every = solve_motion(problem, "rrt_connect", seed=3, retime=False, shortcut_min_gain=0.0)
+    some = solve_motion(problem, "rrt_connect", seed=3, retime=False)  # 32 draws, each checked if it saves 5 %
+    none = solve_motion(problem, "rrt_connect", seed=3, retime=False, shortcut_min_gain=0.999999)
+    assert raw.success and every.success and some.success and none.success
+    assert none.info["shortcuts_tried"] == 0 and np.array_equal(none.path, raw.path)  # no draw saves that much
+    assert 0 < some.info["shortcuts_tried"] < every.info["shortcuts_tried"]
+    for result in (every, some):  # (success: verified, the whole motion certified)
+        assert result.path_length < 0.99 * raw.path_length
+    for gain in (-0.1, 1.0, float("nan"), True, "0.2"):
+        with pytest.raises(InvalidArgument, match=r"shortcut_min_gain must be in \[0, 1\)"):
+            solve_motion(problem, "rrt_connect", shortcut_min_gain=gain)
+
+
 def test_narrow_passage():
     scene = slot_scene()
     goal = goals_in(scene, [0.6, -0.2, 0.41], [0.8, 0.2, 0.63], 1)[0]

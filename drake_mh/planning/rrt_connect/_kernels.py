@@ -132,24 +132,38 @@ def _drop_collinear(path):
 
 
 @numba.njit(cache=True)
-def _shortcut(path, iterations, rng, arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance, resolution, margin,
-              max_evals, by_values, stats, clock, buf, profile, start, time_limit):
+def _arc_lengths(path):
+    """``(M,)`` the path's length [rad] from its first waypoint to each waypoint."""
+    M, nq = path.shape
+    s = np.zeros(M)
+    for k in range(M - 1):
+        d = 0.0
+        for j in range(nq):
+            d += (path[k + 1, j] - path[k, j]) ** 2
+        s[k + 1] = s[k] + math.sqrt(d)
+    return s
+
+
+@numba.njit(cache=True)
+def _shortcut(path, iterations, min_gain, rng, arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance,
+              resolution, margin, max_evals, by_values, stats, clock, buf, profile, start, time_limit):
     """Random shortcutting (Geraerts & Overmars, "Creating high-quality paths for motion
     planning", IJRR 2007): join two random points of the path by a certified straight motion
-    (:func:`._motion.certified_motion`) when that is shorter, ``iterations`` times or until the deadline. The
-    pieces kept of the old segments are parts of certified segments."""
+    (:func:`._motion.certified_motion`) when that is shorter, ``iterations`` draws or until the
+    deadline. The pieces kept of the old segments are parts of certified segments.
+
+    A draw that would shorten the path by less than ``min_gain`` of its length
+    (``(v - u) - |qb - qa| < min_gain · L``) is not checked: such shortcuts mostly hug the path,
+    so most of them are certified (the expensive answer, many states near obstacles) for little
+    length (see :class:`~.planner.RRTConnectConfig`'s ``shortcut_min_gain``)."""
     t0 = now(clock, buf) if profile else 0.0
     nq = path.shape[1]
+    qa, qb = np.empty(nq), np.empty(nq)  # copied into the new path
+    s = _arc_lengths(path)
     for _ in range(iterations):
         M = path.shape[0]
         if M <= 2 or now(clock, buf) - start > time_limit:
             break
-        s = np.zeros(M)
-        for k in range(M - 1):
-            d = 0.0
-            for j in range(nq):
-                d += (path[k + 1, j] - path[k, j]) ** 2
-            s[k + 1] = s[k] + math.sqrt(d)
         L = s[M - 1]
         u, v = _uniform(rng) * L, _uniform(rng) * L
         if u > v:
@@ -162,13 +176,16 @@ def _shortcut(path, iterations, rng, arrays, ws, mws, lanes, v_WO, reach, cleara
             k += 1
         if k == i:
             continue
-        qa, qb = np.empty(nq), np.empty(nq)
         ha, hb = s[i + 1] - s[i], s[k + 1] - s[k]
         ta = (u - s[i]) / ha if ha > 0 else 0.0
         tb = (v - s[k]) / hb if hb > 0 else 0.0
+        chord = 0.0
         for j in range(nq):
             qa[j] = path[i, j] + ta * (path[i + 1, j] - path[i, j])
             qb[j] = path[k, j] + tb * (path[k + 1, j] - path[k, j])
+            chord += (qb[j] - qa[j]) ** 2
+        if (v - u) - math.sqrt(chord) < min_gain * L:
+            continue
         stats[SHORTCUTS_TRIED] += 1
         if not certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance, resolution,
                                 margin, max_evals, by_values, stats, clock, buf, profile):
@@ -187,6 +204,7 @@ def _shortcut(path, iterations, rng, arrays, ws, mws, lanes, v_WO, reach, cleara
             r += 1
         new[r:] = path[k + 1:]
         path = new
+        s = _arc_lengths(path)
     if profile:
         stats[T_SHORTCUT] += now(clock, buf) - t0
     return path
@@ -195,7 +213,7 @@ def _shortcut(path, iterations, rng, arrays, ws, mws, lanes, v_WO, reach, cleara
 @numba.njit(cache=True)
 def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearance, self_clearance, seed,
                 step, resolution, margin, first_lanes, block_lanes, probes, goal_bias, balance, max_nodes, time_limit,
-                max_evals, shortcut_iterations, by_values, clock, profile, stats):
+                max_evals, shortcut_iterations, shortcut_min_gain, by_values, clock, profile, stats):
     """RRT-Connect (Kuffner & LaValle, "RRT-Connect: An efficient approach to single-query path
     planning", ICRA 2000) from ``q_start`` to any row of ``goals``, then shortcutting.
 
@@ -224,13 +242,14 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
                        clearance, self_clearance)
     return _plan(owner, buf, start, arrays, q_start, goals, lower, upper, v_WO, reach,
                  clearance, self_clearance, seed, step, resolution, margin, first_lanes, block_lanes, goal_bias,
-                 balance, max_nodes, time_limit, max_evals, shortcut_iterations, by_values, clock, profile, stats)
+                 balance, max_nodes, time_limit, max_evals, shortcut_iterations, shortcut_min_gain, by_values, clock,
+                 profile, stats)
 
 
 @numba.njit(cache=True)
 def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_owner, reach_owner, clearance,
           self_clearance, seed, step, resolution, margin, first_lanes, block_lanes, goal_bias, balance, max_nodes,
-          time_limit, max_evals, shortcut_iterations, by_values, clock, profile, stats_owner):
+          time_limit, max_evals, shortcut_iterations, shortcut_min_gain, by_values, clock, profile, stats_owner):
     """:func:`plan_kernel` on its workspace ``owner``. The arrays that every motion passes on are
     borrowed from the arguments (held by the caller for the whole call: :mod:`drake_mh._borrow`)."""
     (ws, mws), buf, v_WO, reach, stats = borrow((owner, buf_owner, v_WO_owner, reach_owner, stats_owner))
@@ -338,9 +357,9 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
                         g = _root(P, a, ia)
                     stats[NODES] += added
                     path = _drop_collinear(path)
-                    path = _shortcut(path, shortcut_iterations, rng, arrays, ws, mws, lanes, v_WO, reach,
-                                     clearance, self_clearance, resolution, margin, max_evals, by_values, stats, clock,
-                                     buf, profile, start, time_limit)
+                    path = _shortcut(path, shortcut_iterations, shortcut_min_gain, rng, arrays, ws, mws, lanes, v_WO,
+                                     reach, clearance, self_clearance, resolution, margin, max_evals, by_values, stats,
+                                     clock, buf, profile, start, time_limit)
                     stats[T_TOTAL] += now(clock, buf) - start
                     return path, FOUND, g
                 jn = count[b]
