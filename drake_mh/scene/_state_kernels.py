@@ -34,7 +34,8 @@ Typical use (compiled code; the workspace is allocated once per plan)::
 
     arrays = _packing._unpack(ints, floats)                  # a scene's packed arrays
     ws = state_workspace(F, G, S, P, lanes)
-    answer = check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, inv_lam, speeds, arrays, ws,
+    ctx = CheckContext(arrays, ws, None)                     # one pointer (drake_mh.scene._check_context)
+    answer = check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, inv_lam, speeds, ctx,
                           out, tau)
 """
 
@@ -87,11 +88,16 @@ def _spheres_state(b, a, s0, s1, s_offset, s_radius, margin, plain, R, p, k, kin
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)  # not inlined: a second copy in check_states slowed its loop
-def _groups_state(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, margin, plain, R, p, k, kinds,
-                  R_WO, p_WO, dims):
+def _groups_state(b, a, u0, u1, margin, plain, k, ctx):
     """:func:`_spheres_state` of the spheres of groups ``u0 .. u1-1``, a group whose bounding
     sphere keeps the margin passed whole (:func:`drake_mh.scene.batch.sphere_groups`):
-    ``(answer, value)``."""
+    ``(answer, value)``. The arrays come from ``ctx`` (:func:`check_states`'), not as arguments:
+    passing them cost more than reading them."""
+    (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
+     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
+     u_offset, u_radius) = ctx.arrays
+    (R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first, ux, uy, uz, ufree,
+     rows_near, tau_l, gap_l) = ctx.ws
     answer, low = CLEAR, math.inf
     for u in range(u0, u1):
         x, y, z = _lane_point(a, u_offset, u, 0, R, p, b)
@@ -118,7 +124,7 @@ def _remember(order, k_first, gi, k):
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def _link_tau(gap, inv_lam, g, b, anchor, speeds, g_radius, Gx, Gy, Gz, parent, kind, qidx, R, p):
+def _link_tau(gap, inv_lam, g, b, anchor, speeds, ctx):
     """How far (in the motion's parameter t) link ``g``, ``gap`` [m] above its plain clearance in
     lane ``b``, certifies the motion around that state: the larger of the static bound
     ``gap / Λ_g`` and a local one from where the joint axes are in this state.
@@ -135,6 +141,11 @@ def _link_tau(gap, inv_lam, g, b, anchor, speeds, g_radius, Gx, Gy, Gz, parent, 
     static = gap * inv_lam
     if inv_lam <= 0.0 or gap <= 0.0:
         return static
+    (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
+     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
+     u_offset, u_radius) = ctx.arrays
+    (R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first, ux, uy, uz, ufree,
+     rows_near, tau_l, gap_l) = ctx.ws
     cx, cy, cz = Gx[g, b], Gy[g, b], Gz[g, b]
     r = g_radius[g]
     lin, W = 0.0, 0.0
@@ -163,13 +174,18 @@ lanes at once (SIMD, :func:`_groups_lanes`) rather than lane by lane."""
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def _groups_lanes(m, a, u0, u1, hit, u_start, u_offset, u_radius, s_offset, s_radius, margin, plain, R, p, k, kinds,
-                  R_WO, p_WO, dims, ux, uy, uz, ufree, keep, gap):
+def _groups_lanes(m, a, u0, u1, margin, plain, k, ctx):
     """:func:`_groups_state` of the lanes with ``hit[b]`` set, a group at a time over all ``m``
     lanes (the group's centres and its obstacle test vectorize across lanes); the spheres of a
     group near the obstacle in a hit lane are then tested in that lane. Returns COLLISION at
     the first sphere below ``plain``, else NEAR if it cleared ``keep[b]`` for a lane below
-    ``margin`` (and lowered ``tau[b]``, see :func:`check_states`), else CLEAR."""
+    ``margin`` (and lowered its smallest gap, the workspace's ``gap_l[b]``, see
+    :func:`check_states`), else CLEAR."""
+    (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
+     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
+     u_offset, u_radius) = ctx.arrays
+    (R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first, ux, uy, uz, ufree,
+     rows_near, tau_l, gap_l) = ctx.ws
     answer = CLEAR
     for u in range(u0, u1):
         _centre_block(m, a, u_offset, u, R, p, ux, uy, uz)
@@ -184,13 +200,13 @@ def _groups_lanes(m, a, u0, u1, hit, u_start, u_offset, u_radius, s_offset, s_ra
                     return COLLISION
                 if state == NEAR:
                     keep[b] = False
-                    gap[b] = min(gap[b], value - plain)
+                    gap_l[b] = min(gap_l[b], value - plain)
                     answer = NEAR
     return answer
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, inv_lam, speeds, arrays, ws, out, tau):
+def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, inv_lam, speeds, ctx, out, tau):
     """Check configurations ``QT[:, n0:n0+m]`` at two clearance levels in one pass.
 
     Args:
@@ -205,9 +221,9 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, in
         speeds: ``(nq,)`` ``|Δq_j|`` of the motion the configurations lie on (per unit of its
             parameter), for the links' local bound on ``tau`` (:func:`_link_tau`); all zero:
             the static bound ``(v_c - plain_c) / Λ_c`` only.
-        arrays: the scene's unpacked arrays (:func:`drake_mh.scene._packing._unpack`
-            of :func:`~drake_mh.scene._packing.pack`'s buffers).
-        ws: :func:`state_workspace`.
+        ctx: :class:`~drake_mh.scene._check_context.CheckContext` of the scene's unpacked
+            arrays (:func:`drake_mh.scene._packing._unpack` of
+            :func:`~drake_mh.scene._packing.pack`'s buffers) and a :func:`state_workspace`.
         out: ``(N,)`` bool; ``out[n0 + b]`` is set to whether configuration ``n0 + b`` keeps
             every margin (unless the answer is COLLISION: then ``out`` is not written).
             The workspace's ``rows_near[c]`` is set for each row below its margin (a link or a
@@ -226,9 +242,9 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, in
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
-     u_offset, u_radius) = arrays
+     u_offset, u_radius) = ctx.arrays
     (R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first, ux, uy, uz, ufree,
-     rows_near, tau_l, gap_l) = ws
+     rows_near, tau_l, gap_l) = ctx.ws
     G, K = g_anchor.shape[0], kinds.shape[0]
     nw = (m + 7) // 8
     for b in range(m, 8 * nw):  # lanes past m read 0
@@ -268,9 +284,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, in
                 hit[b] = not near[b]
                 c += hit[b]
             if c >= GROUP_LANES and g_ustart[g + 1] - g_ustart[g] > 1:  # many: each group over all lanes at once
-                state = _groups_lanes(m, a, g_ustart[g], g_ustart[g + 1], hit, u_start, u_offset, u_radius, s_offset,
-                                      s_radius, margin, plain, R, p, k, kinds, R_WO, p_WO, dims, ux, uy, uz, ufree,
-                                      keep, gap_l)
+                state = _groups_lanes(m, a, g_ustart[g], g_ustart[g + 1], margin, plain, k, ctx)
                 if state == COLLISION:
                     _remember(order, k_first, gi, k)
                     return COLLISION
@@ -284,9 +298,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, in
                 for b in range(8 * w, 8 * w + 8):
                     if hit[b]:  # the link's spheres
                         if g_ustart[g + 1] - g_ustart[g] > 1:  # the link's spheres a group at a time
-                            state, value = _groups_state(b, a, g_ustart[g], g_ustart[g + 1], u_start, u_offset,
-                                                         u_radius, s_offset, s_radius, margin, plain, R, p, k, kinds,
-                                                         R_WO, p_WO, dims)
+                            state, value = _groups_state(b, a, g_ustart[g], g_ustart[g + 1], margin, plain, k, ctx)
                         else:  # one group: the link's bounding sphere, known to be near
                             state, value = _spheres_state(b, a, g_start[g], g_start[g + 1], s_offset, s_radius,
                                                           margin, plain, R, p, k, kinds, R_WO, p_WO, dims)
@@ -301,8 +313,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, in
         if near_link:  # each near lane's tau from its smallest gap to the link's plain clearance (tau grows with it)
             for b in range(m):
                 if gap_l[b] < math.inf:
-                    tau_l[b] = min(tau_l[b], _link_tau(gap_l[b], inv_lam[g], g, b, a, speeds, g_radius, Gx, Gy, Gz,
-                                                       parent, kind, qidx, R, p))
+                    tau_l[b] = min(tau_l[b], _link_tau(gap_l[b], inv_lam[g], g, b, a, speeds, ctx))
     for i in range(pair_a.shape[0]):
         if pair_margin[i] == -math.inf:
             continue  # the caller has certified the pair on these configurations (rrt_connect: its floor table)
@@ -339,13 +350,13 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, in
 
 
 @numba.njit(cache=True)
-def check_blocks(QT, n, lanes, margins, plain, inv_lam, speeds, arrays, ws, out, tau):
+def check_blocks(QT, n, lanes, margins, plain, inv_lam, speeds, ctx, out, tau):
     """Columns ``0 .. n-1`` of ``QT`` in blocks (:func:`check_states`): the first of ``lanes[0]``
     columns (VAMP's "rake": states spread over a motion, so a collision is found early), the
     others of ``lanes[1]``.
 
     ``margins``, ``plain``: ``(link clearances (G,), pair clearances (P,))``; ``inv_lam``,
-    ``speeds``, ``tau``: as :func:`check_states`'.
+    ``speeds``, ``ctx``, ``tau``: as :func:`check_states`'.
 
     Returns:
         ``(answer, configurations checked)``: COLLISION (stops there), NEAR (``out[w]``: column
@@ -355,7 +366,7 @@ def check_blocks(QT, n, lanes, margins, plain, inv_lam, speeds, arrays, ws, out,
     n0 = 0
     while n0 < n:
         m = min(lanes[0] if n0 == 0 else lanes[1], n - n0)
-        r = check_states(QT, n0, m, margins[0], margins[1], plain[0], plain[1], inv_lam, speeds, arrays, ws, out, tau)
+        r = check_states(QT, n0, m, margins[0], margins[1], plain[0], plain[1], inv_lam, speeds, ctx, out, tau)
         if r == COLLISION:
             return COLLISION, n0 + m
         if r == NEAR:

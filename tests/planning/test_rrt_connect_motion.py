@@ -10,6 +10,7 @@ from drake_mh.planning.rrt_connect import planner
 from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capacity, workspaces
 from drake_mh.planning.rrt_connect._stats import STAT_NAMES
 from drake_mh.scene import Box, Scene, Sphere
+from drake_mh.scene._check_context import CheckContext
 from drake_mh.scene._packing import _unpack
 from drake_mh.scene._state_kernels import check_blocks
 
@@ -42,9 +43,10 @@ def _answers(QA, QB, ints, floats, v_WO, reach, capacity, clock, probes=0):
     ws, mws = workspaces(arrays, QA.shape[1], reach.shape[0], 32, capacity, probes, 0.0, 0.0)  # owned: no borrowing
     stats, buf = np.zeros(len(STAT_NAMES)), np.zeros(2, np.int64)
     out = np.empty(QA.shape[0], np.bool_)
+    ctx = CheckContext(arrays, ws, mws)
     for i in range(QA.shape[0]):
-        out[i] = certified_motion(QA[i], QB[i], arrays, ws, mws, (8, 32), v_WO, reach, 0.0, 0.0, 16.0, 0.02, 512,
-                                  None, stats, clock, buf, False)
+        out[i] = certified_motion(QA[i], QB[i], ctx, (8, 32), v_WO, reach, 0.0, 0.0, 16.0, 0.02, 512, None, stats,
+                                  clock, buf, False)
     return out, stats
 
 
@@ -121,6 +123,7 @@ def _taus(QA, QB, t, lam, ints, floats, margin_scale, local):
     G = arrays[6].shape[0]
     C = lam.shape[1]
     ws, _ = workspaces(arrays, QA.shape[1], C, 1, 4, 0, 0.0, 0.0)
+    ctx = CheckContext(arrays, ws, None)
     kept, tau = np.empty(QA.shape[0], np.bool_), np.empty(QA.shape[0])
     for i in range(QA.shape[0]):
         QT = np.empty((QA.shape[1], 1))
@@ -130,7 +133,7 @@ def _taus(QA, QB, t, lam, ints, floats, margin_scale, local):
         inv = 1.0 / lam[i]
         k, tv = np.empty(1, np.bool_), np.empty(1)
         speeds = np.abs(QB[i] - QA[i]) if local else np.zeros(QA.shape[1])
-        check_blocks(QT, 1, (1, 1), margins, plain, inv, speeds, arrays, ws, k, tv)
+        check_blocks(QT, 1, (1, 1), margins, plain, inv, speeds, ctx, k, tv)
         kept[i], tau[i] = k[0], tv[0]
     return kept, tau
 

@@ -21,6 +21,7 @@ from drake_mh.planning.rrt_connect._clock import now
 from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capacity, workspaces
 from drake_mh.planning.rrt_connect._stats import ITERATIONS, NN_SCANS, NODES, SHORTCUTS_KEPT, SHORTCUTS_TRIED, \
     T_NN, T_SAMPLE, T_SHORTCUT, T_TOTAL
+from drake_mh.scene._check_context import CheckContext
 from drake_mh.scene._packing import _unpack
 
 FOUND, BUDGET, TIMEOUT = 0, 1, 2
@@ -145,7 +146,7 @@ def _arc_lengths(path):
 
 
 @numba.njit(cache=True)
-def _shortcut(path, iterations, min_gain, rng, arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance,
+def _shortcut(path, iterations, min_gain, rng, ctx, lanes, v_WO, reach, clearance, self_clearance,
               resolution, margin, max_evals, by_values, stats, clock, buf, profile, start, time_limit):
     """Random shortcutting (Geraerts & Overmars, "Creating high-quality paths for motion
     planning", IJRR 2007): join two random points of the path by a certified straight motion
@@ -187,7 +188,7 @@ def _shortcut(path, iterations, min_gain, rng, arrays, ws, mws, lanes, v_WO, rea
         if (v - u) - math.sqrt(chord) < min_gain * L:
             continue
         stats[SHORTCUTS_TRIED] += 1
-        if not certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance, resolution,
+        if not certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance, resolution,
                                 margin, max_evals, by_values, stats, clock, buf, profile):
             continue
         stats[SHORTCUTS_KEPT] += 1
@@ -253,6 +254,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
     """:func:`plan_kernel` on its workspace ``owner``. The arrays that every motion passes on are
     borrowed from the arguments (held by the caller for the whole call: :mod:`drake_mh._borrow`)."""
     (ws, mws), buf, v_WO, reach, stats = borrow((owner, buf_owner, v_WO_owner, reach_owner, stats_owner))
+    ctx = CheckContext(arrays, ws, mws)  # one pointer for every call below (drake_mh.scene._check_context)
     lanes = (first_lanes, block_lanes)
     nq, G = q_start.shape[0], goals.shape[0]
     rng = seed
@@ -265,7 +267,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
             acc += (goals[g, j] - q_start[j]) ** 2
         dist[g] = acc
     for g in np.argsort(dist):
-        if certified_motion(q_start, goals[g], arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance,
+        if certified_motion(q_start, goals[g], ctx, lanes, v_WO, reach, clearance, self_clearance,
                             resolution, margin, max_evals, by_values, stats, clock, buf, profile):
             path = np.empty((2, nq))
             path[0], path[1] = q_start, goals[g]
@@ -317,7 +319,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
         _steer(V[a, i], q_rand, step, q_new)
         if profile:
             stats[T_NN] += now(clock, buf) - t0
-        if certified_motion(V[a, i], q_new, arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance, resolution,
+        if certified_motion(V[a, i], q_new, ctx, lanes, v_WO, reach, clearance, self_clearance, resolution,
                             margin, max_evals, by_values, stats, clock, buf, profile):
             ia = count[a]
             V[a, ia] = q_new
@@ -339,7 +341,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
                         P2[t, :count[t]] = P[t, :count[t]]
                     V, P = V2, P2
                 reached = _steer(V[b, jb], q_new, step, q)
-                if not certified_motion(V[b, jb], q, arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance,
+                if not certified_motion(V[b, jb], q, ctx, lanes, v_WO, reach, clearance, self_clearance,
                                         resolution, margin, max_evals, by_values, stats, clock, buf, profile):
                     break
                 if reached:  # q_new joins the trees: the path runs through it
@@ -357,7 +359,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
                         g = _root(P, a, ia)
                     stats[NODES] += added
                     path = _drop_collinear(path)
-                    path = _shortcut(path, shortcut_iterations, shortcut_min_gain, rng, arrays, ws, mws, lanes, v_WO,
+                    path = _shortcut(path, shortcut_iterations, shortcut_min_gain, rng, ctx, lanes, v_WO,
                                      reach, clearance, self_clearance, resolution, margin, max_evals, by_values, stats,
                                      clock, buf, profile, start, time_limit)
                     stats[T_TOTAL] += now(clock, buf) - start
@@ -399,8 +401,9 @@ def _certify_all(owner, buf_owner, arrays, QA, QB, v_WO_owner, reach_owner, clea
                  margin, lanes, max_evals, by_values, clock, stats_owner):
     """:func:`certify_motions` on its workspace ``owner`` (borrowed as in :func:`_plan`)."""
     (ws, mws), buf, v_WO, reach, stats = borrow((owner, buf_owner, v_WO_owner, reach_owner, stats_owner))
+    ctx = CheckContext(arrays, ws, mws)
     out = np.empty(QA.shape[0], np.bool_)
     for i in range(QA.shape[0]):
-        out[i] = certified_motion(QA[i], QB[i], arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance,
+        out[i] = certified_motion(QA[i], QB[i], ctx, lanes, v_WO, reach, clearance, self_clearance,
                                   resolution, margin, max_evals, by_values, stats, clock, buf, False)
     return out

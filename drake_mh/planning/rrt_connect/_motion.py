@@ -6,8 +6,9 @@ its whole length: its interpolated states in batched calls with early exit (the 
 "Motions in Microseconds via Vectorized Sampling-Based Planning", ICRA 2024), at clearances
 raised by a margin that certifies the motion between the states (the Lipschitz bound of
 :mod:`drake_mh.scene._segment_kernel`), refined only where a state is within the margin. Its
-callers pass the arrays borrowed (:mod:`drake_mh._borrow`), and its per-motion arrays come from a
-workspace (:func:`motion_workspace`).
+callers pass the arrays borrowed (:mod:`drake_mh._borrow`) in one
+:class:`~drake_mh.scene._check_context.CheckContext` with the workspaces (:func:`workspaces`: its
+per-motion arrays come from :func:`motion_workspace`).
 """
 
 from __future__ import annotations
@@ -110,8 +111,7 @@ def _clearances(lam, scale, G, clearance, self_clearance, link, pair):
 
 
 @numba.njit(cache=True)
-def _refine(qa, qb, tau, order, n, lam, inv_lam, speeds, plain, clearance, self_clearance, arrays, ws, lanes,
-            max_evals):
+def _refine(qa, qb, tau, order, n, lam, inv_lam, speeds, plain, clearance, self_clearance, ctx, lanes, max_evals):
     """Certify ``qa -> qb`` by conservative advancement from both ends of each piece, or find a
     collision on it (see :func:`certified_motion`).
 
@@ -131,7 +131,7 @@ def _refine(qa, qb, tau, order, n, lam, inv_lam, speeds, plain, clearance, self_
         ``(certified, configurations evaluated)``.
     """
     nq = qa.shape[0]
-    G = arrays[6].shape[0]
+    G = ctx.arrays[6].shape[0]
     total = n + 1
     lam_max = 0.0
     for c in range(lam.shape[0]):
@@ -166,8 +166,7 @@ def _refine(qa, qb, tau, order, n, lam, inv_lam, speeds, plain, clearance, self_
             for j in range(nq):
                 QE[j, r] = qa[j] + tm[r] * (qb[j] - qa[j])
         kept, tau_m = np.empty(count, np.bool_), np.empty(count)
-        answer, used = check_blocks(QE, count, (lanes[1], lanes[1]), margins, plain, inv_lam, speeds, arrays, ws, kept,
-                                    tau_m)
+        answer, used = check_blocks(QE, count, (lanes[1], lanes[1]), margins, plain, inv_lam, speeds, ctx, kept, tau_m)
         evals += used
         if answer == COLLISION:
             return False, evals
@@ -185,9 +184,10 @@ def _refine(qa, qb, tau, order, n, lam, inv_lam, speeds, plain, clearance, self_
 
 
 @numba.njit(cache=True, inline="always")
-def _probe_collides(qa, qb, arrays, ws, mws):
+def _probe_collides(qa, qb, ctx):
     """Whether one of the motion's probe states (:data:`PROBES`, as many as the workspace
     holds) collides at the plain clearances: one batched call before any of the motion's setup."""
+    mws = ctx.mws
     PT = mws[10]
     probes = PT.shape[1]
     if probes == 0:
@@ -199,13 +199,12 @@ def _probe_collides(qa, qb, arrays, ws, mws):
     # margins = plain clearances: the answer is COLLISION or CLEAR, no tau (so the speeds, still the
     # previous motion's, are not read)
     link, pair = mws[11], mws[12]
-    return check_states(PT, 0, probes, link, pair, link, pair, mws[8], mws[15], arrays, ws, mws[13],
-                        mws[14]) == COLLISION
+    return check_states(PT, 0, probes, link, pair, link, pair, mws[8], mws[15], ctx, mws[13], mws[14]) == COLLISION
 
 
 @numba.njit(cache=True)
-def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, self_clearance, resolution,
-                     max_margin, max_evals, by_values, stats, clock, buf, profile):
+def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance, resolution, max_margin, max_evals,
+                     by_values, stats, clock, buf, profile):
     """Whether the straight motion ``qa -> qb`` is **certified** collision-free (``qa`` free).
 
     Every constraint row ``c`` (a link against the obstacles, a checked link pair) changes
@@ -250,12 +249,13 @@ def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, sel
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
-     u_offset, u_radius) = arrays
+     u_offset, u_radius) = ctx.arrays
+    ws, mws = ctx.ws, ctx.mws
     t0 = now(clock, buf) if profile else 0.0
     nq = qa.shape[0]
     G, C = g_anchor.shape[0], reach.shape[0]
     stats[STATES] += mws[10].shape[1]
-    if _probe_collides(qa, qb, arrays, ws, mws):
+    if _probe_collides(qa, qb, ctx):
         stats[MOTIONS] += 1
         stats[REJECTED] += 1
         stats[BY_PROBES] += 1
@@ -307,7 +307,7 @@ def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, sel
         inv_lam[c] = 1.0 / lam[c] if lam[c] > 0.0 else 0.0
     rows_near = ws[22]
     rows_near[:] = False
-    answer, used = check_blocks(QT, total, lanes, margins, plain, inv_lam, speeds, arrays, ws, out, tau)
+    answer, used = check_blocks(QT, total, lanes, margins, plain, inv_lam, speeds, ctx, out, tau)
     stats[MOTIONS] += 1
     stats[STATES] += used
     if profile:
@@ -327,7 +327,7 @@ def certified_motion(qa, qb, arrays, ws, mws, lanes, v_WO, reach, clearance, sel
                 lam[c] = CERTIFIED_ROW
         plain = _clearances(lam, 0.0, G, clearance, self_clearance, mws[6], mws[7])
         certified, evals = _refine(qa, qb, tau, order, n, lam, inv_lam, speeds, plain, clearance, self_clearance,
-                                   arrays, ws, lanes, max_evals)
+                                   ctx, lanes, max_evals)
     else:
         QA = np.empty((1, nq))
         QB = np.empty((1, nq))
