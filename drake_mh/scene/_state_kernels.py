@@ -93,11 +93,9 @@ def _groups_state(b, a, u0, u1, margin, plain, k, ctx):
     sphere keeps the margin passed whole (:func:`drake_mh.scene.batch.sphere_groups`):
     ``(answer, value)``. The arrays come from ``ctx`` (:func:`check_states`'), not as arguments:
     passing them cost more than reading them."""
-    (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
-     u_offset, u_radius) = ctx.arrays
-    (R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first, ux, uy, uz, ufree,
-     rows_near, tau_l, gap_l) = ctx.ws
+    s_offset, s_radius, kinds, R_WO, p_WO, dims = ctx.arrays[10:16]  # (the names of check_states' unpacking)
+    u_start, u_offset, u_radius = ctx.arrays[25:28]
+    R, p = ctx.ws[0:2]
     answer, low = CLEAR, math.inf
     for u in range(u0, u1):
         x, y, z = _lane_point(a, u_offset, u, 0, R, p, b)
@@ -141,11 +139,8 @@ def _link_tau(gap, inv_lam, g, b, anchor, speeds, ctx):
     static = gap * inv_lam
     if inv_lam <= 0.0 or gap <= 0.0:
         return static
-    (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
-     u_offset, u_radius) = ctx.arrays
-    (R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first, ux, uy, uz, ufree,
-     rows_near, tau_l, gap_l) = ctx.ws
+    parent, kind, qidx, g_radius = ctx.arrays[0], ctx.arrays[4], ctx.arrays[5], ctx.arrays[8]
+    R, p, Gx, Gy, Gz = ctx.ws[0], ctx.ws[1], ctx.ws[4], ctx.ws[5], ctx.ws[6]
     cx, cy, cz = Gx[g, b], Gy[g, b], Gz[g, b]
     r = g_radius[g]
     lin, W = 0.0, 0.0
@@ -181,11 +176,11 @@ def _groups_lanes(m, a, u0, u1, margin, plain, k, ctx):
     the first sphere below ``plain``, else NEAR if it cleared ``keep[b]`` for a lane below
     ``margin`` (and lowered its smallest gap, the workspace's ``gap_l[b]``, see
     :func:`check_states`), else CLEAR."""
-    (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
-     kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
-     u_offset, u_radius) = ctx.arrays
-    (R, p, sn, cs, Gx, Gy, Gz, cx, cy, cz, keep, near, idx, hit, words, pbuf, order, k_first, ux, uy, uz, ufree,
-     rows_near, tau_l, gap_l) = ctx.ws
+    s_offset, s_radius, kinds, R_WO, p_WO, dims = ctx.arrays[10:16]  # (the names of check_states' unpacking)
+    u_start, u_offset, u_radius = ctx.arrays[25:28]
+    R, p = ctx.ws[0:2]
+    keep, hit, gap_l = ctx.ws[10], ctx.ws[13], ctx.ws[24]
+    ux, uy, uz, ufree = ctx.ws[18:22]
     answer = CLEAR
     for u in range(u0, u1):
         _centre_block(m, a, u_offset, u, R, p, ux, uy, uz)
