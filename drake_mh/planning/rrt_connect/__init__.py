@@ -8,8 +8,9 @@ Methods of :func:`drake_mh.planning.solve_motion`:
   (uniform, or with probability ``goal_bias`` a root of the other tree), CONNECT the other
   tree to the new node, grow the smaller tree next (VAMP's balancing); the direct motion to
   each goal is tried first; then random shortcutting (Geraerts & Overmars, "Creating
-  high-quality paths for motion planning", IJRR 2007), 16 attempts;
-* ``rrt_connect_smooth`` — the same with 128 shortcut attempts (shorter paths).
+  high-quality paths for motion planning", IJRR 2007), 32 draws, each checked only if it would
+  shorten the path by 5 % of its length (``shortcut_min_gain``);
+* ``rrt_connect_smooth`` — the same with 192 draws at 0.5 % (shorter paths).
 
 Design (the one that makes VAMP fast: Thomason, Kingston, Kavraki, "Motions in Microseconds
 via Vectorized Sampling-Based Planning", ICRA 2024):
@@ -90,5 +91,5 @@ __all__ = ["RRTConnectConfig", "plan", "plan_smooth", "prepare", "certify_motion
 plan.prepare = prepare  # for a runner that loads methods before starting its clock
 plan_smooth.prepare = prepare
 register("rrt_connect", "RRT-Connect (Kuffner & LaValle 2000), compiled, batched state checks with early exit, "
-                        "every edge certified, 16 random shortcuts")(plan)
-register("rrt_connect_smooth", "rrt_connect with 128 random shortcuts (shorter paths)")(plan_smooth)
+                        "every edge certified, 32 random shortcut draws")(plan)
+register("rrt_connect_smooth", "rrt_connect with 192 random shortcut draws (shorter paths)")(plan_smooth)
