@@ -314,10 +314,17 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, in
             continue  # the caller has certified the pair on these configurations (rrt_connect: its floor table)
         ga, gb = pair_a[i], pair_b[i]
         lim = pair_margin[i] + g_radius[ga] + g_radius[gb]
-        c = 0
-        for b in range(m):
+        lim *= lim
+        close = False
+        for b in range(m):  # any lane whose bounding spheres are near (vectorizes; most pairs are far in every lane)
             dx, dy, dz = Gx[ga, b] - Gx[gb, b], Gy[ga, b] - Gy[gb, b], Gz[ga, b] - Gz[gb, b]
-            if dx * dx + dy * dy + dz * dz < lim * lim:
+            close |= dx * dx + dy * dy + dz * dz < lim
+        if not close:
+            continue
+        c = 0
+        for b in range(m):  # those lanes (a compaction: scalar)
+            dx, dy, dz = Gx[ga, b] - Gx[gb, b], Gy[ga, b] - Gy[gb, b], Gz[ga, b] - Gz[gb, b]
+            if dx * dx + dy * dy + dz * dz < lim:
                 idx[c] = b
                 c += 1
         for j in range(c):  # the lanes whose bounding spheres are near: their sphere pairs, once
