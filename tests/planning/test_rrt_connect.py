@@ -199,3 +199,20 @@ def test_profile_and_options(table_problems):
     plain = solve_motion(problem, "rrt_connect", seed=0, retime=False, probes=0)
     assert plain.info["rejected_by_probes"] == 0 and plain.success
     np.testing.assert_array_equal(plain.path, result.path)  # probes only reject colliding motions: same tree
+
+
+def test_plan_called_directly_takes_any_goal_layout_and_rejects_wrong_shapes(table_problems):
+    """The kernel is called through a compiled entry point that checks no type, so ``plan``
+    itself must convert every argument: goals as a list, a strided or a Fortran array give the same
+    path as the float rows, and goals of the wrong shape raise a clear error."""
+    from drake_mh.planning.rrt_connect import plan
+
+    problem = table_problems[0]
+    goals = problem.goal_configurations
+    path, _ = plan(problem, goals, np.random.default_rng(0), None, None)
+    for layout in (np.asfortranarray(goals), np.repeat(goals, 2, axis=0)[::2], list(map(list, goals))):
+        again, _ = plan(problem, layout, np.random.default_rng(0), None, None)
+        np.testing.assert_array_equal(again, path)
+    for wrong in (goals[0], goals[:, :3], np.zeros((1, 1, 7))):
+        with pytest.raises(InvalidArgument, match="goals must be"):
+            plan(problem, wrong, np.random.default_rng(0), None, None)

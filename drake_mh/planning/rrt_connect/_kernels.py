@@ -27,6 +27,12 @@ from drake_mh.scene._packing import _unpack
 FOUND, BUDGET, TIMEOUT = 0, 1, 2
 """Outcomes of :func:`plan_kernel`."""
 
+OPTION_NAMES = ("step", "resolution", "margin", "lanes", "block", "probes", "goal_bias", "balance",
+                "max_certify_evaluations", "shortcut_iterations", "shortcut_min_gain", "clock", "profile")
+"""The entries of :func:`plan_kernel`'s ``options`` vector, in order (integers and flags as
+float64, exact: the clock's address is below 2**53). One array instead of 13 arguments: numba
+unboxes each argument of a call from Python (:mod:`.planner` keeps one vector per config)."""
+
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
 _MIX2 = np.uint64(0x94D049BB133111EB)
@@ -212,9 +218,8 @@ def _shortcut(path, iterations, min_gain, rng, ctx, lanes, v_WO, reach, clearanc
 
 
 @numba.njit(cache=True)
-def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearance, self_clearance, seed,
-                step, resolution, margin, first_lanes, block_lanes, probes, goal_bias, balance, max_nodes, time_limit,
-                max_evals, shortcut_iterations, shortcut_min_gain, by_values, clock, profile, stats):
+def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearance, self_clearance, seed, max_nodes,
+                time_limit, options, by_values, stats):
     """RRT-Connect (Kuffner & LaValle, "RRT-Connect: An efficient approach to single-query path
     planning", ICRA 2000) from ``q_start`` to any row of ``goals``, then shortcutting.
 
@@ -227,6 +232,10 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
 
     Args:
         seed: ``(1,)`` uint64, the splitmix64 state (advanced in place).
+        options: ``(13,)`` float64, the values of :data:`OPTION_NAMES` (the planner's options,
+            ``clock`` the address of :func:`._clock.clock_address`, ``profile`` 0 or 1).
+        by_values: None (the batched check's refinement) or True (the bisection on clearance
+            values), :func:`._motion.certified_motion`'s; a compile-time choice.
         max_nodes: most nodes added to the trees (the budget), roots not counted.
         time_limit: [s] of the monotonic clock from the start of this call (``inf``: none).
         stats: ``(len(STAT_NAMES),)`` float64, counts and (with ``profile``) seconds, added to.
@@ -235,6 +244,11 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
         ``(path (M, nq), outcome, goal_index)``: ``outcome`` FOUND, BUDGET or TIMEOUT (then
         ``path`` is empty).
     """
+    step, resolution, margin = options[0], options[1], options[2]
+    first_lanes, block_lanes, probes = int(options[3]), int(options[4]), int(options[5])
+    goal_bias, balance, max_evals = options[6], options[7] != 0.0, int(options[8])
+    shortcut_iterations, shortcut_min_gain, clock, profile = int(options[9]), options[10], int(options[11]), \
+        options[12] != 0.0
     buf = np.zeros(2, np.int64)
     start = now(clock, buf)
     arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._borrow)

@@ -13,6 +13,7 @@ import numbers
 import time
 import weakref
 
+import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
@@ -20,6 +21,8 @@ from drake_mh.planning.rrt_connect import _kernels as K
 from drake_mh.planning.rrt_connect import _stats as S
 from drake_mh.planning.rrt_connect._clock import clock_address
 from drake_mh.planning.rrt_connect._motion import PROBES
+
+_CLOCK = clock_address()
 
 DEFAULT_MAX_NODES = 200_000
 """Tree nodes when neither ``budget`` nor a deadline bounds a run (a blocked goal then fails
@@ -121,6 +124,10 @@ class RRTConnectConfig:
                     or (most is not None and value > most):
                 bounds = f">= {least}" if most is None else f"in [{least}, {most}]"
                 raise InvalidArgument(f"rrt_connect: {name} must be an integer {bounds}, got {value!r}")
+        # the kernel's options vector (._kernels.OPTION_NAMES), built once per config
+        values = {**dataclasses.asdict(self), "clock": _CLOCK, "profile": int(self.profile),
+                  "balance": int(self.balance)}
+        object.__setattr__(self, "_vector", np.array([float(values[name]) for name in K.OPTION_NAMES]))
 
     @classmethod
     def from_options(cls, options: dict, **defaults) -> "RRTConnectConfig":
@@ -140,20 +147,28 @@ class RRTConnectConfig:
 
 
 _CONFIGS: dict = {}
+_DEFAULT = RRTConnectConfig()
 _COUNTS = S.T_SAMPLE  # counts first, then seconds
 _COUNT_NAMES = S.STAT_NAMES[:_COUNTS]
 _NSTATS = len(S.STAT_NAMES)
 
-
-_CLOCK = clock_address()
-
 #: per scene: (obstacle arrays it was bound to, kernel arguments)
 _BOUND: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _PREPARED = False
+#: plan_kernel's entry points per the types of a binding's arrays, then per by_values (_call)
+_ENTRIES: dict = {}
 
 
 def _arguments(scene) -> tuple:
     """``(ints, floats, v_WO, reach)`` of the scene's current obstacles (cached until they change)."""
+    return _binding(scene)[:4]
+
+
+def _binding(scene) -> tuple:
+    """``(ints, floats, v_WO, reach, lower, upper, entries)`` of the scene's current obstacles,
+    float64 and contiguous as the kernels take them, and the kernel's entry points for them
+    (:func:`_call`; shared by every binding whose arrays have the same types, so that a new scene
+    costs no compilation in a plan), cached until the obstacles change."""
     arrays = getattr(scene, "_obstacle_arrays", None)  # None after add/move/remove: the property rebuilds it
     if arrays is None:
         arrays = scene.obstacle_arrays
@@ -162,9 +177,39 @@ def _arguments(scene) -> tuple:
         return cached[1]
     model = scene.collision_model
     ints, floats = model.packed(arrays, model.pair_arrays)
-    bound = (ints, floats, np.ascontiguousarray(arrays[3], dtype=float), np.ascontiguousarray(model.reach))
+    robot = scene.robot
+    bound = (ints, floats, np.ascontiguousarray(arrays[3], dtype=float), np.ascontiguousarray(model.reach),
+             np.ascontiguousarray(robot.lower, dtype=float), np.ascontiguousarray(robot.upper, dtype=float))
+    bound += (_ENTRIES.setdefault(tuple(numba.typeof(a) for a in bound), {}),)
     _BOUND[scene] = (arrays, bound)
     return bound
+
+
+def _call(binding: tuple, arguments: tuple):
+    """:func:`._kernels.plan_kernel` on ``arguments`` (which hold the ``binding``'s arrays) through
+    the compiled entry point of their types, kept in the binding per ``by_values`` (compiled or
+    loaded from numba's cache on first use). The entry point skips numba's type dispatch (about
+    10 µs of a plan called after other work, its code and data out of the CPU's caches) and
+    checks no type: every call for a binding must pass the same types (numba's entry points do
+    not check an array's dtype or dimensions), which :func:`_arguments_of` guarantees."""
+    entries = binding[6]
+    entry = entries.get(arguments[14])
+    if entry is None:
+        entry = entries[arguments[14]] = K.plan_kernel.compile(tuple(numba.typeof(a) for a in arguments))
+    return entry(*arguments)
+
+
+def _arguments_of(problem, goals, binding: tuple, seed, max_nodes: int, time_limit: float, config) -> tuple:
+    """:func:`._kernels.plan_kernel`'s arguments, each of the one type :func:`_call` expects."""
+    q = np.ascontiguousarray(problem.q_start, dtype=float)
+    goals = np.ascontiguousarray(goals, dtype=float)
+    if q.ndim != 1 or goals.ndim != 2 or goals.shape[1] != q.shape[0]:
+        raise InvalidArgument(f"rrt_connect: goals must be (G, {q.shape[0]}) for q_start ({q.shape[0]},), got "
+                              f"{goals.shape} and {q.shape}")
+    ints, floats, v_WO, reach, lower, upper = binding[:6]
+    return (q, goals, lower, upper, ints, floats, v_WO, reach, float(problem.clearance), float(problem.self_clearance),
+            seed, int(max_nodes), float(time_limit), config._vector, None if config.certify == "boolean" else True,
+            np.zeros(_NSTATS))
 
 
 def prepare(problem) -> float:
@@ -176,14 +221,10 @@ def prepare(problem) -> float:
     compiling after a change of the kernels 1-2 minutes."""
     global _PREPARED
     start = time.perf_counter()
-    ints, floats, v_WO, reach = _arguments(problem.scene)
+    binding = _binding(problem.scene)
     if not _PREPARED:
-        q = np.ascontiguousarray(problem.q_start, dtype=float)
-        robot = problem.robot
-        stats = np.zeros(len(S.STAT_NAMES))
-        K.plan_kernel(q, q[None].copy(), robot.lower.astype(float), robot.upper.astype(float), ints, floats, v_WO,
-                      reach, float(problem.clearance), float(problem.self_clearance), np.zeros(1, np.uint64),
-                      1.0, 16.0, 0.02, 64, 64, 4, 0.05, True, 1, 1.0, 16, 1, 0.0, None, _CLOCK, False, stats)
+        config = RRTConnectConfig(max_certify_evaluations=16, shortcut_iterations=1)
+        _call(binding, _arguments_of(problem, problem.q_start[None], binding, np.zeros(1, np.uint64), 1, 1.0, config))
         _PREPARED = True
     return time.perf_counter() - start
 
@@ -191,7 +232,7 @@ def prepare(problem) -> float:
 def plan(problem, goals, rng, deadline, budget, **options):
     """RRT-Connect from ``problem.q_start`` to any row of ``goals``; every edge certified, the
     path shortcut (options: :class:`RRTConnectConfig`; ``budget``: tree nodes)."""
-    config = RRTConnectConfig.from_options(options)
+    config = RRTConnectConfig.from_options(options) if options else _DEFAULT
     return _run(problem, goals, rng, deadline, budget, config)
 
 
@@ -209,23 +250,18 @@ def _by_values(config: RRTConnectConfig):
 
 
 def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
+    # few Python steps here: a plan is often called after other work, with this code and its data out
+    # of the CPU's caches, where each step costs microseconds (MotionBenchMaker, after a verification:
+    # 68 µs around a 0.55 ms kernel before, see docs/planning.md)
     prepare_time = prepare(problem) if not _PREPARED else 0.0
-    ints, floats, v_WO, reach = _arguments(problem.scene)
-    robot = problem.robot
-    seed = rng.bit_generator.random_raw(1)  # (1,) uint64: the splitmix64 state
+    binding = _binding(problem.scene)
     # the deadline measures planning, not loading (as solve_ik's timeout)
     time_limit = np.inf if deadline is None else deadline + prepare_time - time.perf_counter()
-    max_nodes = DEFAULT_MAX_NODES if budget is None else int(budget)
-    stats = np.zeros(_NSTATS)
-    path, outcome, goal = K.plan_kernel(
-        np.ascontiguousarray(problem.q_start, dtype=float), np.ascontiguousarray(goals, dtype=float),
-        robot.lower.astype(float), robot.upper.astype(float), ints, floats, v_WO, reach,
-        float(problem.clearance), float(problem.self_clearance), seed, float(config.step), float(config.resolution),
-        float(config.margin), int(config.lanes), int(config.block), int(config.probes), float(config.goal_bias),
-        bool(config.balance), max_nodes, float(time_limit), int(config.max_certify_evaluations),
-        int(config.shortcut_iterations), float(config.shortcut_min_gain),
-        _by_values(config), _CLOCK, bool(config.profile), stats)
-    info = dict(zip(_COUNT_NAMES, map(int, stats[:_COUNTS].tolist())))
+    arguments = _arguments_of(problem, goals, binding, rng.bit_generator.random_raw(1),  # the splitmix64 state
+                              DEFAULT_MAX_NODES if budget is None else budget, time_limit, config)
+    path, outcome, goal = _call(binding, arguments)
+    stats = arguments[-1]
+    info = dict(zip(_COUNT_NAMES, stats[:_COUNTS].astype(np.int64).tolist()))
     info["t_total"] = float(stats[S.T_TOTAL])
     if config.profile:
         info.update(zip(S.STAT_NAMES[_COUNTS:], stats[_COUNTS:].tolist()))
