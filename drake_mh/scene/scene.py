@@ -125,6 +125,7 @@ class Scene:
         self._free_function = None
         self._free_one = None  # its one-configuration entry and buffer (batch.CollisionModel.free_function)
         self._clearance_function = None  # batch_obstacle_distances' (batch.CollisionModel.obstacle_clearance_function)
+        self._planner_binding = None  # a planner's arguments for these obstacles (rrt_connect.planner._binding)
         self._polytopes = None  # the obstacles' polytopes for its penetration correction (penetration.py)
         self._q_shape, self._nq = (robot.nq,), robot.nq
         self._self_capsule_pairs: list = []
@@ -468,7 +469,7 @@ class Scene:
     def _obstacles_changed(self) -> None:
         """Drop what was bound to the obstacles (rebuilt on the next query)."""
         self._obstacle_arrays = self._free_function = self._free_one = self._clearance_function = None
-        self._polytopes = None
+        self._polytopes = self._planner_binding = None
 
     @property
     def obstacle_arrays(self) -> tuple:

@@ -231,14 +231,14 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     :func:`._motion.certified_motion`. The direct motion to each goal (nearest first) is tried before any tree.
 
     Args:
-        seed: ``(1,)`` uint64, the splitmix64 state (advanced in place).
+        seed: uint64, the splitmix64 state to start from.
         options: ``(13,)`` float64, the values of :data:`OPTION_NAMES` (the planner's options,
             ``clock`` the address of :func:`._clock.clock_address`, ``profile`` 0 or 1).
         by_values: None (the batched check's refinement) or True (the bisection on clearance
             values), :func:`._motion.certified_motion`'s; a compile-time choice.
         max_nodes: most nodes added to the trees (the budget), roots not counted.
         time_limit: [s] of the monotonic clock from the start of this call (``inf``: none).
-        stats: ``(len(STAT_NAMES),)`` float64, counts and (with ``profile``) seconds, added to.
+        stats: ``(len(STAT_NAMES),)`` float64, set to the counts and (with ``profile``) seconds.
 
     Returns:
         ``(path (M, nq), outcome, goal_index)``: ``outcome`` FOUND, BUDGET or TIMEOUT (then
@@ -251,12 +251,15 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
         options[12] != 0.0
     buf = np.zeros(2, np.int64)
     start = now(clock, buf)
+    stats[:] = 0.0
+    state = np.empty(1, np.uint64)
+    state[0] = seed
     arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._borrow)
     capacity = motion_capacity(upper - lower, reach, resolution, margin)
     owner = workspaces(arrays, q_start.shape[0], reach.shape[0], max(first_lanes, block_lanes), capacity, probes,
                        clearance, self_clearance)
     return _plan(owner, buf, start, arrays, q_start, goals, lower, upper, v_WO, reach,
-                 clearance, self_clearance, seed, step, resolution, margin, first_lanes, block_lanes, goal_bias,
+                 clearance, self_clearance, state, step, resolution, margin, first_lanes, block_lanes, goal_bias,
                  balance, max_nodes, time_limit, max_evals, shortcut_iterations, shortcut_min_gain, by_values, clock,
                  profile, stats)
 

@@ -11,7 +11,6 @@ from __future__ import annotations
 import dataclasses
 import numbers
 import time
-import weakref
 
 import numba
 import numpy as np
@@ -152,8 +151,6 @@ _COUNTS = S.T_SAMPLE  # counts first, then seconds
 _COUNT_NAMES = S.STAT_NAMES[:_COUNTS]
 _NSTATS = len(S.STAT_NAMES)
 
-#: per scene: (obstacle arrays it was bound to, kernel arguments)
-_BOUND: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _PREPARED = False
 #: plan_kernel's entry points per the types of a binding's arrays, then per by_values (_call)
 _ENTRIES: dict = {}
@@ -165,14 +162,15 @@ def _arguments(scene) -> tuple:
 
 
 def _binding(scene) -> tuple:
-    """``(ints, floats, v_WO, reach, lower, upper, entries)`` of the scene's current obstacles,
-    float64 and contiguous as the kernels take them, and the kernel's entry points for them
-    (:func:`_call`; shared by every binding whose arrays have the same types, so that a new scene
-    costs no compilation in a plan), cached until the obstacles change."""
-    arrays = getattr(scene, "_obstacle_arrays", None)  # None after add/move/remove: the property rebuilds it
+    """``(ints, floats, v_WO, reach, lower, upper, entries, stats)`` of the scene's current
+    obstacles: the arrays float64 and contiguous as the kernels take them, the kernel's entry
+    points for them (:func:`_call`; shared by every binding whose arrays have the same types, so
+    that a new scene costs no compilation in a plan) and the statistics array a plan writes
+    (read at once). Kept on the scene until its obstacles change."""
+    arrays = scene._obstacle_arrays  # None after add/move/remove: the property rebuilds it
     if arrays is None:
         arrays = scene.obstacle_arrays
-    cached = _BOUND.get(scene)
+    cached = scene._planner_binding
     if cached is not None and cached[0] is arrays:
         return cached[1]
     model = scene.collision_model
@@ -180,8 +178,8 @@ def _binding(scene) -> tuple:
     robot = scene.robot
     bound = (ints, floats, np.ascontiguousarray(arrays[3], dtype=float), np.ascontiguousarray(model.reach),
              np.ascontiguousarray(robot.lower, dtype=float), np.ascontiguousarray(robot.upper, dtype=float))
-    bound += (_ENTRIES.setdefault(tuple(numba.typeof(a) for a in bound), {}),)
-    _BOUND[scene] = (arrays, bound)
+    bound += (_ENTRIES.setdefault(tuple(numba.typeof(a) for a in bound), {}), np.zeros(_NSTATS))
+    scene._planner_binding = (arrays, bound)
     return bound
 
 
@@ -195,7 +193,9 @@ def _call(binding: tuple, arguments: tuple):
     entries = binding[6]
     entry = entries.get(arguments[14])
     if entry is None:
-        entry = entries[arguments[14]] = K.plan_kernel.compile(tuple(numba.typeof(a) for a in arguments))
+        types = [numba.typeof(a) for a in arguments]
+        types[10] = numba.uint64  # the seed, whatever its value
+        entry = entries[arguments[14]] = K.plan_kernel.compile(tuple(types))
     return entry(*arguments)
 
 
@@ -208,8 +208,8 @@ def _arguments_of(problem, goals, binding: tuple, seed, max_nodes: int, time_lim
                               f"{goals.shape} and {q.shape}")
     ints, floats, v_WO, reach, lower, upper = binding[:6]
     return (q, goals, lower, upper, ints, floats, v_WO, reach, float(problem.clearance), float(problem.self_clearance),
-            seed, int(max_nodes), float(time_limit), config._vector, None if config.certify == "boolean" else True,
-            np.zeros(_NSTATS))
+            int(seed), int(max_nodes), float(time_limit), config._vector, None if config.certify == "boolean" else True,
+            binding[7])
 
 
 def prepare(problem) -> float:
@@ -224,7 +224,7 @@ def prepare(problem) -> float:
     binding = _binding(problem.scene)
     if not _PREPARED:
         config = RRTConnectConfig(max_certify_evaluations=16, shortcut_iterations=1)
-        _call(binding, _arguments_of(problem, problem.q_start[None], binding, np.zeros(1, np.uint64), 1, 1.0, config))
+        _call(binding, _arguments_of(problem, problem.q_start[None], binding, 0, 1, 1.0, config))
         _PREPARED = True
     return time.perf_counter() - start
 
@@ -257,14 +257,14 @@ def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
     binding = _binding(problem.scene)
     # the deadline measures planning, not loading (as solve_ik's timeout)
     time_limit = np.inf if deadline is None else deadline + prepare_time - time.perf_counter()
-    arguments = _arguments_of(problem, goals, binding, rng.bit_generator.random_raw(1),  # the splitmix64 state
+    arguments = _arguments_of(problem, goals, binding, rng.bit_generator.random_raw(),  # the splitmix64 state
                               DEFAULT_MAX_NODES if budget is None else budget, time_limit, config)
     path, outcome, goal = _call(binding, arguments)
-    stats = arguments[-1]
-    info = dict(zip(_COUNT_NAMES, stats[:_COUNTS].astype(np.int64).tolist()))
-    info["t_total"] = float(stats[S.T_TOTAL])
+    values = binding[7].tolist()
+    info = {name: int(value) for name, value in zip(_COUNT_NAMES, values)}
+    info["t_total"] = values[S.T_TOTAL]
     if config.profile:
-        info.update(zip(S.STAT_NAMES[_COUNTS:], stats[_COUNTS:].tolist()))
+        info.update(zip(S.STAT_NAMES[_COUNTS:], values[_COUNTS:]))
     info["prepare_time"] = prepare_time
     if outcome == K.FOUND:
         info["goal"] = int(goal)
