@@ -19,7 +19,10 @@ via Vectorized Sampling-Based Planning", ICRA 2024):
   (linear scan: trees stay small), motion checks, path extraction and shortcutting run in
   numba without Python in the loop; the deadline is read inside the kernel from the
   monotonic clock (:mod:`._clock`), the budget counts tree nodes; randomness is splitmix64
-  seeded from the caller's generator (same seed, same path);
+  seeded from the caller's generator (same seed, same path). Python calls it through the
+  compiled entry point of its one signature, the options in one vector and the scene's arrays
+  bound once (:func:`.planner._binding`): a plan is often called after other work, with its
+  code and data out of the CPU's caches, where every Python step costs microseconds;
 * **batched motion checks with early exit** (the scene's
   :func:`drake_mh.scene._state_kernels.check_states`): the interpolated states of a motion go
   through the scene's sphere model in SIMD blocks, the first block spread over the whole

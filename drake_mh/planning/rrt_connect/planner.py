@@ -166,7 +166,8 @@ def _binding(scene) -> tuple:
     obstacles: the arrays float64 and contiguous as the kernels take them, the kernel's entry
     points for them (:func:`_call`; shared by every binding whose arrays have the same types, so
     that a new scene costs no compilation in a plan) and the statistics array a plan writes
-    (read at once). Kept on the scene until its obstacles change."""
+    (read at once: like the scene's Drake context, not for plans in concurrent threads). Kept on
+    the scene until its obstacles change."""
     arrays = scene._obstacle_arrays  # None after add/move/remove: the property rebuilds it
     if arrays is None:
         arrays = scene.obstacle_arrays
@@ -194,7 +195,8 @@ def _call(binding: tuple, arguments: tuple):
     entry = entries.get(arguments[14])
     if entry is None:
         types = [numba.typeof(a) for a in arguments]
-        types[10] = numba.uint64  # the seed, whatever its value
+        # q_start and goals writable or not (never written), the seed whatever its value
+        types[0], types[1], types[10] = numba.float64[::1], numba.float64[:, ::1], numba.uint64
         entry = entries[arguments[14]] = K.plan_kernel.compile(tuple(types))
     return entry(*arguments)
 
