@@ -210,8 +210,7 @@ def _arguments_of(problem, goals, binding: tuple, seed, max_nodes: int, time_lim
                               f"{goals.shape} and {q.shape}")
     ints, floats, v_WO, reach, lower, upper = binding[:6]
     return (q, goals, lower, upper, ints, floats, v_WO, reach, float(problem.clearance), float(problem.self_clearance),
-            int(seed), int(max_nodes), float(time_limit), config._vector, None if config.certify == "boolean" else True,
-            binding[7])
+            int(seed), int(max_nodes), float(time_limit), config._vector, _by_values(config), binding[7])
 
 
 def prepare(problem) -> float:
