@@ -216,3 +216,19 @@ def test_plan_called_directly_takes_any_goal_layout_and_rejects_wrong_shapes(tab
     for wrong in (goals[0], goals[:, :3], np.zeros((1, 1, 7))):
         with pytest.raises(InvalidArgument, match="goals must be"):
             plan(problem, wrong, np.random.default_rng(0), None, None)
+
+
+def test_a_pickled_config_builds_its_own_kernel_options():
+    """The kernel's options vector holds the process's clock address: a config that crosses a
+    process (pickle) or is copied rebuilds it from its options instead of carrying it."""
+    import copy
+    import pickle
+
+    from drake_mh.planning.rrt_connect import RRTConnectConfig
+    from drake_mh.planning.rrt_connect.planner import _CLOCK
+
+    config = RRTConnectConfig(step=0.5, probes=2)
+    config._vector[:] = -1.0  # as if from another process
+    for again in (pickle.loads(pickle.dumps(config)), copy.deepcopy(config), copy.copy(config)):
+        assert again == config and again._vector is not config._vector
+        assert again._vector[0] == 0.5 and again._vector[5] == 2 and again._vector[11] == float(_CLOCK)

@@ -128,6 +128,16 @@ class RRTConnectConfig:
                   "balance": int(self.balance)}
         object.__setattr__(self, "_vector", np.array([float(values[name]) for name in K.OPTION_NAMES]))
 
+    def __getstate__(self) -> dict:
+        """The options only: the kernel's vector holds this process's clock address, so a copy or
+        an unpickled config (another process) builds its own (:meth:`__setstate__`)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    def __setstate__(self, state: dict) -> None:
+        for name, value in state.items():
+            object.__setattr__(self, name, value)
+        self.__post_init__()
+
     @classmethod
     def from_options(cls, options: dict, **defaults) -> "RRTConnectConfig":
         """The config of ``solve_motion``'s keywords over ``defaults`` (the defaults' instance is
