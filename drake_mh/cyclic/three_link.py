@@ -115,7 +115,7 @@ def reachable_orientation(p_BT, lengths):
     A = l3 * R / (l1 * l2)
     phi = np.unwrap(np.arctan2(-p_BT[:, 1], -p_BT[:, 0]))
     kp = (R * R + l3 * l3 - l2 * l2 - l1 * l1) / (2 * l1 * l2)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # R -> 0: A -> 0, the ratios +-inf
         cos_alpha = (1.0 - kp) / A
         cos_beta = (-1.0 - kp) / A
     alpha = np.arccos(np.clip(cos_alpha, -1.0, 1.0))
