@@ -187,6 +187,9 @@ def test_profile_and_options(table_problems):
     for key in ("t_sample", "t_nn", "t_check", "t_certify", "t_shortcut", "t_total"):
         assert result.info[key] >= 0.0
     assert result.info["t_total"] <= result.planning_time
+    # the first certified path, then the shortcut inside the rest
+    assert 0.0 < result.info["t_found"] <= result.info["t_total"]
+    assert result.info["t_total"] - result.info["t_found"] >= result.info["t_shortcut"] - 1e-9
     with pytest.raises(InvalidArgument, match="unknown option"):
         solve_motion(problem, "rrt_connect", bogus=1)
     with pytest.raises(InvalidArgument, match="step"):
@@ -225,10 +228,12 @@ def test_a_pickled_config_builds_its_own_kernel_options():
     import pickle
 
     from drake_mh.planning.rrt_connect import RRTConnectConfig
+    from drake_mh.planning.rrt_connect._kernels import OPTION_NAMES
     from drake_mh.planning.rrt_connect.planner import _CLOCK
 
     config = RRTConnectConfig(step=0.5, probes=2)
     config._vector[:] = -1.0  # as if from another process
     for again in (pickle.loads(pickle.dumps(config)), copy.deepcopy(config), copy.copy(config)):
         assert again == config and again._vector is not config._vector
-        assert again._vector[0] == 0.5 and again._vector[5] == 2 and again._vector[11] == float(_CLOCK)
+        option = dict(zip(OPTION_NAMES, again._vector))
+        assert option["step"] == 0.5 and option["probes"] == 2 and option["clock"] == float(_CLOCK)

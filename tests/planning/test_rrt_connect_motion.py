@@ -38,15 +38,16 @@ def panda_reach():
 
 
 @numba.njit
-def _answers(QA, QB, ints, floats, v_WO, reach, capacity, clock, probes=0):
+def _answers(QA, QB, ints, floats, v_WO, reach, capacity, clock, probes=0, interior=0):
     arrays = _unpack(ints, floats)
-    ws, mws = workspaces(arrays, QA.shape[1], reach.shape[0], 32, capacity, probes, 0.0, 0.0)  # owned: no borrowing
+    # owned: no borrowing
+    ws, mws = workspaces(arrays, QA.shape[1], reach.shape[0], 32, capacity, probes, interior, 0.0, 0.0)
     stats, buf = np.zeros(len(STAT_NAMES)), np.zeros(2, np.int64)
     out = np.empty(QA.shape[0], np.bool_)
     ctx = CheckContext(arrays, ws, mws)
     for i in range(QA.shape[0]):
         out[i] = certified_motion(QA[i], QB[i], ctx, (8, 32), v_WO, reach, 0.0, 0.0, 16.0, 0.02, 512, None, stats,
-                                  clock, buf, False)
+                                  clock, buf, False, interior > 0)
     return out, stats
 
 
@@ -91,6 +92,13 @@ def test_probes_reject_colliding_motions_before_their_setup_and_change_no_answer
         assert 0 < by_probes <= stats[STAT_NAMES.index("rejected")] == stats_none[STAT_NAMES.index("rejected")]
     ends = scene.collision_free(QB)
     assert np.all(~ok[~ends])  # a motion whose end collides is never certified
+    # the interior probes (for motions whose ends are free) neither: same answers, some rejected by them
+    inside = ends & scene.collision_free(QA)
+    ref, _ = _answers(QA[inside], QB[inside], ints, floats, v_WO, reach, 4096, planner._CLOCK, 0)
+    for interior in (1, 4, 8):
+        ok, stats = _answers(QA[inside], QB[inside], ints, floats, v_WO, reach, 4096, planner._CLOCK, 4, interior)
+        np.testing.assert_array_equal(ok, ref)
+        assert stats[STAT_NAMES.index("states")] > 0 and stats[STAT_NAMES.index("rejected_by_probes")] > 0
 
 
 def test_the_refinement_of_the_rows_that_came_near_never_certifies_a_collision():
@@ -122,7 +130,7 @@ def _taus(QA, QB, t, lam, ints, floats, margin_scale, local):
     arrays = _unpack(ints, floats)
     G = arrays[6].shape[0]
     C = lam.shape[1]
-    ws, _ = workspaces(arrays, QA.shape[1], C, 1, 4, 0, 0.0, 0.0)
+    ws, _ = workspaces(arrays, QA.shape[1], C, 1, 4, 0, 0, 0.0, 0.0)
     ctx = CheckContext(arrays, ws, None)
     kept, tau = np.empty(QA.shape[0], np.bool_), np.empty(QA.shape[0])
     for i in range(QA.shape[0]):

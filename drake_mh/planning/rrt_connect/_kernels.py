@@ -20,17 +20,17 @@ from drake_mh._borrow import borrow
 from drake_mh.planning.rrt_connect._clock import now
 from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capacity, workspaces
 from drake_mh.planning.rrt_connect._stats import ITERATIONS, NN_SCANS, NODES, SHORTCUTS_KEPT, SHORTCUTS_TRIED, \
-    T_NN, T_SAMPLE, T_SHORTCUT, T_TOTAL
+    T_FOUND, T_NN, T_SAMPLE, T_SHORTCUT, T_TOTAL
 from drake_mh.scene._check_context import CheckContext
 from drake_mh.scene._packing import _unpack
 
 FOUND, BUDGET, TIMEOUT = 0, 1, 2
 """Outcomes of :func:`plan_kernel`."""
 
-OPTION_NAMES = ("step", "resolution", "margin", "lanes", "block", "probes", "goal_bias", "balance",
+OPTION_NAMES = ("step", "resolution", "margin", "lanes", "block", "probes", "shortcut_probes", "goal_bias", "balance",
                 "max_certify_evaluations", "shortcut_iterations", "shortcut_min_gain", "clock", "profile")
 """The entries of :func:`plan_kernel`'s ``options`` vector, in order (integers and flags as
-float64, exact: the clock's address is below 2**53). One array instead of 13 arguments: numba
+float64, exact: the clock's address is below 2**53). One array instead of 14 arguments: numba
 unboxes each argument of a call from Python (:mod:`.planner` keeps one vector per config)."""
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
@@ -195,7 +195,7 @@ def _shortcut(path, iterations, min_gain, rng, ctx, lanes, v_WO, reach, clearanc
             continue
         stats[SHORTCUTS_TRIED] += 1
         if not certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance, resolution,
-                                margin, max_evals, by_values, stats, clock, buf, profile):
+                                margin, max_evals, by_values, stats, clock, buf, profile, True):
             continue
         stats[SHORTCUTS_KEPT] += 1
         # path[:i+1], qa (unless it is path[i]), qb (unless it is path[k+1]), path[k+1:]
@@ -232,23 +232,25 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
 
     Args:
         seed: uint64, the splitmix64 state to start from.
-        options: ``(13,)`` float64, the values of :data:`OPTION_NAMES` (the planner's options,
+        options: ``(14,)`` float64, the values of :data:`OPTION_NAMES` (the planner's options,
             ``clock`` the address of :func:`._clock.clock_address`, ``profile`` 0 or 1).
         by_values: None (the batched check's refinement) or True (the bisection on clearance
             values), :func:`._motion.certified_motion`'s; a compile-time choice.
         max_nodes: most nodes added to the trees (the budget), roots not counted.
         time_limit: [s] of the monotonic clock from the start of this call (``inf``: none).
-        stats: ``(len(STAT_NAMES),)`` float64, set to the counts and (with ``profile``) seconds.
+        stats: ``(len(STAT_NAMES),)`` float64, set to the counts, ``t_total``, ``t_found`` (when
+            the first certified path was found, before the shortcut) and (with ``profile``) the
+            other seconds.
 
     Returns:
         ``(path (M, nq), outcome, goal_index)``: ``outcome`` FOUND, BUDGET or TIMEOUT (then
         ``path`` is empty).
     """
     step, resolution, margin = options[0], options[1], options[2]
-    first_lanes, block_lanes, probes = int(options[3]), int(options[4]), int(options[5])
-    goal_bias, balance, max_evals = options[6], options[7] != 0.0, int(options[8])
-    shortcut_iterations, shortcut_min_gain, clock, profile = int(options[9]), options[10], int(options[11]), \
-        options[12] != 0.0
+    first_lanes, block_lanes, probes, interior = int(options[3]), int(options[4]), int(options[5]), int(options[6])
+    goal_bias, balance, max_evals = options[7], options[8] != 0.0, int(options[9])
+    shortcut_iterations, shortcut_min_gain, clock, profile = int(options[10]), options[11], int(options[12]), \
+        options[13] != 0.0
     buf = np.zeros(2, np.int64)
     start = now(clock, buf)
     stats[:] = 0.0
@@ -257,7 +259,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._borrow)
     capacity = motion_capacity(upper - lower, reach, resolution, margin)
     owner = workspaces(arrays, q_start.shape[0], reach.shape[0], max(first_lanes, block_lanes), capacity, probes,
-                       clearance, self_clearance)
+                       interior, clearance, self_clearance)
     return _plan(owner, buf, start, arrays, q_start, goals, lower, upper, v_WO, reach,
                  clearance, self_clearance, state, step, resolution, margin, first_lanes, block_lanes, goal_bias,
                  balance, max_nodes, time_limit, max_evals, shortcut_iterations, shortcut_min_gain, by_values, clock,
@@ -285,10 +287,11 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
         dist[g] = acc
     for g in np.argsort(dist):
         if certified_motion(q_start, goals[g], ctx, lanes, v_WO, reach, clearance, self_clearance,
-                            resolution, margin, max_evals, by_values, stats, clock, buf, profile):
+                            resolution, margin, max_evals, by_values, stats, clock, buf, profile, False):
             path = np.empty((2, nq))
             path[0], path[1] = q_start, goals[g]
             stats[T_TOTAL] += now(clock, buf) - start
+            stats[T_FOUND] = stats[T_TOTAL]
             return path, FOUND, g
     cap = max(64, G + 1)
     V = np.empty((2, cap, nq))
@@ -337,7 +340,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
         if profile:
             stats[T_NN] += now(clock, buf) - t0
         if certified_motion(V[a, i], q_new, ctx, lanes, v_WO, reach, clearance, self_clearance, resolution,
-                            margin, max_evals, by_values, stats, clock, buf, profile):
+                            margin, max_evals, by_values, stats, clock, buf, profile, False):
             ia = count[a]
             V[a, ia] = q_new
             P[a, ia] = i
@@ -359,7 +362,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
                     V, P = V2, P2
                 reached = _steer(V[b, jb], q_new, step, q)
                 if not certified_motion(V[b, jb], q, ctx, lanes, v_WO, reach, clearance, self_clearance,
-                                        resolution, margin, max_evals, by_values, stats, clock, buf, profile):
+                                        resolution, margin, max_evals, by_values, stats, clock, buf, profile, False):
                     break
                 if reached:  # q_new joins the trees: the path runs through it
                     half_a = _trace(V, P, a, ia)  # q_new ... root of a
@@ -375,6 +378,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
                         path[half_b.shape[0]:] = half_a
                         g = _root(P, a, ia)
                     stats[NODES] += added
+                    stats[T_FOUND] = now(clock, buf) - start  # the first certified path, before the shortcut
                     path = _drop_collinear(path)
                     path = _shortcut(path, shortcut_iterations, shortcut_min_gain, rng, ctx, lanes, v_WO,
                                      reach, clearance, self_clearance, resolution, margin, max_evals, by_values, stats,
@@ -407,7 +411,7 @@ def certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance
         for j in range(QA.shape[1]):
             span[j] = max(span[j], abs(QB[i, j] - QA[i, j]))
     capacity = motion_capacity(span, reach, resolution, margin)
-    owner = workspaces(arrays, QA.shape[1], reach.shape[0], max(first_lanes, block_lanes), capacity, probes,
+    owner = workspaces(arrays, QA.shape[1], reach.shape[0], max(first_lanes, block_lanes), capacity, probes, 0,
                        clearance, self_clearance)
     return _certify_all(owner, buf, arrays, QA, QB, v_WO, reach, clearance, self_clearance, resolution, margin,
                         (first_lanes, block_lanes), max_evals, by_values, clock, stats)
@@ -422,5 +426,5 @@ def _certify_all(owner, buf_owner, arrays, QA, QB, v_WO_owner, reach_owner, clea
     out = np.empty(QA.shape[0], np.bool_)
     for i in range(QA.shape[0]):
         out[i] = certified_motion(QA[i], QB[i], ctx, lanes, v_WO, reach, clearance, self_clearance,
-                                  resolution, margin, max_evals, by_values, stats, clock, buf, False)
+                                  resolution, margin, max_evals, by_values, stats, clock, buf, False, False)
     return out

@@ -41,36 +41,52 @@ MotionBenchMaker motions that the planner rejected (6 sets, cage left out, each 
 97 %: their collisions start near the tree node (median t = 0.06-0.23) and cover most of the
 motion. In the plans, 4 probes stop 97 % of a median plan's rejected motions (99.7 % of all)."""
 
+INTERIOR_PROBES = (0.5, 0.25, 0.75, 0.125, 0.875, 0.375, 0.625, 0.0625)
+"""The probes of a motion whose two ends are known free (a shortcut between two points of a
+certified path, see :func:`certified_motion`'s ``interior``): inside it only, middle first.
+With :data:`PROBES`, its first probe (t = 1) was always free, and in a median MotionBenchMaker
+plan 2.6 of its 14 shortcut motions passed the probes and were rejected later, each after a
+first pass over all of its states."""
+
 
 @numba.njit(cache=True)
-def motion_workspace(nq, C, G, capacity, probes, clearance, self_clearance):
+def motion_workspace(nq, C, G, capacity, probes, interior, clearance, self_clearance, t_grid):
     """Arrays :func:`certified_motion` writes into, for ``C`` constraint rows (``G`` links) and
     motions of up to ``capacity`` states (:func:`motion_capacity`; longer ones allocate their
     own): ``(lam (C,), QT (nq, capacity), order (capacity,), out (capacity,), margin rows (G,),
     (C - G,), plain rows (G,), (C - G,), inv_lam (C,), tau (capacity,), probe states
-    (nq, probes), plain clearances of the probes link (G,), pair (C - G,), probe out
-    (probes,), probe tau (probes,), the motion's joint speeds |Δq| (nq,))``, the probes'
-    clearances filled (every pair checked: a probe certifies nothing, it may only reject).
+    (nq, L), plain clearances of the probes link (G,), pair (C - G,), probe out (L,), probe
+    tau (L,), the motion's joint speeds |Δq| (nq,), (probes, interior))``, ``L`` the larger of
+    ``probes`` and ``interior`` (how many states of :data:`PROBES` and of
+    :data:`INTERIOR_PROBES` a motion probes), the probes' clearances filled: every link, and every link pair but those whose floor table's lowest
+    floor keeps ``self_clearance`` (``t_grid``, :mod:`drake_mh.scene.pair_table`: such a pair
+    keeps it in every configuration, so it rejects no motion; 8 of the hand Panda's 12 pairs).
+    A probe certifies nothing, it may only reject.
     Allocated once per plan: the first eight allocations were about 0.15 µs of a motion's 1.2 µs
     of setup (a replay of 132,349 MotionBenchMaker motions)."""
     P = C - G
-    link_plain, pair_plain = _clearances(np.zeros(C), 0.0, G, clearance, self_clearance, np.empty(G), np.empty(P))
+    lam = np.zeros(C)
+    for i in range(P):
+        if t_grid[i, LOWEST] >= self_clearance + 1e-12:  # (certified_motion's test: -inf without a table)
+            lam[G + i] = CERTIFIED_ROW
+    link_plain, pair_plain = _clearances(lam, 0.0, G, clearance, self_clearance, np.empty(G), np.empty(P))
+    L = max(probes, interior)
     return (np.empty(C), np.empty((nq, capacity)), np.empty(capacity, np.int64), np.empty(capacity, np.bool_),
             np.empty(G), np.empty(P), np.empty(G), np.empty(P), np.empty(C), np.empty(capacity),
-            np.empty((nq, probes)), link_plain, pair_plain, np.empty(probes, np.bool_), np.empty(probes),
-            np.zeros(nq))
+            np.empty((nq, L)), link_plain, pair_plain, np.empty(L, np.bool_), np.empty(L),
+            np.zeros(nq), np.array([probes, interior], np.int64))
 
 
 @numba.njit(cache=True)
-def workspaces(arrays, nq, C, lanes, capacity, probes, clearance, self_clearance):
+def workspaces(arrays, nq, C, lanes, capacity, probes, interior, clearance, self_clearance):
     """``(state workspace, motion workspace)`` of a plan
     (:func:`~drake_mh.scene._state_kernels.state_workspace`, :func:`motion_workspace`) for a
     scene's unpacked ``arrays``, ``C`` constraint rows, at most ``lanes`` states per call,
-    ``probes`` probe states per motion (0: none, at most ``len(PROBES)``) and the plan's
-    clearances."""
+    ``probes`` probe states per motion and ``interior`` per motion between two free ends (0:
+    none, at most 8) and the plan's clearances."""
     G = arrays[6].shape[0]
-    return (state_workspace(arrays[0].shape[0], G, arrays[11].shape[0], C - G, max(lanes, probes)),
-            motion_workspace(nq, C, G, capacity, probes, clearance, self_clearance))
+    return (state_workspace(arrays[0].shape[0], G, arrays[11].shape[0], C - G, max(lanes, probes, interior)),
+            motion_workspace(nq, C, G, capacity, probes, interior, clearance, self_clearance, arrays[21]))
 
 
 @numba.njit(cache=True)
@@ -142,58 +158,67 @@ def _refine(qa, qb, tau, order, n, lam, inv_lam, speeds, plain, clearance, self_
     for w in range(total):
         ts[order[w]] = order[w] / n
         tv[order[w]] = min(tau[w], half)
-    # pieces not certified: (t0, τ0, t1, τ1)
-    P0, V0, P1, V1 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    # pieces not certified: (t0, τ0, t1, τ1), rows of P (each round writes the next pieces into N);
+    # the arrays are allocated once per motion, not per round
+    cap = 2 * n
+    P, N = np.empty((cap, 4)), np.empty((cap, 4))
     count = 0
     for i in range(n):  # (both ends kept the margins: certified, as in step 1)
         if (tv[i] < half or tv[i + 1] < half) and tv[i] + tv[i + 1] < ts[i + 1] - ts[i]:
-            P0[count], V0[count], P1[count], V1[count] = ts[i], tv[i], ts[i + 1], tv[i + 1]
+            P[count, 0], P[count, 1], P[count, 2], P[count, 3] = ts[i], tv[i], ts[i + 1], tv[i + 1]
             count += 1
+    tm, half_gap, QE = np.empty(cap), np.empty(cap), np.empty((nq, cap))
+    kept, tau_m = np.empty(cap, np.bool_), np.empty(cap)
+    margin_rows = (np.empty(G), np.empty(lam.shape[0] - G))
     evals = 0
     while count > 0:
+        if 2 * count > cap:  # (rare: the pieces doubled beyond the first round's room)
+            cap = 2 * count
+            P2, N = np.empty((cap, 4)), np.empty((cap, 4))
+            P2[:count] = P[:count]
+            P = P2
+            tm, half_gap, QE = np.empty(cap), np.empty(cap), np.empty((nq, cap))
+            kept, tau_m = np.empty(cap, np.bool_), np.empty(cap)
         # each piece's middle state tm and the τ it needs (half its gap); margins for the largest
-        tm, half_gap = np.empty(count), np.empty(count)
         need = 0.0
         for r in range(count):
-            a, b = P0[r] + V0[r], P1[r] - V1[r]
+            a, b = P[r, 0] + P[r, 1], P[r, 2] - P[r, 3]
             tm[r], half_gap[r] = 0.5 * (a + b), 0.5 * (b - a)
             need = max(need, half_gap[r])
         if evals + count > max_evals or lam_max * need < 1e-9:
             return False, evals
-        margins = _clearances(lam, need, G, clearance, self_clearance, np.empty(G), np.empty(lam.shape[0] - G))
-        QE = np.empty((nq, count))
+        margins = _clearances(lam, need, G, clearance, self_clearance, margin_rows[0], margin_rows[1])
         for r in range(count):
             for j in range(nq):
                 QE[j, r] = qa[j] + tm[r] * (qb[j] - qa[j])
-        kept, tau_m = np.empty(count, np.bool_), np.empty(count)
         answer, used = check_blocks(QE, count, (lanes[1], lanes[1]), margins, plain, inv_lam, speeds, ctx, kept, tau_m)
         evals += used
         if answer == COLLISION:
             return False, evals
-        N0, W0, N1, W1 = np.empty(2 * count), np.empty(2 * count), np.empty(2 * count), np.empty(2 * count)
         c2 = 0
         for r in range(count):
             vm = tau_m[r]
             if vm >= half_gap[r]:  # it certifies half the gap on each side
                 continue
-            N0[c2], W0[c2], N1[c2], W1[c2] = P0[r], V0[r], tm[r], vm
-            N0[c2 + 1], W0[c2 + 1], N1[c2 + 1], W1[c2 + 1] = tm[r], vm, P1[r], V1[r]
+            N[c2, 0], N[c2, 1], N[c2, 2], N[c2, 3] = P[r, 0], P[r, 1], tm[r], vm
+            N[c2 + 1, 0], N[c2 + 1, 1], N[c2 + 1, 2], N[c2 + 1, 3] = tm[r], vm, P[r, 2], P[r, 3]
             c2 += 2
-        P0, V0, P1, V1, count = N0, W0, N1, W1, c2
+        P, N, count = N, P, c2
     return True, evals
 
 
 @numba.njit(cache=True, inline="always")
-def _probe_collides(qa, qb, ctx):
-    """Whether one of the motion's probe states (:data:`PROBES`, as many as the workspace
-    holds) collides at the plain clearances: one batched call before any of the motion's setup."""
+def _probe_collides(qa, qb, ctx, interior):
+    """Whether one of the motion's probe states (:data:`PROBES`, or :data:`INTERIOR_PROBES` for
+    a motion whose ends are known free; as many as the workspace says) collides at the plain
+    clearances: one batched call before any of the motion's setup."""
     mws = ctx.mws
     PT = mws[10]
-    probes = PT.shape[1]
+    probes = mws[16][1] if interior else mws[16][0]
     if probes == 0:
         return False
     for w in range(probes):
-        t = PROBES[w]
+        t = INTERIOR_PROBES[w] if interior else PROBES[w]
         for j in range(qa.shape[0]):
             PT[j, w] = qa[j] + t * (qb[j] - qa[j])
     # margins = plain clearances: the answer is COLLISION or CLEAR, no tau (so the speeds, still the
@@ -204,8 +229,9 @@ def _probe_collides(qa, qb, ctx):
 
 @numba.njit(cache=True)
 def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance, resolution, max_margin, max_evals,
-                     by_values, stats, clock, buf, profile):
-    """Whether the straight motion ``qa -> qb`` is **certified** collision-free (``qa`` free).
+                     by_values, stats, clock, buf, profile, interior):
+    """Whether the straight motion ``qa -> qb`` is **certified** collision-free (``qa`` free;
+    ``interior``: ``qb`` known free too, e.g. both on a certified path).
 
     Every constraint row ``c`` (a link against the obstacles, a checked link pair) changes
     along the motion no faster than ``Λ_c = Σ_j reach[c, j] |Δq_j|`` per unit of t (the
@@ -216,10 +242,11 @@ def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance,
     its ``Λ_c`` is :data:`CERTIFIED_ROW` and no state checks that pair (its clearance rows are
     ``-inf``: neither its bounding spheres, nor its table, nor its sphere pairs).
 
-    0. The probes (:func:`_probe_collides`, as many states of :data:`PROBES` as the workspace
-       holds, 0 to skip): one batched call at the plain clearances, before any of the motion's
-       setup; a probe that collides rejects the motion (the statistics' ``BY_PROBES``). A probe
-       certifies nothing, so the answer is the same with or without them.
+    0. The probes (:func:`_probe_collides`: states of :data:`PROBES`, or with ``interior`` of
+       :data:`INTERIOR_PROBES`, as many as the workspace says, 0 to skip): one batched call at
+       the plain clearances, before any of the motion's setup; a probe that collides rejects
+       the motion (the statistics' ``BY_PROBES``). A probe certifies nothing, so the answer is
+       the same with or without them.
     1. ``n`` pieces, ``n >= resolution · |qb - qa|`` and ``n >= max_c Λ_c / (2 max_margin)``;
        the ``n + 1`` states ``t = i / n`` (ends included), in VAMP's "rake" order (``lanes[0]``
        states spread over the whole motion first, so that a collision is found early, then
@@ -254,8 +281,8 @@ def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance,
     t0 = now(clock, buf) if profile else 0.0
     nq = qa.shape[0]
     G, C = g_anchor.shape[0], reach.shape[0]
-    stats[STATES] += mws[10].shape[1]
-    if _probe_collides(qa, qb, ctx):
+    stats[STATES] += mws[16][1] if interior else mws[16][0]
+    if _probe_collides(qa, qb, ctx, interior):
         stats[MOTIONS] += 1
         stats[REJECTED] += 1
         stats[BY_PROBES] += 1

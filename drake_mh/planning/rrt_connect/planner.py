@@ -50,6 +50,9 @@ class RRTConnectConfig:
             clearances (0-8; t = 1, 1/2, 1/4, 1/8, ...: :data:`._motion.PROBES`): a motion
             that collides mostly stops there. They only reject; the motion's own states
             certify.
+        shortcut_probes: the same for a shortcut's motion, whose two ends are on the certified
+            path and so free: states inside it, middle first (0-8; t = 1/2, 1/4, 3/4, 1/8,
+            ...: :data:`._motion.INTERIOR_PROBES`).
         lanes: states of a motion checked next, in one batched call, spread along it (VAMP's
             "rake": a collision that the probes missed is mostly found there).
         block: states per batched call after the first. Probes 4 / lanes 64 / block 64 took
@@ -93,6 +96,7 @@ class RRTConnectConfig:
     resolution: float = 16.0
     margin: float = 0.02
     probes: int = 4
+    shortcut_probes: int = 4
     lanes: int = 64
     block: int = 64
     certify: str = "boolean"
@@ -117,7 +121,8 @@ class RRTConnectConfig:
                 or not 0.0 <= self.goal_bias <= 1.0:
             raise InvalidArgument(f"rrt_connect: goal_bias must be in [0, 1], got {self.goal_bias!r}")
         for name, least, most in (("shortcut_iterations", 0, None), ("max_certify_evaluations", 2, None),
-                                  ("lanes", 1, None), ("block", 1, None), ("probes", 0, len(PROBES))):
+                                  ("lanes", 1, None), ("block", 1, None), ("probes", 0, len(PROBES)),
+                                  ("shortcut_probes", 0, len(PROBES))):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least \
                     or (most is not None and value > most):
@@ -274,6 +279,7 @@ def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
     values = binding[7].tolist()
     info = {name: int(value) for name, value in zip(_COUNT_NAMES, values)}
     info["t_total"] = values[S.T_TOTAL]
+    info["t_found"] = values[S.T_FOUND]
     if config.profile:
         info.update(zip(S.STAT_NAMES[_COUNTS:], values[_COUNTS:]))
     info["prepare_time"] = prepare_time
