@@ -46,9 +46,13 @@ def test_summary_tables_ranks_and_anchors():
     _, module = _module()
     records = []
     for problem in range(4):
-        records += [_record("straight", problem, problem == 0, 1e-4), _record("rrt_connect", problem, True, 0.002),
+        records += [_record("straight", problem, problem == 0, 1e-4),
+                    {**_record("rrt_connect", problem, True, 0.002), "shortcut_cpu": 2e-4 * (problem + 1)},
                     _record("mh_pso", problem, problem != 1, 1.5)]
     text = module.summarize(records)
+    # cpu 1 ms each, shortcuts 0.2 ... 0.8 ms: medians 0.5 ms of shortcut, 0.5 ms to the first path
+    assert "- `rrt_connect`: to the first certified path (CPU time minus the shortcut) median 0.50 ms" in text
+    assert "the shortcut median 0.50 ms" in text and "`mh_pso`: to the first" not in text
     assert "test CPU" in text and "load average 1.50-1.50" in text
     assert "| cage | 4 | 8.0 | 75 |" in text  # one problem of four has a free straight line
     assert "| rrt_connect | 100 (4/4) |" in text and "| straight | 25 (1/4) |" in text
