@@ -199,7 +199,7 @@ def test_profile_and_options(table_problems):
     for probes in (-1, 9, 2.0, True):
         with pytest.raises(InvalidArgument, match=r"probes must be an integer in \[0, 8\]"):
             solve_motion(problem, "rrt_connect", probes=probes)
-    plain = solve_motion(problem, "rrt_connect", seed=0, retime=False, probes=0)
+    plain = solve_motion(problem, "rrt_connect", seed=0, retime=False, probes=0, interior_probes=0)
     assert plain.info["rejected_by_probes"] == 0 and plain.success
     np.testing.assert_array_equal(plain.path, result.path)  # probes only reject colliding motions: same tree
 

@@ -27,8 +27,8 @@ from drake_mh.scene._packing import _unpack
 FOUND, BUDGET, TIMEOUT = 0, 1, 2
 """Outcomes of :func:`plan_kernel`."""
 
-OPTION_NAMES = ("step", "resolution", "margin", "lanes", "block", "probes", "shortcut_probes", "goal_bias", "balance",
-                "max_certify_evaluations", "shortcut_iterations", "shortcut_min_gain", "clock", "profile")
+OPTION_NAMES = ("step", "resolution", "margin", "lanes", "block", "probes", "interior_probes", "goal_bias",
+                "balance", "max_certify_evaluations", "shortcut_iterations", "shortcut_min_gain", "clock", "profile")
 """The entries of :func:`plan_kernel`'s ``options`` vector, in order (integers and flags as
 float64, exact: the clock's address is below 2**53). One array instead of 14 arguments: numba
 unboxes each argument of a call from Python (:mod:`.planner` keeps one vector per config)."""
@@ -287,7 +287,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
         dist[g] = acc
     for g in np.argsort(dist):
         if certified_motion(q_start, goals[g], ctx, lanes, v_WO, reach, clearance, self_clearance,
-                            resolution, margin, max_evals, by_values, stats, clock, buf, profile, False):
+                            resolution, margin, max_evals, by_values, stats, clock, buf, profile, True):
             path = np.empty((2, nq))
             path[0], path[1] = q_start, goals[g]
             stats[T_TOTAL] += now(clock, buf) - start
@@ -325,7 +325,8 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
             V, P = V2, P2
         b = 1 - a
         t0 = now(clock, buf) if profile else 0.0
-        if _uniform(rng) < goal_bias:
+        biased = _uniform(rng) < goal_bias
+        if biased:
             q_rand[:] = V[b, _below(rng, roots[b])]
         else:
             for j in range(nq):
@@ -336,11 +337,13 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
             t0 = t1
         i = _nearest(V[a], count[a], q_rand)
         stats[NN_SCANS] += 1
-        _steer(V[a, i], q_rand, step, q_new)
+        reached = _steer(V[a, i], q_rand, step, q_new)
         if profile:
             stats[T_NN] += now(clock, buf) - t0
+        # a motion that ends on a node (a root of the other tree, or q_new below) has both ends free: its
+        # probes are inside it (._motion.INTERIOR_PROBES)
         if certified_motion(V[a, i], q_new, ctx, lanes, v_WO, reach, clearance, self_clearance, resolution,
-                            margin, max_evals, by_values, stats, clock, buf, profile, False):
+                            margin, max_evals, by_values, stats, clock, buf, profile, biased and reached):
             ia = count[a]
             V[a, ia] = q_new
             P[a, ia] = i
@@ -362,7 +365,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
                     V, P = V2, P2
                 reached = _steer(V[b, jb], q_new, step, q)
                 if not certified_motion(V[b, jb], q, ctx, lanes, v_WO, reach, clearance, self_clearance,
-                                        resolution, margin, max_evals, by_values, stats, clock, buf, profile, False):
+                                        resolution, margin, max_evals, by_values, stats, clock, buf, profile, reached):
                     break
                 if reached:  # q_new joins the trees: the path runs through it
                     half_a = _trace(V, P, a, ia)  # q_new ... root of a

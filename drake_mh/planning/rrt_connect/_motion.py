@@ -42,11 +42,12 @@ MotionBenchMaker motions that the planner rejected (6 sets, cage left out, each 
 motion. In the plans, 4 probes stop 97 % of a median plan's rejected motions (99.7 % of all)."""
 
 INTERIOR_PROBES = (0.5, 0.25, 0.75, 0.125, 0.875, 0.375, 0.625, 0.0625)
-"""The probes of a motion whose two ends are known free (a shortcut between two points of a
-certified path, see :func:`certified_motion`'s ``interior``): inside it only, middle first.
-With :data:`PROBES`, its first probe (t = 1) was always free, and in a median MotionBenchMaker
-plan 2.6 of its 14 shortcut motions passed the probes and were rejected later, each after a
-first pass over all of its states."""
+"""The probes of a motion whose two ends are known free (:func:`certified_motion`'s
+``interior``: the direct motion to a goal, a motion that ends on a tree node, a shortcut between
+two points of the certified path): inside it only, middle first. With :data:`PROBES`, their
+first probe (t = 1) was always free, and in a median MotionBenchMaker plan 2.6 of its 14
+shortcut motions passed the probes and were rejected later, each after a first pass over all of
+its states."""
 
 
 @numba.njit(cache=True)
@@ -58,10 +59,11 @@ def motion_workspace(nq, C, G, capacity, probes, interior, clearance, self_clear
     (nq, L), plain clearances of the probes link (G,), pair (C - G,), probe out (L,), probe
     tau (L,), the motion's joint speeds |Δq| (nq,), (probes, interior))``, ``L`` the larger of
     ``probes`` and ``interior`` (how many states of :data:`PROBES` and of
-    :data:`INTERIOR_PROBES` a motion probes), the probes' clearances filled: every link, and every link pair but those whose floor table's lowest
-    floor keeps ``self_clearance`` (``t_grid``, :mod:`drake_mh.scene.pair_table`: such a pair
-    keeps it in every configuration, so it rejects no motion; 8 of the hand Panda's 12 pairs).
-    A probe certifies nothing, it may only reject.
+    :data:`INTERIOR_PROBES` a motion probes), the probes' clearances filled: every link, and
+    every link pair but those whose floor table's lowest floor keeps ``self_clearance``
+    (``t_grid``, :mod:`drake_mh.scene.pair_table`: such a pair keeps it in every configuration,
+    so it rejects no motion; 8 of the hand Panda's 12 pairs). A probe certifies nothing, it
+    may only reject.
     Allocated once per plan: the first eight allocations were about 0.15 µs of a motion's 1.2 µs
     of setup (a replay of 132,349 MotionBenchMaker motions)."""
     P = C - G
@@ -231,7 +233,8 @@ def _probe_collides(qa, qb, ctx, interior):
 def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance, resolution, max_margin, max_evals,
                      by_values, stats, clock, buf, profile, interior):
     """Whether the straight motion ``qa -> qb`` is **certified** collision-free (``qa`` free;
-    ``interior``: ``qb`` known free too, e.g. both on a certified path).
+    ``interior``: ``qb`` known free too, e.g. a tree node or a point of a certified path, so
+    the probes are inside the motion; a hint that changes the cost, never the answer).
 
     Every constraint row ``c`` (a link against the obstacles, a checked link pair) changes
     along the motion no faster than ``Λ_c = Σ_j reach[c, j] |Δq_j|`` per unit of t (the

@@ -50,9 +50,11 @@ class RRTConnectConfig:
             clearances (0-8; t = 1, 1/2, 1/4, 1/8, ...: :data:`._motion.PROBES`): a motion
             that collides mostly stops there. They only reject; the motion's own states
             certify.
-        shortcut_probes: the same for a shortcut's motion, whose two ends are on the certified
-            path and so free: states inside it, middle first (0-8; t = 1/2, 1/4, 3/4, 1/8,
-            ...: :data:`._motion.INTERIOR_PROBES`).
+        interior_probes: the same for a motion whose two ends are known free (the direct motion
+            to a goal, a motion that ends on a tree node, a shortcut between two points of the
+            certified path): states inside it, middle first (0-8; t = 1/2, 1/4, 3/4, 1/8, ...:
+            :data:`._motion.INTERIOR_PROBES`). 4 checked 1,144 states in a median
+            MotionBenchMaker plan, against 1,350 with :data:`._motion.PROBES` for them (same paths).
         lanes: states of a motion checked next, in one batched call, spread along it (VAMP's
             "rake": a collision that the probes missed is mostly found there).
         block: states per batched call after the first. Probes 4 / lanes 64 / block 64 took
@@ -96,7 +98,7 @@ class RRTConnectConfig:
     resolution: float = 16.0
     margin: float = 0.02
     probes: int = 4
-    shortcut_probes: int = 4
+    interior_probes: int = 4
     lanes: int = 64
     block: int = 64
     certify: str = "boolean"
@@ -122,7 +124,7 @@ class RRTConnectConfig:
             raise InvalidArgument(f"rrt_connect: goal_bias must be in [0, 1], got {self.goal_bias!r}")
         for name, least, most in (("shortcut_iterations", 0, None), ("max_certify_evaluations", 2, None),
                                   ("lanes", 1, None), ("block", 1, None), ("probes", 0, len(PROBES)),
-                                  ("shortcut_probes", 0, len(PROBES))):
+                                  ("interior_probes", 0, len(PROBES))):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least \
                     or (most is not None and value > most):
