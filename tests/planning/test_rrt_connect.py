@@ -119,6 +119,45 @@ def test_narrow_passage():
     assert dense_exact(scene, result.path).min() >= 0.0
 
 
+def test_dynamic_domain_skips_samples_beyond_failed_nodes():
+    """In the slot, extensions fail and their nodes' domains shrink: samples beyond them are drawn
+    again without a check. Without the domain no sample is skipped; both paths are verified."""
+    scene = slot_scene()
+    goal = goals_in(scene, [0.6, -0.2, 0.41], [0.8, 0.2, 0.63], 1)[0]
+    problem = MotionProblem(PANDA, scene, READY, goal)
+    skipped = 0
+    for seed in range(3):
+        domain = solve_motion(problem, "rrt_connect", seed=seed, timeout=10.0, retime=False)
+        off = solve_motion(problem, "rrt_connect", seed=seed, timeout=10.0, retime=False, domain_radius=0.0)
+        assert domain.success and off.success
+        assert off.info["out_of_domain"] == 0
+        # a skipped sample is an iteration without a motion check
+        assert domain.info["iterations"] >= domain.info["out_of_domain"]
+        skipped += domain.info["out_of_domain"]
+        for result in (domain, off):
+            assert dense_exact(scene, result.path).min() >= 0.0
+    assert skipped > 0
+    for radius in (-1.0, float("inf"), float("nan"), True, "4"):
+        with pytest.raises(InvalidArgument, match="domain_radius must be a finite number >= 0"):
+            solve_motion(problem, "rrt_connect", domain_radius=radius)
+
+
+def test_options_are_validated_once_per_distinct_set():
+    """``solve_motion``'s keywords build one config per distinct set (not inside every plan's
+    clock), and the cache never lets an invalid value pass as an equal valid one."""
+    from drake_mh.planning.rrt_connect import RRTConnectConfig
+
+    first = RRTConnectConfig.from_options({"lanes": 1, "step": 0.5})
+    assert RRTConnectConfig.from_options({"step": 0.5, "lanes": 1}) is first
+    assert RRTConnectConfig.from_options({"lanes": 1, "step": 0.5, "probes": 2}) is not first
+    # equal to lanes=1 as keys, but not integers
+    for wrong in ({"lanes": True, "step": 0.5}, {"lanes": 1.0, "step": 0.5}, {"lanes": [1]}, {"step": float("nan")}):
+        with pytest.raises(InvalidArgument, match="lanes|step"):
+            RRTConnectConfig.from_options(wrong)
+    smooth = RRTConnectConfig.from_options({}, shortcut_iterations=192)
+    assert smooth.shortcut_iterations == 192 and RRTConnectConfig.from_options({}) is not smooth
+
+
 def test_several_goals_grow_one_tree():
     scene = table_scene()
     goals = goals_in(scene, [0.35, -0.45, 0.15], [0.8, 0.45, 0.35], 4, seed=5)

@@ -4,9 +4,11 @@ Methods of :func:`drake_mh.planning.solve_motion`:
 
 * ``rrt_connect`` — RRT-Connect (Kuffner & LaValle, "RRT-Connect: An efficient approach to
   single-query path planning", ICRA 2000): one tree from the start, one from *every* goal
-  configuration (all roots of the goal tree), EXTEND one tree a ``step`` toward a sample
-  (uniform, or with probability ``goal_bias`` a root of the other tree), CONNECT the other
-  tree to the new node, grow the smaller tree next (VAMP's balancing); the direct motion to
+  configuration (all roots of the goal tree), EXTEND one tree a ``step`` (1.5 rad) toward a
+  sample (uniform, or with probability ``goal_bias`` a root of the other tree), CONNECT the
+  other tree to the new node, grow the smaller tree next (VAMP's balancing); a dynamic domain
+  (Yershova et al., ICRA 2005, VAMP's radius of 4 rad: a sample beyond the radius of its
+  nearest node whose extension failed is drawn again without a check); the direct motion to
   each goal is tried first; then random shortcutting (Geraerts & Overmars, "Creating
   high-quality paths for motion planning", IJRR 2007), 32 draws, each checked only if it would
   shorten the path by 5 % of its length (``shortcut_min_gain``);
@@ -96,6 +98,6 @@ __all__ = ["RRTConnectConfig", "plan", "plan_smooth", "prepare", "certify_motion
 
 plan.prepare = prepare  # for a runner that loads methods before starting its clock
 plan_smooth.prepare = prepare
-register("rrt_connect", "RRT-Connect (Kuffner & LaValle 2000), compiled, batched state checks with early exit, "
-                        "every edge certified, 32 random shortcut draws")(plan)
+register("rrt_connect", "RRT-Connect (Kuffner & LaValle 2000) with a dynamic domain, compiled, batched state "
+                        "checks with early exit, every edge certified, 32 random shortcut draws")(plan)
 register("rrt_connect_smooth", "rrt_connect with 192 random shortcut draws (shorter paths)")(plan_smooth)

@@ -19,8 +19,8 @@ import numpy as np
 from drake_mh._borrow import borrow
 from drake_mh.planning.rrt_connect._clock import now
 from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capacity, workspaces
-from drake_mh.planning.rrt_connect._stats import ITERATIONS, NN_SCANS, NODES, SHORTCUTS_KEPT, SHORTCUTS_TRIED, \
-    T_FOUND, T_NN, T_SAMPLE, T_SHORTCUT, T_TOTAL
+from drake_mh.planning.rrt_connect._stats import ITERATIONS, NN_SCANS, NODES, OUT_OF_DOMAIN, SHORTCUTS_KEPT, \
+    SHORTCUTS_TRIED, T_FOUND, T_NN, T_SAMPLE, T_SHORTCUT, T_TOTAL
 from drake_mh.scene._check_context import CheckContext
 from drake_mh.scene._packing import _unpack
 
@@ -28,10 +28,17 @@ FOUND, BUDGET, TIMEOUT = 0, 1, 2
 """Outcomes of :func:`plan_kernel`."""
 
 OPTION_NAMES = ("step", "resolution", "margin", "lanes", "block", "probes", "interior_probes", "goal_bias",
-                "balance", "max_certify_evaluations", "shortcut_iterations", "shortcut_min_gain", "clock", "profile")
+                "balance", "max_certify_evaluations", "shortcut_iterations", "shortcut_min_gain", "clock", "profile", "domain_radius")
 """The entries of :func:`plan_kernel`'s ``options`` vector, in order (integers and flags as
-float64, exact: the clock's address is below 2**53). One array instead of 14 arguments: numba
+float64, exact: the clock's address is below 2**53). One array instead of 15 arguments: numba
 unboxes each argument of a call from Python (:mod:`.planner` keeps one vector per config)."""
+
+DOMAIN_MIN_RADIUS, DOMAIN_ALPHA = 1.0, 1e-4
+"""Dynamic domain (Yershova, Jaillet, Siméon, LaValle, "Dynamic-Domain RRTs: Efficient
+Exploration by Controlling the Sampling Domain", ICRA 2005), with VAMP's constants
+(``RRTCSettings``): a node's radius shrinks by ``1 - DOMAIN_ALPHA`` at each further failed
+extension, never below ``DOMAIN_MIN_RADIUS`` [rad] (nor below the starting radius), and grows by
+``1 + DOMAIN_ALPHA`` at each success."""
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -91,6 +98,31 @@ def _steer(qa, qb, step, out):
     for j in range(qa.shape[0]):
         out[j] = qa[j] + s * (qb[j] - qa[j])
     return False
+
+
+@numba.njit(cache=True)
+def _grown(V, P, D, count, cap):
+    """The trees' arrays (nodes ``V (2, cap, nq)``, parents ``P (2, cap)``, domain radii
+    ``D (2, cap)``) copied into arrays of capacity ``cap``."""
+    V2, P2, D2 = np.empty((2, cap, V.shape[2])), np.empty((2, cap), np.int64), np.empty((2, cap))
+    for t in range(2):
+        V2[t, :count[t]] = V[t, :count[t]]
+        P2[t, :count[t]] = P[t, :count[t]]
+        D2[t, :count[t]] = D[t, :count[t]]
+    return V2, P2, D2
+
+
+@numba.njit(cache=True)
+def _out_of_domain(q, i_node, V, D, a):
+    """Whether sample ``q`` lies beyond the domain radius of its nearest node ``i_node`` of tree
+    ``a`` (a node whose extension never failed has radius ``inf``)."""
+    radius = D[a, i_node]
+    if radius == math.inf:
+        return False
+    d = 0.0
+    for j in range(q.shape[0]):
+        d += (q[j] - V[a, i_node, j]) ** 2
+    return d > radius * radius
 
 
 @numba.njit(cache=True)
@@ -230,9 +262,14 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     swap (``balance``: the smaller tree grows next, as VAMP does). Every edge is certified by
     :func:`._motion.certified_motion`. The direct motion to each goal (nearest first) is tried before any tree.
 
+    With a ``domain_radius`` (dynamic domain, :data:`DOMAIN_MIN_RADIUS`), a node whose extension
+    failed takes that radius, and a sample farther than its nearest node's radius from it is
+    drawn again without any check (VAMP's RRT-Connect does the same): nodes next to obstacles
+    stop spending collision checks on samples behind those obstacles.
+
     Args:
         seed: uint64, the splitmix64 state to start from.
-        options: ``(14,)`` float64, the values of :data:`OPTION_NAMES` (the planner's options,
+        options: ``(15,)`` float64, the values of :data:`OPTION_NAMES` (the planner's options,
             ``clock`` the address of :func:`._clock.clock_address`, ``profile`` 0 or 1).
         by_values: None (the batched check's refinement) or True (the bisection on clearance
             values), :func:`._motion.certified_motion`'s; a compile-time choice.
@@ -251,6 +288,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     goal_bias, balance, max_evals = options[7], options[8] != 0.0, int(options[9])
     shortcut_iterations, shortcut_min_gain, clock, profile = int(options[10]), options[11], int(options[12]), \
         options[13] != 0.0
+    domain_radius = options[14]
     buf = np.zeros(2, np.int64)
     start = now(clock, buf)
     stats[:] = 0.0
@@ -263,13 +301,14 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     return _plan(owner, buf, start, arrays, q_start, goals, lower, upper, v_WO, reach,
                  clearance, self_clearance, state, step, resolution, margin, first_lanes, block_lanes, goal_bias,
                  balance, max_nodes, time_limit, max_evals, shortcut_iterations, shortcut_min_gain, by_values, clock,
-                 profile, stats)
+                 profile, stats, domain_radius)
 
 
 @numba.njit(cache=True)
 def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_owner, reach_owner, clearance,
           self_clearance, seed, step, resolution, margin, first_lanes, block_lanes, goal_bias, balance, max_nodes,
-          time_limit, max_evals, shortcut_iterations, shortcut_min_gain, by_values, clock, profile, stats_owner):
+          time_limit, max_evals, shortcut_iterations, shortcut_min_gain, by_values, clock, profile, stats_owner,
+          domain_radius):
     """:func:`plan_kernel` on its workspace ``owner``. The arrays that every motion passes on are
     borrowed from the arguments (held by the caller for the whole call: :mod:`drake_mh._borrow`)."""
     (ws, mws), buf, v_WO, reach, stats = borrow((owner, buf_owner, v_WO_owner, reach_owner, stats_owner))
@@ -296,6 +335,8 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
     cap = max(64, G + 1)
     V = np.empty((2, cap, nq))
     P = np.empty((2, cap), np.int64)
+    D = np.full((2, cap), np.inf)  # domain radii (inf: no failed extension yet)
+    domain_floor = min(DOMAIN_MIN_RADIUS, domain_radius)
     count = np.zeros(2, np.int64)
     V[0, 0] = q_start
     P[0, 0] = -1
@@ -318,11 +359,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
         stats[ITERATIONS] += 1
         if max(count[0], count[1]) + 1 >= cap:  # room for this iteration's first node
             cap *= 2
-            V2, P2 = np.empty((2, cap, nq)), np.empty((2, cap), np.int64)
-            for t in range(2):
-                V2[t, :count[t]] = V[t, :count[t]]
-                P2[t, :count[t]] = P[t, :count[t]]
-            V, P = V2, P2
+            V, P, D = _grown(V, P, D, count, cap)
         b = 1 - a
         t0 = now(clock, buf) if profile else 0.0
         biased = _uniform(rng) < goal_bias
@@ -337,6 +374,15 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
             t0 = t1
         i = _nearest(V[a], count[a], q_rand)
         stats[NN_SCANS] += 1
+        if domain_radius > 0.0 and _out_of_domain(q_rand, i, V, D, a):
+            stats[OUT_OF_DOMAIN] += 1
+            if profile:
+                stats[T_NN] += now(clock, buf) - t0
+            if balance:
+                a = 0 if count[0] <= count[1] else 1
+            else:
+                a = 1 - a
+            continue
         reached = _steer(V[a, i], q_rand, step, q_new)
         if profile:
             stats[T_NN] += now(clock, buf) - t0
@@ -347,6 +393,8 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
             ia = count[a]
             V[a, ia] = q_new
             P[a, ia] = i
+            D[a, ia] = np.inf
+            D[a, i] *= 1.0 + DOMAIN_ALPHA  # (inf stays inf)
             count[a] += 1
             added += 1
             # CONNECT the other tree to q_new
@@ -358,11 +406,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
             while added < max_nodes:
                 if count[b] + 1 >= cap:
                     cap *= 2
-                    V2, P2 = np.empty((2, cap, nq)), np.empty((2, cap), np.int64)
-                    for t in range(2):
-                        V2[t, :count[t]] = V[t, :count[t]]
-                        P2[t, :count[t]] = P[t, :count[t]]
-                    V, P = V2, P2
+                    V, P, D = _grown(V, P, D, count, cap)
                 reached = _steer(V[b, jb], q_new, step, q)
                 if not certified_motion(V[b, jb], q, ctx, lanes, v_WO, reach, clearance, self_clearance,
                                         resolution, margin, max_evals, by_values, stats, clock, buf, profile, reached):
@@ -391,11 +435,14 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
                 jn = count[b]
                 V[b, jn] = q
                 P[b, jn] = jb
+                D[b, jn] = np.inf
                 count[b] += 1
                 added += 1
                 jb = jn
                 if now(clock, buf) - start > time_limit:
                     break
+        elif domain_radius > 0.0:  # the extension failed: the node's domain shrinks
+            D[a, i] = domain_radius if D[a, i] == math.inf else max(D[a, i] * (1.0 - DOMAIN_ALPHA), domain_floor)
         if balance:
             a = 0 if count[0] <= count[1] else 1
         else:

@@ -2,8 +2,9 @@
 these constants (counts first, then seconds when profiling)."""
 
 ITERATIONS, NODES, NN_SCANS, MOTIONS, STATES, BY_MARGIN, REFINED, REFINE_EVALS, REJECTED, BY_PROBES, \
-    SHORTCUTS_TRIED, SHORTCUTS_KEPT, T_SAMPLE, T_NN, T_CHECK, T_CERTIFY, T_SHORTCUT, T_TOTAL, T_FOUND = range(19)
+    SHORTCUTS_TRIED, SHORTCUTS_KEPT, OUT_OF_DOMAIN, T_SAMPLE, T_NN, T_CHECK, T_CERTIFY, T_SHORTCUT, T_TOTAL, \
+    T_FOUND = range(20)
 STAT_NAMES = ("iterations", "nodes", "nn_scans", "motions", "states", "certified_by_margin", "refined",
-              "refine_evals", "rejected", "rejected_by_probes", "shortcuts_tried", "shortcuts_kept", "t_sample",
-              "t_nn", "t_check", "t_certify", "t_shortcut", "t_total", "t_found")
+              "refine_evals", "rejected", "rejected_by_probes", "shortcuts_tried", "shortcuts_kept", "out_of_domain",
+              "t_sample", "t_nn", "t_check", "t_certify", "t_shortcut", "t_total", "t_found")
 """The names of the statistics, in index order (``info`` keys of :func:`~.planner.plan`)."""

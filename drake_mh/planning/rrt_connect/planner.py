@@ -33,11 +33,22 @@ class RRTConnectConfig:
     """Options of ``rrt_connect`` (``solve_motion`` keywords).
 
     Defaults measured on 105 MotionBenchMaker-like Panda problems (median CPU time of a plan;
-    2 shared cores, so differences below about 15 % are noise).
+    2 shared cores, so differences below about 15 % are noise), ``step`` and ``domain_radius`` on
+    384 MotionBenchMaker plans and the generated sets of three robots (below).
 
     Attributes:
-        step: [rad] longest tree edge (EXTEND's range, Euclidean in joint space). 0.7 and 2.0
-            were 1.5x and 1.2x slower than 1.0.
+        step: [rad] longest tree edge (EXTEND's range, Euclidean in joint space). 1.5 with the
+            dynamic domain: 0.915x the median plan time of 1.0 without it on 384 MotionBenchMaker
+            plans (each plan's best of 2, paired, the options interleaved; 0.935x with 1.0 and
+            the domain; 0.88x-0.94x on another 198), 0.92x and 0.95x on 168 plans of the generated
+            sets for the Panda and the Panda with its hand, 1.03x (kernel time; mean 0.84x) on 210
+            UR5 plans; path lengths within 2 % (medians). Without the domain, 0.7 and 2.0 were
+            1.5x and 1.2x slower than 1.0.
+        domain_radius: [rad] dynamic domain (0: off; :func:`._kernels.plan_kernel`): a node whose
+            extension failed takes this radius, and a sample beyond its nearest node's radius is
+            drawn again without a check. VAMP's value for the Panda. 3 and 6 measured 0.99x and
+            1.00x the plan time of no domain on the sets above with a step of 1.0, 4 0.94x; it
+            shortens the slow tail most (mean plan 1.22 ms against 1.69 on MotionBenchMaker).
         resolution: [states per rad] checked along a motion, at least (more where ``margin``
             needs them). VAMP checks its Panda motions at 32 per unit; 8, 16 and 32 measured
             the same here, where the margin sets the count.
@@ -94,7 +105,7 @@ class RRTConnectConfig:
             70 ns per clock reading).
     """
 
-    step: float = 1.0
+    step: float = 1.5
     resolution: float = 16.0
     margin: float = 0.02
     probes: int = 4
@@ -108,12 +119,17 @@ class RRTConnectConfig:
     shortcut_min_gain: float = 0.05
     max_certify_evaluations: int = 4096
     profile: bool = False
+    domain_radius: float = 4.0
 
     def __post_init__(self):
         for name in ("step", "resolution", "margin"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value <= 0:
                 raise InvalidArgument(f"rrt_connect: {name} must be a finite number > 0, got {value!r}")
+        if isinstance(self.domain_radius, bool) or not isinstance(self.domain_radius, numbers.Real) \
+                or not 0.0 <= self.domain_radius < np.inf:
+            raise InvalidArgument(f"rrt_connect: domain_radius must be a finite number >= 0 (0: no dynamic domain), "
+                                  f"got {self.domain_radius!r}")
         if isinstance(self.shortcut_min_gain, bool) or not isinstance(self.shortcut_min_gain, numbers.Real) \
                 or not 0.0 <= self.shortcut_min_gain < 1.0:
             raise InvalidArgument(f"rrt_connect: shortcut_min_gain must be in [0, 1), got {self.shortcut_min_gain!r}")
@@ -147,21 +163,30 @@ class RRTConnectConfig:
 
     @classmethod
     def from_options(cls, options: dict, **defaults) -> "RRTConnectConfig":
-        """The config of ``solve_motion``'s keywords over ``defaults`` (the defaults' instance is
-        built once: a plan without options spends no time here)."""
-        if not options:
-            key = tuple(sorted(defaults.items()))
+        """The config of ``solve_motion``'s keywords over ``defaults``, built once per distinct
+        set of them: building and validating one takes tens of microseconds, which a plan's clock
+        would count (at most :data:`_CONFIG_CACHE` are kept)."""
+        try:  # the type beside each value: True == 1, but lanes=True is an error and lanes=1 is not
+            key = (tuple(sorted((name, type(value), value) for name, value in options.items())),
+                   tuple(sorted(defaults.items())))
             config = _CONFIGS.get(key)
-            if config is None:
-                config = _CONFIGS[key] = cls(**defaults)
+        except TypeError:  # an unhashable value: built (and rejected) below
+            key, config = None, None
+        if config is not None:
             return config
         names = {f.name for f in dataclasses.fields(cls)}
         unknown = sorted(set(options) - names)
         if unknown:
             raise InvalidArgument(f"rrt_connect: unknown option(s) {unknown}; options are {sorted(names)}")
-        return cls(**{**defaults, **options})
+        config = cls(**{**defaults, **options})
+        if key is not None:
+            if len(_CONFIGS) >= _CONFIG_CACHE:
+                _CONFIGS.clear()
+            _CONFIGS[key] = config
+        return config
 
 
+_CONFIG_CACHE = 256
 _CONFIGS: dict = {}
 _DEFAULT = RRTConnectConfig()
 _COUNTS = S.T_SAMPLE  # counts first, then seconds
