@@ -79,8 +79,8 @@ planning time is ``solve_motion``'s, which here includes certifying every edge):
   at load 1.5 (0.50-0.52 ms, machine state varies) and missed under heavier load: the batched check costs 300-400 ns per Panda state against these 7-12
   obstacles (VAMP: 60-130 ns).
 * the original MotionBenchMaker problems with the Panda's meshed hand (778 spheres, 66 problems,
-  ``drake-mh study motion_benchmark``, docs/planning.md): 66/66 verified, median 0.59 ms CPU, of
-  which the shortcut step 0.08 ms (``info["t_found"]``: 0.48 ms to the first certified path).
+  ``drake-mh study motion_benchmark``, docs/planning.md): 66/66 verified, median 0.52 ms CPU, of
+  which the shortcut step 0.08 ms (``info["t_found"]``: 0.43 ms to the first certified path).
 * cold compilation (empty numba cache): :func:`prepare` takes about 1 minute of CPU time
   (``plan_kernel`` and its callees; ``check_states`` alone 5 s).
 * the independent verification (:func:`drake_mh.planning.verify_motion` without retiming)

@@ -28,7 +28,8 @@ FOUND, BUDGET, TIMEOUT = 0, 1, 2
 """Outcomes of :func:`plan_kernel`."""
 
 OPTION_NAMES = ("step", "resolution", "margin", "lanes", "block", "probes", "interior_probes", "goal_bias",
-                "balance", "max_certify_evaluations", "shortcut_iterations", "shortcut_min_gain", "clock", "profile", "domain_radius")
+                "balance", "max_certify_evaluations", "shortcut_iterations", "shortcut_min_gain", "clock", "profile",
+                "domain_radius")
 """The entries of :func:`plan_kernel`'s ``options`` vector, in order (integers and flags as
 float64, exact: the clock's address is below 2**53). One array instead of 15 arguments: numba
 unboxes each argument of a call from Python (:mod:`.planner` keeps one vector per config)."""
