@@ -183,6 +183,12 @@ def test_blocked_goal_fails_honestly_within_budget_and_deadline(planar2r):
     assert not result.success and "budget" in result.message and result.path is None
     assert result.info["nodes"] <= 300
     assert time.perf_counter() - start < 5.0
+    # a tiny dynamic domain draws nearly every sample again (no node added): the budget still ends it
+    start = time.perf_counter()
+    result = solve_motion(problem, "rrt_connect", seed=0, budget=20, timeout=None, retime=False, domain_radius=1e-3)
+    assert not result.success and "budget" in result.message
+    assert result.info["out_of_domain"] > 0 and result.info["iterations"] <= 20_000
+    assert time.perf_counter() - start < 5.0
     start = time.perf_counter()
     result = solve_motion(problem, "rrt_connect", seed=0, timeout=0.2, retime=False)
     assert not result.success and "timeout" in result.message

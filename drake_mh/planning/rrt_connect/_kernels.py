@@ -41,6 +41,11 @@ Exploration by Controlling the Sampling Domain", ICRA 2005), with VAMP's constan
 extension, never below ``DOMAIN_MIN_RADIUS`` [rad] (nor below the starting radius), and grows by
 ``1 + DOMAIN_ALPHA`` at each success."""
 
+SAMPLES_PER_NODE = 1000
+"""Most iterations per node of the budget (``max_nodes``): samples that the dynamic domain draws
+again add no node, so without this bound a tree whose every node failed, with a small radius,
+could sample forever when no deadline is given (VAMP bounds its iterations too)."""
+
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
 _MIX2 = np.uint64(0x94D049BB133111EB)
@@ -274,7 +279,8 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
             ``clock`` the address of :func:`._clock.clock_address`, ``profile`` 0 or 1).
         by_values: None (the batched check's refinement) or True (the bisection on clearance
             values), :func:`._motion.certified_motion`'s; a compile-time choice.
-        max_nodes: most nodes added to the trees (the budget), roots not counted.
+        max_nodes: most nodes added to the trees (the budget), roots not counted; and at most
+            :data:`SAMPLES_PER_NODE` times as many iterations.
         time_limit: [s] of the monotonic clock from the start of this call (``inf``: none).
         stats: ``(len(STAT_NAMES),)`` float64, set to the counts, ``t_total``, ``t_found`` (when
             the first certified path was found, before the shortcut) and (with ``profile``) the
@@ -353,7 +359,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
             stats[T_TOTAL] += now(clock, buf) - start
             stats[NODES] += added
             return empty, TIMEOUT, -1
-        if added >= max_nodes:
+        if added >= max_nodes or stats[ITERATIONS] >= SAMPLES_PER_NODE * max_nodes:
             stats[T_TOTAL] += now(clock, buf) - start
             stats[NODES] += added
             return empty, BUDGET, -1

@@ -315,7 +315,8 @@ def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
         return path, info
     why = "budget" if outcome == K.BUDGET else "timeout"
     info["message"] = (f"no path: {why} reached after {info['nodes']} tree nodes and {info['motions']} motion checks"
-                       + (" (budget: tree nodes)" if why == "budget" else ""))
+                       + (f" (budget: tree nodes, and {K.SAMPLES_PER_NODE} samples per node; {info['out_of_domain']} "
+                          f"samples drawn again by the dynamic domain)" if why == "budget" else ""))
     return None, info
 
 
