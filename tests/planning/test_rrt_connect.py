@@ -131,8 +131,6 @@ def test_dynamic_domain_skips_samples_beyond_failed_nodes():
         off = solve_motion(problem, "rrt_connect", seed=seed, timeout=10.0, retime=False, domain_radius=0.0)
         assert domain.success and off.success
         assert off.info["out_of_domain"] == 0
-        # a skipped sample is an iteration without a motion check
-        assert domain.info["iterations"] >= domain.info["out_of_domain"]
         skipped += domain.info["out_of_domain"]
         for result in (domain, off):
             assert dense_exact(scene, result.path).min() >= 0.0

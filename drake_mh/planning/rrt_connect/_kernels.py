@@ -118,6 +118,14 @@ def _grown(V, P, D, count, cap):
     return V2, P2, D2
 
 
+@numba.njit(cache=True, inline="always")
+def _next_tree(balance, a, count):
+    """The tree that grows next: the smaller one (``balance``, VAMP), else the other one."""
+    if balance:
+        return 0 if count[0] <= count[1] else 1
+    return 1 - a
+
+
 @numba.njit(cache=True)
 def _out_of_domain(q, i_node, V, D, a):
     """Whether sample ``q`` lies beyond the domain radius of its nearest node ``i_node`` of tree
@@ -385,10 +393,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
             stats[OUT_OF_DOMAIN] += 1
             if profile:
                 stats[T_NN] += now(clock, buf) - t0
-            if balance:
-                a = 0 if count[0] <= count[1] else 1
-            else:
-                a = 1 - a
+            a = _next_tree(balance, a, count)
             continue
         reached = _steer(V[a, i], q_rand, step, q_new)
         if profile:
@@ -450,10 +455,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
                     break
         elif domain_radius > 0.0:  # the extension failed: the node's domain shrinks
             D[a, i] = domain_radius if D[a, i] == math.inf else max(D[a, i] * (1.0 - DOMAIN_ALPHA), domain_floor)
-        if balance:
-            a = 0 if count[0] <= count[1] else 1
-        else:
-            a = 1 - a
+        a = _next_tree(balance, a, count)
 
 
 @numba.njit(cache=True)
