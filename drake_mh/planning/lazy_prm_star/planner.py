@@ -1,0 +1,156 @@
+"""``lazy_prm_star``: the Python side of the compiled informed lazy PRM* (:mod:`._kernels`).
+
+:func:`plan` starts from ``rrt_connect``'s certified path (``warm_start``), then calls
+:func:`._kernels.prm_kernel`, which improves it batch by batch until the sample budget or the
+deadline. :func:`prepare` compiles (or loads) both planners' kernels before any clock starts.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import numbers
+import time
+
+import numpy as np
+
+from drake_mh.errors import InvalidArgument
+from drake_mh.planning.lazy_prm_star import _kernels as K
+from drake_mh.planning.rrt_connect import _stats as S
+from drake_mh.planning.rrt_connect import planner as rrt
+from drake_mh.planning.rrt_connect._motion import PROBES
+
+DEFAULT_SAMPLES = 1000
+"""Samples drawn (the budget) when ``solve_motion``'s ``budget`` is None: the search then ends
+by this budget or by the deadline, whichever comes first."""
+
+_CHECK = rrt.RRTConnectConfig()  # the motion check's defaults, shared with rrt_connect
+
+
+@dataclasses.dataclass(frozen=True)
+class LazyPRMStarConfig:
+    """Options of ``lazy_prm_star`` (``solve_motion`` keywords; ``budget``: samples drawn).
+
+    Attributes:
+        batch: samples drawn per batch (each batch: free samples join the graph, the graph is
+            rebuilt and searched).
+        k_scale: neighbours per node as a multiple of PRM*'s ``e (1 + 1/d) log n`` (Karaman &
+            Frazzoli 2011; below 1 the asymptotic optimality is lost).
+        warm_start: start from ``rrt_connect``'s path (its time counts): the informed sampling
+            then begins at once; without it, samples are uniform until the graph holds a path.
+        shortcut_iterations, shortcut_min_gain: random shortcuts of the best path at the end
+            (as ``rrt_connect``'s).
+        resolution, margin, lanes, block, probes, interior_probes, max_certify_evaluations: the
+            motion check's (:class:`~drake_mh.planning.rrt_connect.RRTConnectConfig`).
+    """
+
+    batch: int = 100
+    k_scale: float = 1.0
+    warm_start: bool = True
+    shortcut_iterations: int = 64
+    shortcut_min_gain: float = 0.005
+    resolution: float = _CHECK.resolution
+    margin: float = _CHECK.margin
+    lanes: int = _CHECK.lanes
+    block: int = _CHECK.block
+    probes: int = _CHECK.probes
+    interior_probes: int = _CHECK.interior_probes
+    max_certify_evaluations: int = _CHECK.max_certify_evaluations
+
+    def __post_init__(self):
+        for name in ("k_scale", "resolution", "margin"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value <= 0:
+                raise InvalidArgument(f"lazy_prm_star: {name} must be a finite number > 0, got {value!r}")
+        if not isinstance(self.warm_start, bool):
+            raise InvalidArgument(f"lazy_prm_star: warm_start must be True or False, got {self.warm_start!r}")
+        if isinstance(self.shortcut_min_gain, bool) or not isinstance(self.shortcut_min_gain, numbers.Real) \
+                or not 0.0 <= self.shortcut_min_gain < 1.0:
+            raise InvalidArgument(f"lazy_prm_star: shortcut_min_gain must be in [0, 1), got {self.shortcut_min_gain!r}")
+        for name, least, most in (("batch", 1, None), ("shortcut_iterations", 0, None), ("lanes", 1, None),
+                                  ("block", 1, None), ("max_certify_evaluations", 2, None),
+                                  ("probes", 0, len(PROBES)), ("interior_probes", 0, len(PROBES))):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least \
+                    or (most is not None and value > most):
+                bounds = f">= {least}" if most is None else f"in [{least}, {most}]"
+                raise InvalidArgument(f"lazy_prm_star: {name} must be an integer {bounds}, got {value!r}")
+
+    def vector(self) -> np.ndarray:
+        """The kernel's ``options`` (:data:`._kernels.OPTION_NAMES`)."""
+        values = {**dataclasses.asdict(self), "clock": rrt._CLOCK}
+        return np.array([float(values[name]) for name in K.OPTION_NAMES])
+
+    @classmethod
+    def from_options(cls, options: dict) -> "LazyPRMStarConfig":
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(options) - names)
+        if unknown:
+            raise InvalidArgument(f"lazy_prm_star: unknown option(s) {unknown}; options are {sorted(names)}")
+        return cls(**options)
+
+
+_PREPARED = False
+
+
+def prepare(problem, **options) -> float:
+    """Compile or load ``rrt_connect``'s kernel and this one (once per process); seconds taken.
+    From an empty numba cache this kernel compiles in about a minute, from the cache it loads in
+    a fraction of a second."""
+    global _PREPARED
+    start = time.perf_counter()
+    rrt.prepare(problem)
+    if not _PREPARED:
+        _kernel_call(problem, problem.q_start[None], np.empty((0, len(problem.q_start))), 0, 0, 1, 1.0,
+                     LazyPRMStarConfig(batch=1, shortcut_iterations=0))
+        _PREPARED = True
+    return time.perf_counter() - start
+
+
+def _kernel_call(problem, goals, init_path, init_goal, seed, samples, time_limit, config):
+    binding = rrt._binding(problem.scene)
+    ints, floats, v_WO, reach, lower, upper = binding[:6]
+    stats = np.zeros(K.N_STATS)
+    path, outcome, goal = K.prm_kernel(
+        np.ascontiguousarray(problem.q_start, dtype=float), np.ascontiguousarray(goals, dtype=float),
+        np.ascontiguousarray(init_path, dtype=float), int(init_goal), lower, upper, ints, floats, v_WO, reach,
+        float(problem.clearance), float(problem.self_clearance), np.uint64(seed), int(samples), float(time_limit),
+        config.vector(), stats)
+    return path, outcome, int(goal), stats
+
+
+def plan(problem, goals, rng, deadline, budget, **options):
+    """Informed lazy PRM* from ``problem.q_start`` to any row of ``goals`` (module docstring of
+    :mod:`drake_mh.planning.lazy_prm_star`); ``budget``: samples drawn (default
+    :data:`DEFAULT_SAMPLES`)."""
+    config = LazyPRMStarConfig.from_options(options)
+    begin = time.perf_counter()
+    prepare_time = prepare(problem) if not _PREPARED else 0.0
+    limit = (lambda: np.inf) if deadline is None else (lambda: deadline + prepare_time - time.perf_counter())
+    init, init_goal, warm_info = np.empty((0, goals.shape[1])), 0, {}
+    if config.warm_start:
+        path, warm_info = rrt.plan(problem, goals, rng, None if deadline is None else deadline + prepare_time, None)
+        if path is not None:
+            init, init_goal = path, warm_info["goal"]
+    warm_time = time.perf_counter() - begin - prepare_time
+    seed = rng.bit_generator.random_raw()
+    path, outcome, goal, stats = _kernel_call(problem, goals, init, init_goal, seed,
+                                              DEFAULT_SAMPLES if budget is None else budget, limit(), config)
+    counts = S.STAT_NAMES[:S.T_SAMPLE] + K.PRM_STAT_NAMES
+    index = list(range(S.T_SAMPLE)) + list(range(len(S.STAT_NAMES), K.N_STATS))
+    info = {name: int(stats[i]) for name, i in zip(counts, index)}
+    found = len(init) > 0 or stats[S.T_FOUND] > 0
+    info.update(warm_start_time=warm_time, warm_start_length=_length(init) if len(init) else float("nan"),
+                t_first=(warm_time if len(init) else warm_time + stats[S.T_FOUND]) if found else float("nan"),
+                t_search=stats[S.T_TOTAL], prepare_time=prepare_time)
+    if outcome == K.FOUND:
+        info["goal"] = goal
+        return path, info
+    why = "budget" if outcome == K.BUDGET else "timeout"
+    info["message"] = (f"no path: {why} reached after {info['samples']} samples ({info['free_samples']} free) and "
+                       f"{info['edges_checked']} edges checked"
+                       + ("" if not config.warm_start else f"; the warm start found none ({warm_info.get('message')})"))
+    return None, info
+
+
+def _length(path: np.ndarray) -> float:
+    return float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
