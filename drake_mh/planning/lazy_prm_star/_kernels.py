@@ -123,12 +123,13 @@ def _heuristics(V, n, G, h, f_start):
 
 
 @numba.njit(cache=True)
-def _knn_graph(V, alive, n, k):
+def _knn_graph(V, alive, n, k, clock, buf, start_time, time_limit):
     """The graph of every alive node joined to its ``k`` nearest alive nodes (either way):
     ``(start (n + 1,), neighbours)``, node ``i``'s neighbours ``neighbours[start[i]:start[i + 1]]``
     (a pair nearest to each other appears twice: the search does not mind). The distances of a
     node to all others in one pass over the transposed nodes (SIMD), then the ``k`` smallest by
-    insertion (rare after the first ``k``)."""
+    insertion (rare after the first ``k``). Past the deadline (read once per node) it returns
+    a graph without edges."""
     ids = np.nonzero(alive[:n])[0]
     m, nq = ids.shape[0], V.shape[1]
     kk = max(min(k, m - 1), 0)
@@ -141,6 +142,8 @@ def _knn_graph(V, alive, n, k):
     row = np.empty(m)
     degree = np.zeros(n + 1, np.int64)
     for a in range(m if kk > 0 else 0):
+        if now(clock, buf) - start_time > time_limit:  # O(m^2): a large graph must not overrun the deadline
+            return np.zeros(n + 1, np.int64), np.empty(0, np.int64)
         row[:] = 0.0
         for c in range(nq):
             x = VT[c, a]
@@ -358,7 +361,7 @@ def _search(owner, buf_owner, start, arrays, q_start, goals, init_path, init_goa
             graph_nodes += alive[i]
         stats[GRAPH_NODES] = graph_nodes
         k = int(math.ceil(k_scale * math.e * (1.0 + 1.0 / nq) * math.log(max(graph_nodes, 2))))
-        start_e, neighbours = _knn_graph(V, alive, n, k)
+        start_e, neighbours = _knn_graph(V, alive, n, k, clock, buf, start, time_limit)
         weight, blocked = _edge_arrays(V, start_e, neighbours, status)
         g_cost, parent = np.empty(n), np.empty(n, np.int64)
         # lazy search: certify the edges of the shortest path found, drop those that fail, search again

@@ -90,6 +90,11 @@ class LazyPRMStarConfig:
 
 
 _PREPARED = False
+#: (name, index) of the counts in ``info``: the search's, and those the motion check adds to
+_COUNTS = tuple((name, S.STAT_NAMES.index(name)) for name in (
+    "motions", "states", "certified_by_margin", "refined", "refine_evals", "rejected", "rejected_by_probes",
+    "shortcuts_tried", "shortcuts_kept")) + tuple((name, K.N_STATS - len(K.PRM_STAT_NAMES) + i)
+                                                  for i, name in enumerate(K.PRM_STAT_NAMES))
 
 
 def prepare(problem, **options) -> float:
@@ -135,9 +140,7 @@ def plan(problem, goals, rng, deadline, budget, **options):
     seed = rng.bit_generator.random_raw()
     path, outcome, goal, stats = _kernel_call(problem, goals, init, init_goal, seed,
                                               DEFAULT_SAMPLES if budget is None else budget, limit(), config)
-    counts = S.STAT_NAMES[:S.T_SAMPLE] + K.PRM_STAT_NAMES
-    index = list(range(S.T_SAMPLE)) + list(range(len(S.STAT_NAMES), K.N_STATS))
-    info = {name: int(stats[i]) for name, i in zip(counts, index)}
+    info = {name: int(stats[i]) for name, i in _COUNTS}
     found = len(init) > 0 or stats[S.T_FOUND] > 0
     info.update(warm_start_time=warm_time, warm_start_length=_length(init) if len(init) else float("nan"),
                 t_first=(warm_time if len(init) else warm_time + stats[S.T_FOUND]) if found else float("nan"),
