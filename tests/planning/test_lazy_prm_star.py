@@ -77,6 +77,21 @@ def test_more_samples_continue_the_same_search(problems):
     assert max(gains) > 1e-3, gains
 
 
+def test_several_goals_any_one_reached(problems):
+    """Three goal configurations: the informed set of each goal that a shorter path could still
+    reach; the path ends on the goal that ``info["goal"]`` names."""
+    scene = problems[0].scene
+    goals = goals_under_board(scene, 3, seed=1)
+    assert len(goals) == 3
+    problem = MotionProblem(PANDA, scene, READY, goals, clearance=0.005)
+    result = solve_motion(problem, "lazy_prm_star", seed=2, timeout=None, budget=600, retime=False)
+    assert result.success, result.message
+    assert np.array_equal(result.path[-1], problem.goal_configurations[result.info["goal"]])
+    assert np.array_equal(result.path[0], READY)
+    assert result.path_length <= result.info["warm_start_length"] + 1e-9
+    assert _dense_exact(scene, result.path).min() >= problem.clearance
+
+
 def test_cold_start_finds_its_own_path(problems):
     problem = problems[0]
     result = solve_motion(problem, "lazy_prm_star", seed=3, timeout=None, budget=1500, retime=False,
