@@ -142,7 +142,9 @@ def plan(problem, goals, rng, deadline, budget, **options):
                                               DEFAULT_SAMPLES if budget is None else budget, limit(), config)
     info = {name: int(stats[i]) for name, i in _COUNTS}
     found = len(init) > 0 or stats[S.T_FOUND] > 0
-    info.update(warm_start_time=warm_time, warm_start_length=K._length(init) if len(init) else float("nan"),
+    # (numpy, not the kernel's _length: a first call of a numba function from Python loads it, ~2 ms in the clock)
+    warm_length = float(np.linalg.norm(np.diff(init, axis=0), axis=1).sum()) if len(init) else float("nan")
+    info.update(warm_start_time=warm_time, warm_start_length=warm_length,
                 t_first=(warm_time if len(init) else warm_time + stats[S.T_FOUND]) if found else float("nan"),
                 t_search=stats[S.T_TOTAL], prepare_time=prepare_time)
     if outcome == K.FOUND:
