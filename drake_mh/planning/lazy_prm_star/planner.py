@@ -17,13 +17,15 @@ from drake_mh.errors import InvalidArgument
 from drake_mh.planning.lazy_prm_star import _kernels as K
 from drake_mh.planning.rrt_connect import _stats as S
 from drake_mh.planning.rrt_connect import planner as rrt
-from drake_mh.planning.rrt_connect._motion import PROBES
 
 DEFAULT_SAMPLES = 1000
 """Samples drawn (the budget) when ``solve_motion``'s ``budget`` is None: the search then ends
 by this budget or by the deadline, whichever comes first."""
 
 _CHECK = rrt.RRTConnectConfig()  # the motion check's defaults, shared with rrt_connect
+_SHARED = ("shortcut_iterations", "shortcut_min_gain", "resolution", "margin", "lanes", "block", "probes",
+           "interior_probes", "max_certify_evaluations")
+"""Options named and checked as ``rrt_connect``'s (:class:`~drake_mh.planning.rrt_connect.RRTConnectConfig`)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -37,8 +39,8 @@ class LazyPRMStarConfig:
             Frazzoli 2011; below 1 the asymptotic optimality is lost).
         warm_start: start from ``rrt_connect``'s path (its time counts): the informed sampling
             then begins at once; without it, samples are uniform until the graph holds a path.
-        shortcut_iterations, shortcut_min_gain: random shortcuts of the best path at the end
-            (as ``rrt_connect``'s).
+        shortcut_iterations, shortcut_min_gain: random shortcuts of each new shortest path of the
+            graph before it is compared with the best (as ``rrt_connect``'s shortcut).
         resolution, margin, lanes, block, probes, interior_probes, max_certify_evaluations: the
             motion check's (:class:`~drake_mh.planning.rrt_connect.RRTConnectConfig`).
     """
@@ -57,23 +59,17 @@ class LazyPRMStarConfig:
     max_certify_evaluations: int = _CHECK.max_certify_evaluations
 
     def __post_init__(self):
-        for name in ("k_scale", "resolution", "margin"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value <= 0:
-                raise InvalidArgument(f"lazy_prm_star: {name} must be a finite number > 0, got {value!r}")
+        if isinstance(self.k_scale, bool) or not isinstance(self.k_scale, numbers.Real) \
+                or not np.isfinite(self.k_scale) or self.k_scale <= 0:
+            raise InvalidArgument(f"lazy_prm_star: k_scale must be a finite number > 0, got {self.k_scale!r}")
+        if isinstance(self.batch, bool) or not isinstance(self.batch, numbers.Integral) or self.batch < 1:
+            raise InvalidArgument(f"lazy_prm_star: batch must be an integer >= 1, got {self.batch!r}")
         if not isinstance(self.warm_start, bool):
             raise InvalidArgument(f"lazy_prm_star: warm_start must be True or False, got {self.warm_start!r}")
-        if isinstance(self.shortcut_min_gain, bool) or not isinstance(self.shortcut_min_gain, numbers.Real) \
-                or not 0.0 <= self.shortcut_min_gain < 1.0:
-            raise InvalidArgument(f"lazy_prm_star: shortcut_min_gain must be in [0, 1), got {self.shortcut_min_gain!r}")
-        for name, least, most in (("batch", 1, None), ("shortcut_iterations", 0, None), ("lanes", 1, None),
-                                  ("block", 1, None), ("max_certify_evaluations", 2, None),
-                                  ("probes", 0, len(PROBES)), ("interior_probes", 0, len(PROBES))):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least \
-                    or (most is not None and value > most):
-                bounds = f">= {least}" if most is None else f"in [{least}, {most}]"
-                raise InvalidArgument(f"lazy_prm_star: {name} must be an integer {bounds}, got {value!r}")
+        try:  # the options shared with rrt_connect: validated by its config, its checks not written twice
+            rrt.RRTConnectConfig.from_options({name: getattr(self, name) for name in _SHARED})
+        except InvalidArgument as error:
+            raise InvalidArgument(str(error).replace("rrt_connect:", "lazy_prm_star:", 1)) from None
 
     def vector(self) -> np.ndarray:
         """The kernel's ``options`` (:data:`._kernels.OPTION_NAMES`)."""
