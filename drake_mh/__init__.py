@@ -28,7 +28,7 @@ _LAZY = {
     "Box": "drake_mh.scene",
     "Cylinder": "drake_mh.scene",
     "SphereModel": "drake_mh.spheres",
-    "dh_to_urdf": "drake_mh.dh",
+    "dh_to_urdf": "drake_mh.robot.dh",
     "minimize": "drake_mh.optim",
     "OptimizeResult": "drake_mh.optim",
     "retime": "drake_mh.trajectories",

@@ -105,7 +105,7 @@ def add_robot_options(p: argparse.ArgumentParser, robot_help: str | None = None)
 def load_robot_from_args(args: argparse.Namespace, name: str | None = None):
     """``load_robot(args.robot or name, ee_frame=args.ee_frame, packages=--package ...)``."""
     import drake_mh
-    from drake_mh.packages import parse_package_option
+    from drake_mh.robot.packages import parse_package_option
 
     return drake_mh.load_robot(name if name is not None else args.robot,
                                ee_frame=getattr(args, "ee_frame", None),
@@ -125,7 +125,7 @@ def register_robot_options(names, args: argparse.Namespace) -> None:
 
     import drake_mh
     from drake_mh.errors import UnknownRobot
-    from drake_mh.packages import parse_package_option
+    from drake_mh.robot.packages import parse_package_option
     from drake_mh.robot import register_robot
 
     packages = parse_package_option(getattr(args, "package", None)) or None

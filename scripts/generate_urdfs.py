@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_mh.dh import Capsule, LinkSpec, Sphere, dh_to_urdf
+from drake_mh.robot.dh import Capsule, LinkSpec, Sphere, dh_to_urdf
 
 URDF_DIR = Path(__file__).resolve().parents[1] / "drake_mh" / "urdf"
 PI = math.pi

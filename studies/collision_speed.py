@@ -44,7 +44,7 @@ import numpy as np
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
 
-ROBOTS = ("panda (bundled, capsules)", "panda_hand")  # then drake_mh.example_arms
+ROBOTS = ("panda (bundled, capsules)", "panda_hand")  # then drake_mh.robot.examples
 SCENES = ("1 sphere", "10 mixed")  # drake_mh.scene.benchmark.BENCHMARK_SCENES
 N_BATCH, N_EXACT, N_SEGMENTS, N_ONE, ONE_CALLS = 1024, 50, 200, 200, 2000
 """``N_ONE`` configurations cycled through by the ``ONE_CALLS`` calls of an ``N = 1`` sample."""
@@ -54,7 +54,7 @@ WARM_CALLS = 20
 
 def _robot(name: str):
     import drake_mh
-    from drake_mh.example_arms import load_example_arm
+    from drake_mh.robot.examples import load_example_arm
 
     return drake_mh.load_robot("panda") if name == ROBOTS[0] else load_example_arm(name)
 

@@ -32,7 +32,7 @@ import numpy as np
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
 
-ROBOTS = ("panda (bundled, capsules)", "panda_hand", "ur5")  # then drake_mh.example_arms (meshes)
+ROBOTS = ("panda (bundled, capsules)", "panda_hand", "ur5")  # then drake_mh.robot.examples (meshes)
 SCENES = ("1 sphere", "10 mixed")  # drake_mh.scene.benchmark.BENCHMARK_SCENES
 METHODS = ("Drake query", "Scene.min_distance", "Scene.distances")
 N_CONFIGS, ROUNDS = 200, 9
@@ -40,7 +40,7 @@ N_CONFIGS, ROUNDS = 200, 9
 
 def _robot(name: str):
     import drake_mh
-    from drake_mh.example_arms import load_example_arm
+    from drake_mh.robot.examples import load_example_arm
 
     return drake_mh.load_robot("panda") if name == ROBOTS[0] else load_example_arm(name)
 

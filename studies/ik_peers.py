@@ -57,7 +57,7 @@ import numpy as np
 
 import drake_mh
 from drake_mh.ik import IKProblem, solve_ik, verify
-from drake_mh.example_arms import example_robot_data_root, load_example_arm
+from drake_mh.robot.examples import example_robot_data_root, load_example_arm
 from drake_mh.study import Case, Fields, Study
 from drake_mh.errors import DrakeMhError, UnsupportedModel
 from drake_mh.study.machine import cpu_model, load_average
@@ -73,7 +73,7 @@ PEERS = ("rtb_ik_LM", "rtb_ik_GN", "trac_ik", "ikpy")
 PEER_MODULE = {"rtb_ik_LM": "roboticstoolbox", "rtb_ik_GN": "roboticstoolbox", "trac_ik": "pytracik", "ikpy": "ikpy"}
 REFERENCE = "rtb_ik_LM"
 BUNDLED = ("panda", "seed000_6dof")
-#: arms of example-robot-data (drake_mh.example_arms) beside the bundled ones
+#: arms of example-robot-data (drake_mh.robot.examples) beside the bundled ones
 ERD_ARMS = ("ur5", "xarm7", "kinova")
 
 _ROBOTS: dict = {}

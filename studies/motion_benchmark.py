@@ -101,7 +101,7 @@ def _chosen_robots() -> set[str]:
 def _robots() -> dict:
     """:data:`ROBOTS` (robots whose models are installed); ``DRAKE_MH_MOTION_PROBLEMS=N``: N
     problems per set and robot, one replicate."""
-    from drake_mh.example_arms import example_robot_data_root
+    from drake_mh.robot.examples import example_robot_data_root
 
     robots = {r: v for r, v in ROBOTS.items() if r == "panda" or example_robot_data_root() is not None}
     chosen = _chosen_robots()

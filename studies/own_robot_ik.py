@@ -17,10 +17,10 @@ import os
 
 import numpy as np
 
-from drake_mh.example_arms import load_example_arm
+from drake_mh.robot.examples import load_example_arm
 from drake_mh.study import Case, Fields, Study
 
-ROBOTS = ("panda_hand", "ur5", "xarm7", "kinova")  # drake_mh.example_arms
+ROBOTS = ("panda_hand", "ur5", "xarm7", "kinova")  # drake_mh.robot.examples
 METHODS = ("hybrid", "drake_snopt")
 TARGETS, QUICK_TARGETS = 100, 10
 TIMEOUT = 0.005  # [s]

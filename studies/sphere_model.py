@@ -24,11 +24,11 @@ import time
 import numpy as np
 
 from drake_mh.cache import temporary_cache
-from drake_mh.example_arms import load_example_arm
+from drake_mh.robot.examples import load_example_arm
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
 
-ROBOTS = ("panda (bundled, capsules)", "panda_hand", "ur5", "xarm7", "kinova")  # then drake_mh.example_arms
+ROBOTS = ("panda (bundled, capsules)", "panda_hand", "ur5", "xarm7", "kinova")  # then drake_mh.robot.examples
 N_BATCH, N_EXACT = 1000, 20
 
 

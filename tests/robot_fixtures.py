@@ -10,12 +10,12 @@ from pathlib import Path
 
 import pytest
 
-from drake_mh.example_arms import EXAMPLE_ARMS
+from drake_mh.robot.examples import EXAMPLE_ARMS
 
 
 def erd_root() -> Path:
     """The ``example-robot-data`` package folder, or skip the test when it is not installed."""
-    from drake_mh.packages import installed_package_dir
+    from drake_mh.robot.packages import installed_package_dir
 
     folder = installed_package_dir("example-robot-data")
     if folder is None or not (folder / "robots").is_dir():

@@ -1,4 +1,4 @@
-"""Tests of drake_mh.dh: DH table -> URDF, checked against Drake and the DH products."""
+"""Tests of drake_mh.robot.dh: DH table -> URDF, checked against Drake and the DH products."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from pydrake.all import AddMultibodyPlantSceneGraph, DiagramBuilder, Parser, SpatialInertia
 
-from drake_mh.dh import Capsule, LinkSpec, Sphere, capsule_inertia, dh_to_urdf, dh_transform
+from drake_mh.robot.dh import Capsule, LinkSpec, Sphere, capsule_inertia, dh_to_urdf, dh_transform
 from drake_mh.errors import InvalidArgument, InvalidDHTable, InvalidLimits
 
 

@@ -1,4 +1,4 @@
-"""Your own robot: model files with meshes load as shipped (drake_mh.robot_loading, packages,
+"""Your own robot: model files with meshes load as shipped (drake_mh.robot.loading, packages,
 meshes, robot_chain); real robots of example-robot-data checked against Pinocchio."""
 
 from __future__ import annotations
@@ -131,7 +131,7 @@ def test_mesh_conversion_is_cached(tmp_path, monkeypatch):
     assert len(files) == 9  # 9 STL collision hulls (link0-7, hand; fingers are boxes, visuals .dae: kept)
     mtimes = [f.stat().st_mtime_ns for f in files]
 
-    import drake_mh.meshes as meshes
+    import drake_mh.robot.meshes as meshes
 
     def no_conversion(path):
         raise AssertionError(f"converted {path} again")
@@ -385,7 +385,7 @@ def test_collision_meshes_of_any_format_become_hulls(tmp_path, suffix):
 
     import trimesh
 
-    from drake_mh.meshes import collision_hull, visual_mesh
+    from drake_mh.robot.meshes import collision_hull, visual_mesh
 
     box = trimesh.creation.box(extents=(0.1, 0.2, 0.3))
     path = tmp_path / f"part{suffix}"
@@ -406,7 +406,7 @@ def test_collision_meshes_of_any_format_become_hulls(tmp_path, suffix):
 
 def test_unreadable_or_flat_collision_mesh(tmp_path):
     from drake_mh.errors import MeshConversionError
-    from drake_mh.meshes import collision_hull
+    from drake_mh.robot.meshes import collision_hull
 
     junk = tmp_path / "junk.stl"
     junk.write_bytes(b"not a mesh")
@@ -449,6 +449,6 @@ def test_unreadable_visual_mesh_only_warns(tmp_path, caplog):
     path.write_text(path.read_text().replace(
         '<visual><geometry><mesh filename="meshes/link.stl"/>',
         '<visual><geometry><mesh filename="meshes/bad.ply"/>'))
-    with caplog.at_level("WARNING", logger="drake_mh.robot_loading"):
+    with caplog.at_level("WARNING", logger="drake_mh.robot.loading"):
         robot = drake_mh.load_robot(path, ee_frame="hand")
     assert robot.nq == 2 and "bad.ply not shown" in caplog.text

@@ -154,8 +154,8 @@ def _example_copy(name: str, limits: dict, edit=None, tag: str = ""):
 
     from drake_mh.cache import atomic_write_bytes, cache_dir, content_hash
     from drake_mh.errors import MeshNotFound
-    from drake_mh.example_arms import EXAMPLE_ARMS, example_robot_data_root
-    from drake_mh.robot import DRAKE_MH_NS
+    from drake_mh.robot.examples import EXAMPLE_ARMS, example_robot_data_root
+    from drake_mh.robot.robot import DRAKE_MH_NS
 
     root = example_robot_data_root()
     if root is None:

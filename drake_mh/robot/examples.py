@@ -26,7 +26,7 @@ EXAMPLE_ARMS = {
 
 def example_robot_data_root() -> Path | None:
     """The installed ``example-robot-data`` folder, or ``None`` when it is not installed."""
-    from drake_mh.packages import installed_package_dir
+    from drake_mh.robot.packages import installed_package_dir
 
     folder = installed_package_dir("example-robot-data")
     return folder if folder is not None and (Path(folder) / "robots").is_dir() else None

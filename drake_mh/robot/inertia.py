@@ -1,7 +1,7 @@
-"""Mass properties of solid capsules, and their sum (the links :func:`drake_mh.dh.dh_to_urdf` generates).
+"""Mass properties of solid capsules, and their sum (the links :func:`drake_mh.robot.dh.dh_to_urdf` generates).
 
 Computed without BLAS (``math.hypot``, ``math.fsum``) so that generated models are the same
-text on every CPU (see :func:`drake_mh.dh._mul`).
+text on every CPU (see :func:`drake_mh.robot.dh._mul`).
 """
 
 from __future__ import annotations

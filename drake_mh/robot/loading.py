@@ -5,11 +5,11 @@ prepares it with :func:`rewrite_meshes` and :func:`lock_joints` before Drake see
 
 * **formats**: URDF (``.urdf``), SDFormat (``.sdf``), MJCF (``.xml`` whose root is
   ``<mujoco>``) and xacro (``.xacro``, evaluated in memory with the ``xacro`` package; its
-  ``$(find NAME)`` uses the same package search as the meshes, see :mod:`drake_mh.packages`).
+  ``$(find NAME)`` uses the same package search as the meshes, see :mod:`drake_mh.robot.packages`).
 * **meshes**: every mesh reference is resolved to an existing file (or a
   :class:`~drake_mh.errors.MeshNotFound` naming every place searched) and rewritten as an
   absolute ``file://`` URI; collision meshes point at their cached convex hull ``.obj`` and
-  are declared convex (:mod:`drake_mh.meshes`). So the text parses the same from a string.
+  are declared convex (:mod:`drake_mh.robot.meshes`). So the text parses the same from a string.
 * **arm chain**: joints that are not on the path from the root to the end-effector frame
   (gripper fingers, a second arm ...) are turned into fixed joints at their locked value —
   in the text, before Drake builds the plant, so the plant has only the chain's degrees of
@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_mh.errors import InvalidURDF, MeshConversionError, MeshNotFound, UnsupportedModel
-from drake_mh.packages import UriResolver
+from drake_mh.robot.packages import UriResolver
 
 logger = logging.getLogger(__name__)
 
@@ -204,7 +204,7 @@ def rewrite_meshes(root: ET.Element, fmt: str, resolver: UriResolver,
         MeshNotFound, UnknownPackage: a reference resolves nowhere.
         MeshConversionError: a collision mesh cannot be turned into a convex hull.
     """
-    from drake_mh.meshes import collision_hull, visual_mesh
+    from drake_mh.robot.meshes import collision_hull, visual_mesh
 
     changed = False
     if fmt in ("urdf", "sdf"):
@@ -458,7 +458,7 @@ def weld_free_bodies(plant) -> None:
 
 def read_extra_limits(root: ET.Element, source: str) -> dict[str, dict[str, float]]:
     """Jerk limits (``drake_mh:jerk``) and raw ``<limit effort>`` per joint from the URDF."""
-    from drake_mh.robot import DRAKE_MH_NS
+    from drake_mh.robot.robot import DRAKE_MH_NS
 
     jerk_key = f"{{{DRAKE_MH_NS}}}jerk"
     jerk, effort = {}, {}

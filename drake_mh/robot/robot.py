@@ -18,9 +18,9 @@ A model whose root link is not welded to ``world`` is welded at its default pose
 base would add quaternion coordinates that the rest of the library does not handle).
 
 Models with meshes load as shipped: :func:`load_robot` reads URDF, xacro, SDFormat and MJCF
-files, resolves ``package://`` and relative mesh references (:mod:`drake_mh.packages`),
-turns collision meshes into cached convex hulls (:mod:`drake_mh.meshes`) and locks the joints
-that are not on the way to the end effector (:mod:`drake_mh.robot_chain`); see
+files, resolves ``package://`` and relative mesh references (:mod:`drake_mh.robot.packages`),
+turns collision meshes into cached convex hulls (:mod:`drake_mh.robot.meshes`) and locks the joints
+that are not on the way to the end effector (:mod:`drake_mh.robot.chain`); see
 ``docs/robots.md``, "Your own robot".
 """
 
@@ -42,11 +42,11 @@ from drake_mh.errors import (
     UnknownRobot,
     UnsupportedModel,
 )
-from drake_mh.model_checks import check_urdf
+from drake_mh.robot.checks import check_urdf
 
 logger = logging.getLogger(__name__)
 
-URDF_DIR = Path(__file__).resolve().parent / "urdf"
+URDF_DIR = Path(__file__).resolve().parents[1] / "urdf"
 """Folder of the bundled robot models (``urdf/`` at the repository root links here)."""
 
 DRAKE_MH_NS = "https://github.com/drake-mh/ns"
@@ -128,8 +128,8 @@ def load_robot(name_or_path: str | Path, ee_frame: str | None = None, packages=N
 
 def _load_file(name_or_path, ee_frame=None, packages=None, locked=None, xacro_args=None) -> Robot:
     """:func:`load_robot` without the registry look-up."""
-    from drake_mh.packages import UriResolver
-    from drake_mh.robot_loading import read_model
+    from drake_mh.robot.packages import UriResolver
+    from drake_mh.robot.loading import read_model
 
     text = str(name_or_path)
     bundled = text in available_robots()
@@ -204,9 +204,9 @@ class Robot:
                  name: str | None = None, *, packages=None, locked: dict[str, float] | None = None,
                  model_format: str = "urdf", model_dir: str | Path | None = None,
                  _resolver=None, _reload: dict | None = None):
-        from drake_mh.packages import UriResolver
-        from drake_mh.robot_chain import default_ee, plan_locks, read_tree
-        from drake_mh.robot_loading import (
+        from drake_mh.robot.packages import UriResolver
+        from drake_mh.robot.chain import default_ee, plan_locks, read_tree
+        from drake_mh.robot.loading import (
             FORMATS, MeshReport, dedupe_urdf_materials, lock_joints, parse_model, parse_xml, rewrite_meshes,
             read_extra_limits, strip_mimics, to_text, urdf_mimics, weld_free_bodies,
         )
@@ -301,12 +301,12 @@ class Robot:
             a, alpha, d, offset, lower, upper: DH columns, one entry per joint [m, rad].
             name: model name.
             ee_frame: end-effector frame; default the generated ``ee`` link.
-            **dh_kwargs: passed to :func:`drake_mh.dh.dh_to_urdf` (``convention``, limits ...).
+            **dh_kwargs: passed to :func:`drake_mh.robot.dh.dh_to_urdf` (``convention``, limits ...).
 
         Raises:
             InvalidDHTable, InvalidLimits: the table is inconsistent.
         """
-        from drake_mh.dh import dh_to_urdf
+        from drake_mh.robot.dh import dh_to_urdf
 
         import inspect
 
