@@ -12,7 +12,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from drake_mh._kernels import fk_jacobian_one  # shared with Robot.fk / Robot.jacobian
+from drake_mh.kinematics.kernels import fk_jacobian_one  # shared with Robot.fk / Robot.jacobian
 
 __all__ = ["fk_jacobian_one", "uniform_hash"]
 

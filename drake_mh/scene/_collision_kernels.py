@@ -1,7 +1,7 @@
 """Numba kernels behind :mod:`drake_mh.scene.batch` and :mod:`drake_mh.scene.segments`.
 
 Every kernel evaluates the robot's sphere model in blocks of ``LANES`` configurations with
-the lane index innermost (structure of arrays, as :mod:`drake_mh._kernels`), so LLVM
+the lane index innermost (structure of arrays, as :mod:`drake_mh.kinematics.kernels`), so LLVM
 vectorizes each per-joint and per-sphere operation across configurations (SIMD). Branches
 depend on the link, sphere or obstacle only, or reduce over the block ("does any lane need the
 fine spheres of this link?") — the scheme of VAMP (Thomason, Kingston, Kavraki, ICRA 2024):
@@ -29,7 +29,7 @@ import math
 import numba
 import numpy as np
 
-from drake_mh._kernels import _frames_block
+from drake_mh.kinematics.kernels import _frames_block
 from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
 LANES = 128

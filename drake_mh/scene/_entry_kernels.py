@@ -16,7 +16,7 @@ import numba
 import numpy as np
 from numpy.lib.stride_tricks import as_strided
 
-from drake_mh._kernels import _frames_block
+from drake_mh.kinematics.kernels import _frames_block
 from drake_mh.scene._collision_kernels import _groups_free, _point_free, _range_free, collision_free, link_clearances
 from drake_mh.scene._packing import _rows, _unpack, _unpack_views
 from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor

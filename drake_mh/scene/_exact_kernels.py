@@ -1,7 +1,7 @@
 """Numba kernels behind :mod:`drake_mh.scene.exact`: one configuration's link-obstacle distances.
 
 One call computes the world pose of every robot collision geometry from ``q`` (the compiled
-chain of :mod:`drake_mh._kernels`, tested against Drake) and then, per link geometry and
+chain of :mod:`drake_mh.kinematics.kernels`, tested against Drake) and then, per link geometry and
 obstacle, the exact signed distance:
 
 * sphere or capsule link vs sphere or capsule obstacle, and capsule-capsule self pairs: the
@@ -41,7 +41,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from drake_mh._kernels import fk_jacobian_one
+from drake_mh.kinematics.kernels import fk_jacobian_one
 from drake_mh.scene import _gjk
 from drake_mh.scene.segment_distance import _GOLDEN, _ITERATIONS, BOX, CYLINDER, _gradient, _sdf
 

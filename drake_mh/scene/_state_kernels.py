@@ -46,7 +46,7 @@ import math
 import numba
 import numpy as np
 
-from drake_mh._kernels import _frames_block
+from drake_mh.kinematics.kernels import _frames_block
 from drake_mh.scene._collision_kernels import _centre_block, _obstacle_free, _point_distance, _point_free
 from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 

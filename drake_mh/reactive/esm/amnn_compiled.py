@@ -19,7 +19,7 @@ compiled function runs layer 0 and, for ``l = 1 .. L``:
   ``"repair"``: it is evaluated at its projection
   (:func:`~drake_mh.reactive.esm.kernels.repair`), the agent keeps the unrepaired point, and
   an unrepairable candidate gets ``+inf``;
-* the objective of eq. (10) of the other candidates: :func:`drake_mh._kernels.fk_jacobian`
+* the objective of eq. (10) of the other candidates: :func:`drake_mh.kinematics.kernels.fk_jacobian`
   on the transposed layer (the layout ``BatchKinematics`` uses), then
   :func:`drake_mh.reactive.esm.kernels.esm_values`. A rejected candidate skips the
   kinematics (11-22 % of them in the study's scenarios, 30-44 % while an obstacle row is
@@ -48,9 +48,9 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from drake_mh import _kernels
+from drake_mh.kinematics import kernels as _kernels
 from drake_mh.errors import InvalidArgument
-from drake_mh._kernels import fk_jacobian as _fk_jacobian
+from drake_mh.kinematics.kernels import fk_jacobian as _fk_jacobian
 from drake_mh.optim import aro
 from drake_mh.optim.aro import _move
 from drake_mh.reactive.esm import kernels as esm_kernels

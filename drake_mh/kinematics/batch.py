@@ -17,7 +17,7 @@ Every link is then a constant offset from the moving frame of its nearest moving
 (its *anchor*; -1 = world). Per joint and configuration the kernel does one constant 3x3
 rotation product, one rotation about z, and the Jacobian column ``[z_k; z_k × (p_E − o_k)]``.
 
-The kernels (:mod:`drake_mh._kernels`) are numba-compiled, vectorized across blocks of
+The kernels (:mod:`drake_mh.kinematics.kernels`) are numba-compiled, vectorized across blocks of
 configurations (chosen by measurement, see ``studies/bench_kinematics.py`` and the README:
 numpy's per-call overhead dominates at the population sizes metaheuristics use).
 """
@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drake_mh import _kernels
+from drake_mh.kinematics import kernels as _kernels
 from drake_mh.errors import FrameNotFound
 
 REVOLUTE, PRISMATIC = 0, 1

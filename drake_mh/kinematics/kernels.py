@@ -247,7 +247,7 @@ def fk_jacobian_one(q, parent, KR, Kp, perm, kind, qidx, anchor, ER, Ep, on_path
     """Pose ``T (4, 4)`` and geometric Jacobian ``J (6, nq)`` (rows ``[ω; v]``) of one configuration.
 
     The same compiled chain and recursion as the batched kernel
-    (:func:`drake_mh._kernels.fk_jacobian`, see :mod:`drake_mh.kinematics`) for a single
+    (:func:`drake_mh.kinematics.kernels.fk_jacobian`, see :mod:`drake_mh.kinematics`) for a single
     ``q (nq,)``, with scalar ``sin``/``cos`` and no allocation: ``R (F, 3, 3)`` and ``p (F, 3)``
     are work arrays (the world pose of every moving frame); ``J`` is left alone unless
     ``want_jac``. Measured 0.2 µs on the Panda, a quarter of the block kernel's cost at N = 1
