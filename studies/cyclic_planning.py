@@ -164,7 +164,7 @@ def _full_arm(case: Case, task, robot_name: str) -> dict:
     try:  # Meshcat animation (drake_mh.viz, another module); a hook when it is absent
         import drake_mh.viz as viz
         from drake_mh.scene import Scene
-        from drake_mh.shapes import Cylinder
+        from drake_mh.geometry.shapes import Cylinder
 
         scene = Scene(robot)
         for i, o in enumerate(task.obstacles):

@@ -1,7 +1,7 @@
 """Sphere model: build time (first and cached), sphere counts and bounds, batched clearance cost.
 
 For the bundled Panda (capsules) and the mesh arms of ``example-robot-data`` (a test extra),
-a case builds :class:`drake_mh.spheres.SphereModel` at one covering tolerance into a fresh,
+a case builds :class:`drake_mh.geometry.spheres.SphereModel` at one covering tolerance into a fresh,
 empty cache (``DRAKE_MH_CACHE`` pointed at a new temporary folder), then again from that cache,
 and times ``Scene.batch_min_distance`` on ``N = 1000`` random configurations against three
 obstacles (a ball, a tilted box, a tilted cylinder) placed in the arm's workspace, beside
@@ -52,7 +52,7 @@ def _scene(robot, tolerance: float):
 
 def run(case: Case) -> dict:
     """Build the sphere model of one robot at one tolerance (fresh cache, then cached); time queries."""
-    from drake_mh.spheres import SphereModel
+    from drake_mh.geometry.spheres import SphereModel
 
     robot = _robot(case["robot"])
     tolerance = float(case["tolerance"])

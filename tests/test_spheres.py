@@ -7,9 +7,9 @@ from scipy.optimize import nnls
 
 import drake_mh
 from drake_mh.errors import InvalidArgument, SceneError, UnsupportedGeometry
-from drake_mh.shapes import Box, Capsule, ConvexPolytope, Cylinder, Ellipsoid, Sphere
-from drake_mh.sphere_cover import circumscribed_polytope, cover
-from drake_mh.spheres import SphereModel, cover_shape
+from drake_mh.geometry.shapes import Box, Capsule, ConvexPolytope, Cylinder, Ellipsoid, Sphere
+from drake_mh.geometry.sphere_cover import circumscribed_polytope, cover
+from drake_mh.geometry.spheres import SphereModel, cover_shape
 from sphere_fixtures import mesh_arm_urdf, no_geometry_urdf, primitive_arm_urdf
 
 

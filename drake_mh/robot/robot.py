@@ -532,8 +532,8 @@ class Robot:
 
     @functools.cached_property
     def sphere_model(self):
-        """:class:`drake_mh.spheres.SphereModel` covering the collision geometry (default tolerance)."""
-        from drake_mh.spheres import SphereModel
+        """:class:`drake_mh.geometry.spheres.SphereModel` covering the collision geometry (default tolerance)."""
+        from drake_mh.geometry.spheres import SphereModel
 
         return SphereModel.from_robot(self)
 

@@ -18,7 +18,7 @@ The *constraint values* of one configuration are, in this order,
 
 Obstacle kinds: 0 sphere (radius), 1 box (half sizes), 2 cylinder (radius, half length),
 3 capsule (radius, half length); axes along z of the obstacle frame, as in
-:mod:`drake_mh.shapes`. An obstacle may move: at lane parameter ``tau`` it is at
+:mod:`drake_mh.geometry.shapes`. An obstacle may move: at lane parameter ``tau`` it is at
 ``p_WO + tau * v_WO`` (``v_WO`` a displacement [m] per unit of ``tau``).
 """
 

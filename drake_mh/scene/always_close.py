@@ -1,7 +1,7 @@
 """Link pairs that are always close: left out of a scene's self-collision checks by default.
 
 The sphere model covers each link with spheres a little larger than its geometry
-(:mod:`drake_mh.spheres`), so links that sit next to each other by construction — a joint's two
+(:mod:`drake_mh.geometry.spheres`), so links that sit next to each other by construction — a joint's two
 sides, a wrist whose housings nest — can be touching, or a millimetre apart, under the model in
 *every* configuration. The capsule Panda's ``panda_link1``–``panda_link3`` spheres are at most
 0.9 mm apart over the whole joint range; the UR5's ``base_link``–``upper_arm_link`` at most
@@ -45,7 +45,7 @@ def always_close_pairs(robot, sphere_model, pairs) -> tuple:
 
     Args:
         robot: the :class:`drake_mh.robot.Robot`.
-        sphere_model: its :class:`drake_mh.spheres.SphereModel`.
+        sphere_model: its :class:`drake_mh.geometry.spheres.SphereModel`.
         pairs: candidate ``[(link_a, link_b)]`` (the self pairs Drake's filter keeps).
 
     Returns:

@@ -4,7 +4,7 @@
 :class:`drake_mh.scene.Scene`:
 
 * the robot's kinematic chain (from :class:`drake_mh.kinematics.BatchKinematics`);
-* its :class:`drake_mh.spheres.SphereModel`, grouped per link, each link with a *bounding
+* its :class:`drake_mh.geometry.spheres.SphereModel`, grouped per link, each link with a *bounding
   sphere* that contains all of the link's spheres (centre: the middle of the centres' bounding
   box; radius: the farthest sphere surface from it), and a *bounding capsule* (tighter for long
   links: the pairs' second test);
@@ -28,7 +28,7 @@ from drake_mh.scene import _collision_kernels as K
 from drake_mh.scene import _entry_kernels as E
 from drake_mh.scene._packing import pack
 from drake_mh.scene.pair_table import empty_tables
-from drake_mh.shapes import Box, Capsule, Cylinder, Sphere
+from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere
 
 
 def obstacle_arrays(obstacles) -> tuple:
@@ -128,7 +128,7 @@ class CollisionModel:
 
     Args:
         robot: the :class:`drake_mh.robot.Robot`.
-        model: its :class:`drake_mh.spheres.SphereModel`.
+        model: its :class:`drake_mh.geometry.spheres.SphereModel`.
         self_pairs: ``[(link_a, link_b)]`` link pairs to check for self-collision.
     """
 

@@ -90,11 +90,11 @@ def _pairs(values: np.ndarray, links, others, selfs) -> list[DistancePair]:
 def link_kinds(robot, robot_ids) -> dict:
     """``{geometry id: (kernel link kind, drake_mh shape or None)}`` of robot collision geometries.
 
-    ``LINK_DRAKE`` (Drake's query keeps the pair) for shapes :func:`drake_mh.shapes.from_drake`
+    ``LINK_DRAKE`` (Drake's query keeps the pair) for shapes :func:`drake_mh.geometry.shapes.from_drake`
     rejects (half spaces, unreadable meshes) and for bodies off the compiled chain.
     """
     from drake_mh.errors import UnsupportedGeometry
-    from drake_mh.shapes import Capsule, Sphere, from_drake
+    from drake_mh.geometry.shapes import Capsule, Sphere, from_drake
 
     inspector = robot.scene_graph.model_inspector()
     anchors = robot.batch.chain.body_anchor
@@ -116,7 +116,7 @@ def link_kinds(robot, robot_ids) -> dict:
 def _link_arrays(shape, kind, X_AG: np.ndarray, anchor: int, hull_start: int):
     """One row of ``g_int`` / ``g_float`` (layout in :mod:`drake_mh.scene._exact_kernels`) and
     the hull vertices it adds."""
-    from drake_mh.shapes import Box, Capsule, ConvexPolytope, Cylinder, Ellipsoid, Sphere
+    from drake_mh.geometry.shapes import Box, Capsule, ConvexPolytope, Cylinder, Ellipsoid, Sphere
 
     row_i = np.array([anchor, kind, hull_start, 0, 0], np.int64)
     row_f = np.zeros(20)
@@ -146,7 +146,7 @@ def _link_arrays(shape, kind, X_AG: np.ndarray, anchor: int, hull_start: int):
 
 def obstacle_rows(obstacles) -> tuple[np.ndarray, np.ndarray]:
     """``(o_int (K, 2), o_float (K, 20))`` of the obstacles (layout in :mod:`_exact_kernels`)."""
-    from drake_mh.shapes import Capsule, Sphere
+    from drake_mh.geometry.shapes import Capsule, Sphere
 
     obstacles = list(obstacles)
     o_int = np.zeros((len(obstacles), 2), np.int64)
@@ -388,7 +388,7 @@ def drake_reference(scene):
     from pydrake.geometry import CollisionFilterDeclaration, GeometryInstance, GeometrySet, ProximityProperties
     from pydrake.math import RigidTransform, RotationMatrix
 
-    from drake_mh.shapes import Capsule
+    from drake_mh.geometry.shapes import Capsule
 
     robot = scene.robot
     sg, plant = robot.scene_graph, robot.plant

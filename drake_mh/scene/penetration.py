@@ -10,7 +10,7 @@ The sphere model's value for one collision geometry H and an obstacle O is
   any single sphere (a ball obstacle centred on a capsule's axis between two sphere centres).
 
 So wherever ``s < 0`` this module computes ``v <= d`` from the geometry's *core* (see
-:class:`drake_mh.spheres.GeometryCore`) and the model reports ``min(s, v)``, which is never more
+:class:`drake_mh.geometry.spheres.GeometryCore`) and the model reports ``min(s, v)``, which is never more
 than ``d``:
 
 * capsule / sphere links: ``v`` is the exact distance from the axis segment to a ball or capsule
@@ -46,7 +46,7 @@ import numpy as np
 
 from drake_mh.scene._exact_kernels import _closest_segments
 from drake_mh.scene.segment_distance import CAPSULE, SPHERE, _sdf, primitive_code, segment_min_sdf
-from drake_mh.shapes import Box, Cylinder
+from drake_mh.geometry.shapes import Box, Cylinder
 
 _PRISM_SIDES = 16
 
@@ -271,7 +271,7 @@ def correct_clearances(values, points_W, radii, c_G, g_bound, g_start, g_kind, h
                     s_g = min(s_g, _sdf_at(kind, d, R, p, x, y, z) - radii[s])
                 if not s_g < 0.0:
                     continue
-                if g_kind[g] == 0:  # SEGMENT (drake_mh.spheres)
+                if g_kind[g] == 0:  # SEGMENT (drake_mh.geometry.spheres)
                     v_g = _segment_bound(kind, d, R, p, points_W[r, 4 * g:4 * g + 4], half_length[g], radius[g], ck,
                                          nk, ek)
                 else:
@@ -320,7 +320,7 @@ def obstacle_polytopes(obstacles) -> tuple:
 
 
 def core_arrays(model) -> tuple:
-    """The geometries of a :class:`drake_mh.spheres.SphereModel` as :func:`correct_clearances`
+    """The geometries of a :class:`drake_mh.geometry.spheres.SphereModel` as :func:`correct_clearances`
     reads them: ``(radii (S,), c_G (S, 3), g_bound (G,), g_start (G+1,), g_kind, half_length, radius,
     VH, v_start, NH, OH, f_start, EH, e_start, excess)``: the sphere centres in their geometry's
     frame, each geometry's bounding radius about its origin, the polytopes' vertices, facets and
@@ -383,7 +383,7 @@ def segment_lower_bound(half_length, radius, pts_W, obstacle) -> np.ndarray:
 
 def polytope_lower_bound(core, R_WG: np.ndarray, p_WG: np.ndarray, obstacle, sphere_value: np.ndarray) -> np.ndarray:
     """``v (n,)`` <= the signed distance [m] between a polytope core (a
-    :class:`drake_mh.spheres.GeometryCore`) at poses ``R_WG (n, 3, 3), p_WG (n, 3)`` and an
+    :class:`drake_mh.geometry.spheres.GeometryCore`) at poses ``R_WG (n, 3, 3), p_WG (n, 3)`` and an
     obstacle; ``+inf`` where the sphere value needs no correction (module docstring).
 
     Args:

@@ -11,11 +11,11 @@ and 10-20x slower from Python), Drake's ``QueryObject.ComputeSignedDistancePairw
 for the other self pairs and Drake's penetration depth where the exact methods do not hold.
 
 For populations, :meth:`Scene.batch_min_distance` uses the robot's
-:class:`drake_mh.spheres.SphereModel` and the obstacles' closed-form signed distances. Its
+:class:`drake_mh.geometry.spheres.SphereModel` and the obstacles' closed-form signed distances. Its
 guarantee (``d`` the exact distance, ``m`` the model's): ``m <= d`` everywhere, penetration
 included (where a sphere reports penetration, :mod:`drake_mh.scene.penetration` replaces the value by
 a lower bound of the exact one), and ``d - bound <= m`` where ``d >= 0`` (exception in
-:mod:`drake_mh.spheres`).
+:mod:`drake_mh.geometry.spheres`).
 
 A robot without collision geometry has no clearance: every query that needs one raises
 :class:`drake_mh.errors.SceneError` instead of answering ``inf`` (which would read as "clear").
@@ -30,8 +30,8 @@ import numpy as np
 
 from drake_mh.errors import SceneError, UnknownObstacle
 from drake_mh.scene.exact import DistancePair, ExactDistances, exclude_from_drake, link_kinds
-from drake_mh.shapes import Box, Capsule, Cylinder, Sphere, as_shape
-from drake_mh.spheres import DEFAULT_TOLERANCE, SphereModel
+from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere, as_shape
+from drake_mh.geometry.spheres import DEFAULT_TOLERANCE, SphereModel
 
 __all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule"]
 
@@ -248,7 +248,7 @@ class Scene:
     @functools.cached_property
     def _capsule_links(self) -> dict:
         """``{geometry id: Capsule}`` of the robot's capsule collision geometries."""
-        from drake_mh.shapes import from_drake
+        from drake_mh.geometry.shapes import from_drake
 
         inspector = self.robot.scene_graph.model_inspector()
         out = {}

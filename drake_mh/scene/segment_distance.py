@@ -30,7 +30,7 @@ def _sdf(kind, dims, x, y, z):
     """Signed distance of the point (x, y, z), in the obstacle frame, to the primitive.
 
     The scalar, compiled twin of the vectorized ``signed_distance`` methods of
-    :mod:`drake_mh.shapes` (the golden-section search calls it ~100 times per pair); the
+    :mod:`drake_mh.geometry.shapes` (the golden-section search calls it ~100 times per pair); the
     tests check the two against each other through dense sampling.
 
     dims: sphere (r, 0, 0); box (half x, half y, half z); cylinder (r, half length, 0);
@@ -94,8 +94,8 @@ def _gradient(kind, dims, p):
 
 
 def primitive_code(shape) -> tuple[int, np.ndarray] | None:
-    """``(kind, dims)`` of a :mod:`drake_mh.shapes` shape for the kernels, or ``None``."""
-    from drake_mh.shapes import Box, Capsule, Cylinder, Sphere
+    """``(kind, dims)`` of a :mod:`drake_mh.geometry.shapes` shape for the kernels, or ``None``."""
+    from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere
 
     if isinstance(shape, Sphere):
         return SPHERE, np.array([shape.radius, 0.0, 0.0])

@@ -15,7 +15,7 @@ finds a configuration on it that is not, by the bisection of :mod:`._segment_ker
   one SIMD batch.
 
 The sphere model never reads more clearance than the exact geometry has
-(:mod:`drake_mh.spheres`), so a certified segment is clear for the exact collision geometry
+(:mod:`drake_mh.geometry.spheres`), so a certified segment is clear for the exact collision geometry
 too. The converse is conservative: a segment that passes within ``sphere_model.bound`` of an
 obstacle may be reported blocked.
 

@@ -222,7 +222,7 @@ def _archive(path, blocked_goal: bool = True):
 
 
 def test_converter_reads_the_motionbenchmaker_format(tmp_path):
-    from drake_mh.shapes import Box, Cylinder, Sphere
+    from drake_mh.geometry.shapes import Box, Cylinder, Sphere
 
     data = read_motionbenchmaker(_archive(tmp_path / "problems.tar.bz2"))
     assert sorted(data) == ["box", "cage"] and [p.index for p in data["cage"]] == [1, 2]
@@ -256,7 +256,7 @@ def test_converter_builds_problems_and_skips_invalid_ones(tmp_path):
 def test_sphere_tolerance_reaches_the_scenes(tmp_path):
     """``sphere_tolerance`` is the covering tolerance of every scene's sphere model (generated and
     archive problems); the default stays 1 cm; a non-positive one is refused up front."""
-    from drake_mh.spheres import DEFAULT_TOLERANCE
+    from drake_mh.geometry.spheres import DEFAULT_TOLERANCE
 
     coarse = problem_set("cage", PANDA, count=1, seed=5, sphere_tolerance=0.02)
     default = problem_set("cage", PANDA, count=1, seed=5)

@@ -12,7 +12,7 @@ from drake_mh.scene import Box, Capsule, Cylinder, Scene, Sphere
 from drake_mh.scene import _exact_kernels as X
 from drake_mh.scene import _gjk
 from drake_mh.scene.exact import drake_reference
-from drake_mh.shapes import ConvexPolytope, Ellipsoid
+from drake_mh.geometry.shapes import ConvexPolytope, Ellipsoid
 from sphere_fixtures import mesh_arm_urdf, primitive_arm_urdf
 
 PANDA = drake_mh.load_robot("panda")

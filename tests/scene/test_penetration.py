@@ -5,8 +5,8 @@ import pytest
 
 from drake_mh.scene.penetration import polytope_lower_bound, segment_lower_bound
 from drake_mh.scene import Obstacle
-from drake_mh.shapes import Box, Capsule, Cylinder, Sphere
-from drake_mh.spheres import POLYTOPE, _core
+from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere
+from drake_mh.geometry.spheres import POLYTOPE, _core
 
 
 def _obstacle(shape, p=(0.0, 0.0, 0.0), R=np.eye(3)):

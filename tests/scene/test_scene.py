@@ -297,7 +297,7 @@ def _rotation(rng):
 
 def test_segment_distance_matches_dense_sampling():
     from drake_mh.scene.segment_distance import capsule_distance
-    from drake_mh.shapes import Capsule
+    from drake_mh.geometry.shapes import Capsule
 
     rng = np.random.default_rng(4)
     for shape in (Box((0.2, 0.3, 0.1)), Cylinder(0.05, 0.6), Capsule(0.04, 0.3), Sphere(0.1)):

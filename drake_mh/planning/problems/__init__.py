@@ -29,7 +29,7 @@ from drake_mh.planning.problems.fixtures import FIXTURES
 from drake_mh.planning.problems.generate import (check_sphere_tolerance, generate_problem, ready_configuration,
                                                   tool_transform)
 from drake_mh.planning.problems.mbm import MBM_SETS, read_motionbenchmaker, to_motion_problem
-from drake_mh.spheres import DEFAULT_TOLERANCE
+from drake_mh.geometry.spheres import DEFAULT_TOLERANCE
 
 logger = logging.getLogger(__name__)
 
@@ -235,7 +235,7 @@ def problem_set(name: str, robot="panda", count: int = 10, seed: int = 0, cleara
         self_collision: check the robot's links against each other too (as MotionBenchMaker does).
         first: index of the first problem (``first=5, count=2``: problems 5 and 6).
         sphere_tolerance: covering tolerance [m] of the scenes' sphere model
-            (:class:`drake_mh.spheres.SphereModel`, default 1 cm), what start and goal are
+            (:class:`drake_mh.geometry.spheres.SphereModel`, default 1 cm), what start and goal are
             certified with and planners check against. Coarser is fewer spheres, so faster
             checks, but more pessimistic: configurations near obstacles are no longer certified
             free, narrow passages close (docs/planning.md, "Sphere tolerance: speed against

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drake_mh.shapes import Box, Cylinder
+from drake_mh.geometry.shapes import Box, Cylinder
 
 CAN_RADIUS = 0.03
 """[m] the cans of MotionBenchMaker's shelves (14 cm tall; 12 cm on its tables)."""

@@ -28,7 +28,7 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument, InvalidMotionProblem
 from drake_mh.planning.problems.fixtures import FIXTURES
-from drake_mh.spheres import DEFAULT_TOLERANCE
+from drake_mh.geometry.spheres import DEFAULT_TOLERANCE
 
 MAX_DRAWS = 12
 """Fixtures drawn per problem before giving up (a draw fails when no grasp is reachable)."""
@@ -214,7 +214,7 @@ def new_scene(robot, self_collision: bool = True, sphere_tolerance: float = DEFA
     """An empty :class:`drake_mh.scene.Scene`, self-collision with the default rule: the robot's
     always-close link pairs left out (:func:`always_close_pairs`, found under this scene's sphere
     model). ``sphere_tolerance`` [m] is the covering tolerance of the scene's sphere model
-    (:class:`drake_mh.spheres.SphereModel`; default 1 cm): coarser is fewer spheres, so faster
+    (:class:`drake_mh.geometry.spheres.SphereModel`; default 1 cm): coarser is fewer spheres, so faster
     checks, but more pessimistic (docs/planning.md, "Sphere tolerance: speed against pessimism").
 
     Raises:

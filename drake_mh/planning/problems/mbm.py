@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.spheres import DEFAULT_TOLERANCE
+from drake_mh.geometry.spheres import DEFAULT_TOLERANCE
 
 MBM_SETS = ("table_pick", "table_under_pick", "box", "bookshelf_small", "bookshelf_tall", "bookshelf_thin", "cage")
 """MotionBenchMaker's Panda sets, as named in the archive (without the ``_panda`` suffix)."""
@@ -55,7 +55,7 @@ class MBMProblem:
     Attributes:
         set: the set's name (e.g. ``bookshelf_small``, the robot suffix removed).
         index: the problem's number in its set.
-        obstacles: ``[(name, shape, p_WO (3,), R_WO (3, 3))]``, shapes of :mod:`drake_mh.shapes`.
+        obstacles: ``[(name, shape, p_WO (3,), R_WO (3, 3))]``, shapes of :mod:`drake_mh.geometry.shapes`.
         start: ``{joint name: position}`` of the start state.
         goal: ``{joint name: position}`` of the goal's joint constraints.
     """
@@ -92,7 +92,7 @@ def _pose(pose) -> np.ndarray:
 
 
 def _shape(primitive: dict, where: str):
-    from drake_mh.shapes import Box, Cylinder, Sphere
+    from drake_mh.geometry.shapes import Box, Cylinder, Sphere
 
     kind, dims = primitive.get("type"), [float(d) for d in primitive.get("dimensions", [])]
     if kind == "box" and len(dims) == 3:

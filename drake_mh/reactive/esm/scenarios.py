@@ -21,7 +21,7 @@ import numpy as np
 
 from drake_mh.errors import UnknownMethod
 from drake_mh.reactive.esm.config import ESMConfig
-from drake_mh.shapes import Box, Sphere
+from drake_mh.geometry.shapes import Box, Sphere
 
 THETA0 = (0.481, 0.703, 0.093, -0.800, -0.364, 0.992, 0.026)
 """ESM paper's initial configuration of the Panda [rad] (Sec. IV-B)."""
@@ -35,7 +35,7 @@ class MovingObstacle:
 
     Attributes:
         name: obstacle name in the scene.
-        shape: :class:`drake_mh.shapes.Sphere`, ``Box`` ...
+        shape: :class:`drake_mh.geometry.shapes.Sphere`, ``Box`` ...
         start: position at t = 0 [m] ``(3,)``.
         velocities: ``((t_from [s], (vx, vy, vz) [m/s]), ...)``, first ``t_from = 0``.
     """

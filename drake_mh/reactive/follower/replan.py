@@ -123,7 +123,7 @@ class ReplanResult:
 
 def obstacle_circumradius(shape) -> float:
     """Radius [m] of the smallest origin-centred sphere containing ``shape``."""
-    from drake_mh.shapes import Box, Capsule, Cylinder, Sphere
+    from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere
 
     if isinstance(shape, Sphere):
         return float(shape.radius)

@@ -8,7 +8,7 @@ import pytest
 import drake_mh
 from drake_mh.reactive import AMNN, ESMConfig, QPBaseline, get_scenario, optimal_manipulability, run_esm
 from drake_mh.reactive.esm.scenarios import TARGET, THETA0, MovingObstacle
-from drake_mh.shapes import Sphere
+from drake_mh.geometry.shapes import Sphere
 
 MU_STAR = 0.16089694     # multi-start SLSQP, flange pinned at the paper's target (docs/esm.md)
 

@@ -1,6 +1,6 @@
 """Cover one convex collision shape with spheres: the union contains the shape, with a proven excess.
 
-The sphere model (:mod:`drake_mh.spheres`) calls :func:`cover` once per collision geometry. For a
+The sphere model (:mod:`drake_mh.geometry.spheres`) calls :func:`cover` once per collision geometry. For a
 shape H it returns spheres ``B(c_j, R_j)`` and a number ``excess`` such that
 
 * **containment**: ``H`` is a subset of the union of the spheres;
@@ -57,7 +57,7 @@ import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.shapes import Box, Capsule, ConvexPolytope, Cylinder, Ellipsoid, Sphere
+from drake_mh.geometry.shapes import Box, Capsule, ConvexPolytope, Cylinder, Ellipsoid, Sphere
 
 _TARGET_RHO = 0.45
 """Boundary cells are split until their circumradius is at most this fraction of ``tol``."""
@@ -330,7 +330,7 @@ def cover(shape, tolerance: float) -> tuple[np.ndarray, np.ndarray, float]:
     """Spheres ``(centres_G (S, 3), radii (S,))`` whose union contains ``shape``, and the excess [m].
 
     Args:
-        shape: a :mod:`drake_mh.shapes` shape in its frame G (robot collision geometry).
+        shape: a :mod:`drake_mh.geometry.shapes` shape in its frame G (robot collision geometry).
         tolerance: the excess is at most this [m] for every shape (polytopes are covered with
             ``tolerance - hausdorff``).
 

@@ -12,7 +12,7 @@ robot-obstacle distances always come from Drake.
 
 A robot's collision geometry may also be an :class:`Ellipsoid` or a :class:`ConvexPolytope`
 (Drake's ``Convex`` and ``Mesh``, both used by Drake's proximity queries as their convex hull).
-These two are not obstacle shapes: the sphere model covers them (:mod:`drake_mh.sphere_cover`).
+These two are not obstacle shapes: the sphere model covers them (:mod:`drake_mh.geometry.sphere_cover`).
 """
 
 from __future__ import annotations

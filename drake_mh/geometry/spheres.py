@@ -5,7 +5,7 @@ exact distance per configuration. :class:`SphereModel` covers every collision ge
 every link (sphere, capsule, cylinder, box, ellipsoid, and ``Convex`` / ``Mesh`` through their
 convex hull, which is what Drake's distance queries use) with spheres whose union *contains*
 the geometry, and every point of whose spheres lies within ``link_bound[link]`` of it
-(:mod:`drake_mh.sphere_cover` gives the construction and the proof; the bound is at most the
+(:mod:`drake_mh.geometry.sphere_cover` gives the construction and the proof; the bound is at most the
 tolerance, 1 cm by default).
 
 The guarantee :class:`drake_mh.scene.Scene` derives from it, per obstacle, with ``d`` the true
@@ -45,8 +45,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drake_mh.errors import InvalidArgument, SceneError
-from drake_mh.shapes import Box, Capsule, ConvexPolytope, Cylinder, Ellipsoid, Sphere, from_drake
-from drake_mh.sphere_cover import circumscribed_polytope, cover
+from drake_mh.geometry.shapes import Box, Capsule, ConvexPolytope, Cylinder, Ellipsoid, Sphere, from_drake
+from drake_mh.geometry.sphere_cover import circumscribed_polytope, cover
 
 log = logging.getLogger(__name__)
 
@@ -54,7 +54,7 @@ DEFAULT_TOLERANCE = 0.01
 """Default covering tolerance [m]: every sphere point lies within it of the geometry."""
 
 ALGORITHM_VERSION = "sphere-cover-3"
-"""Part of every cache key: change it whenever :mod:`drake_mh.sphere_cover` changes its output."""
+"""Part of every cache key: change it whenever :mod:`drake_mh.geometry.sphere_cover` changes its output."""
 
 SEGMENT, POLYTOPE = 0, 1
 
@@ -98,7 +98,7 @@ def _shape_key(shape) -> str:
 
 
 def _cover_cached(shape, tolerance: float, use_cache: bool):
-    """:func:`drake_mh.sphere_cover.cover`, cached on disk for the shapes that take time."""
+    """:func:`drake_mh.geometry.sphere_cover.cover`, cached on disk for the shapes that take time."""
     if not use_cache or isinstance(shape, (Sphere, Capsule)):
         return cover(shape, tolerance)
     from drake_mh.cache import atomic_write_bytes, cache_dir, content_hash
