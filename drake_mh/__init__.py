@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import importlib
 
-from drake_mh import _numba_cache
+from drake_mh._support import numba_cache
 
-_numba_cache.configure()  # before any kernel module is imported: numba's cache, keyed by the sources
+numba_cache.configure()  # before any kernel module is imported: numba's cache, keyed by the sources
 
 from drake_mh import errors  # noqa: E402
 

@@ -62,7 +62,7 @@ def catalogue_entry(robot) -> list[str]:
                      "need <collision> elements)")
     meshes = robot.mesh_files
     if meshes["collision"] or meshes["visual"]:
-        from drake_mh.cache import cache_dir
+        from drake_mh._support.cache import cache_dir
 
         lines.append(f"  meshes: {len(meshes['collision'])} collision (as convex hulls), "
                      f"{len(meshes['visual'])} visual; converted files in {cache_dir('meshes')}")

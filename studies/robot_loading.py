@@ -22,7 +22,7 @@ import time
 
 import numpy as np
 
-from drake_mh.cache import temporary_cache
+from drake_mh._support.cache import temporary_cache
 from drake_mh.robot.examples import EXAMPLE_ARMS, example_robot_data_root, load_example_arm
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model

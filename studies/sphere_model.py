@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from drake_mh.cache import temporary_cache
+from drake_mh._support.cache import temporary_cache
 from drake_mh.robot.examples import load_example_arm
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average

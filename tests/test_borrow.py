@@ -1,10 +1,10 @@
-"""drake_mh._borrow: a borrowed array is the same array (type, data, shape, strides), so the
+"""drake_mh._support.borrow: a borrowed array is the same array (type, data, shape, strides), so the
 kernels that receive it compile once for both, and writes go to the owner's memory."""
 
 import numba
 import numpy as np
 
-from drake_mh._borrow import borrow
+from drake_mh._support.borrow import borrow
 
 
 @numba.njit

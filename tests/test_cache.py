@@ -1,8 +1,8 @@
-"""Tests of drake_mh.cache (content-hash keys, atomic writes, the folder's location)."""
+"""Tests of drake_mh._support.cache (content-hash keys, atomic writes, the folder's location)."""
 
 from __future__ import annotations
 
-from drake_mh.cache import atomic_write_bytes, cache_dir, content_hash
+from drake_mh._support.cache import atomic_write_bytes, cache_dir, content_hash
 
 
 def test_cache_dir_follows_environment(tmp_path, monkeypatch):

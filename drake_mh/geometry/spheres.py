@@ -29,7 +29,7 @@ shallower on the Panda). Where a sphere reports penetration, :mod:`drake_mh.scen
 replaces the value by a lower bound of the exact one computed from each geometry's *core* (its
 axis segment or its bounding polytope).
 
-Models are cached on disk (:func:`drake_mh.cache.cache_dir` ``("spheres")``) by a content hash of
+Models are cached on disk (:func:`drake_mh._support.cache.cache_dir` ``("spheres")``) by a content hash of
 each geometry's shape, the tolerance and :data:`ALGORITHM_VERSION`, so a mesh robot's second
 load does not recompute its covering.
 """
@@ -91,7 +91,7 @@ class GeometryCore:
 def _shape_key(shape) -> str:
     """A string identifying ``shape`` exactly (for cache keys)."""
     if isinstance(shape, ConvexPolytope):
-        from drake_mh.cache import content_hash
+        from drake_mh._support.cache import content_hash
 
         return "ConvexPolytope:" + content_hash(shape.fingerprint())
     return repr(shape)
@@ -101,7 +101,7 @@ def _cover_cached(shape, tolerance: float, use_cache: bool):
     """:func:`drake_mh.geometry.sphere_cover.cover`, cached on disk for the shapes that take time."""
     if not use_cache or isinstance(shape, (Sphere, Capsule)):
         return cover(shape, tolerance)
-    from drake_mh.cache import atomic_write_bytes, cache_dir, content_hash
+    from drake_mh._support.cache import atomic_write_bytes, cache_dir, content_hash
 
     key = content_hash(ALGORITHM_VERSION, repr(float(tolerance)), _shape_key(shape))
     path = cache_dir("spheres") / f"{key}.npz"
@@ -203,7 +203,7 @@ class SphereModel:
                 geometry. Smaller is tighter but takes more spheres: about
                 ``tolerance^-1.5`` for meshes (example-robot-data's Panda: 282 / 794 / 2,174
                 spheres at 2 / 1 / 0.5 cm), ``tolerance^-0.5`` for capsules.
-            cache: read and write the on-disk cache (:mod:`drake_mh.cache`).
+            cache: read and write the on-disk cache (:mod:`drake_mh._support.cache`).
 
         Raises:
             InvalidArgument: non-positive tolerance.

@@ -9,7 +9,7 @@
   others (``.stl``, ``.ply`` ...) are converted to ``.obj`` (the whole mesh, not its hull).
 
 Converted files live in ``cache_dir("meshes")`` (``$DRAKE_MH_CACHE/meshes``, see
-:mod:`drake_mh.cache`) under the SHA-256 of the source file's bytes, its extension and the
+:mod:`drake_mh._support.cache`) under the SHA-256 of the source file's bytes, its extension and the
 conversion kind, so an edited mesh gets a new entry and a second load reads the file it wrote.
 """
 
@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_mh.cache import atomic_write_bytes, cache_dir, content_hash
+from drake_mh._support.cache import atomic_write_bytes, cache_dir, content_hash
 from drake_mh.errors import MeshConversionError
 
 logger = logging.getLogger(__name__)

@@ -32,7 +32,7 @@ class CheckContext(structref.StructRefProxy):
     the state check's workspace (:func:`drake_mh.scene._state_kernels.state_workspace`) and the
     caller's own workspace (``rrt_connect``: :func:`drake_mh.planning.rrt_connect._motion.motion_workspace`;
     anything, e.g. ``None``, for a caller that has none). Holds references to them, unless they
-    are borrowed (:mod:`drake_mh._borrow`): then whoever owns them must keep them alive."""
+    are borrowed (:mod:`drake_mh._support.borrow`): then whoever owns them must keep them alive."""
 
 
 structref.define_proxy(CheckContext, CheckContextType, ["arrays", "ws", "mws"])

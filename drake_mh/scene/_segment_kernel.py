@@ -26,7 +26,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from drake_mh._borrow import borrow
+from drake_mh._support.borrow import borrow
 from drake_mh.scene._collision_kernels import FASTMATH, PER_LINK, link_clearances
 from drake_mh.scene._pair_kernel import segment_floor
 
@@ -59,7 +59,7 @@ def certify_segments(QA, QB, reach, speed, clearance, self_clearance, tolerance,
     ``lower`` / ``lower_self`` (certified lower bound of the link / pair rows over the whole
     segment, where certified), ``evals`` (configurations evaluated).
     """
-    # the arrays are the caller's for the whole call: passed on without reference counts (drake_mh._borrow)
+    # the arrays are the caller's for the whole call: passed on without reference counts (drake_mh._support.borrow)
     (reach, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO,
      p_WO, v_WO, dims, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius) = borrow(
         (reach, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius, kinds, R_WO,

@@ -25,7 +25,7 @@ compared as before).
 
 Tables are built for the pairs whose sphere product is large (:data:`MIN_PRODUCT`) and whose one
 or two joints have finite limits; the others get none. A table is computed once per robot,
-sphere model and pair in a process, and cached on disk (:func:`drake_mh.cache.cache_dir`
+sphere model and pair in a process, and cached on disk (:func:`drake_mh._support.cache.cache_dir`
 ``("pair_tables")``) by a content hash of everything it depends on.
 """
 
@@ -131,7 +131,7 @@ def _table(model, ga: int, gb: int):
 
 def _cached(model, sa, sb, joints, lower, upper, cells):
     """:func:`_build`, cached on disk by a content hash of its inputs."""
-    from drake_mh.cache import atomic_write_bytes, cache_dir, content_hash
+    from drake_mh._support.cache import atomic_write_bytes, cache_dir, content_hash
 
     chain = model.robot.batch.chain
     _, _, _, _, s_offset, s_radius = model.model_arrays

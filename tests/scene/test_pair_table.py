@@ -5,7 +5,7 @@ with its hand (where link 6 against the hand and link 5 against the hand get tab
 import numpy as np
 import pytest
 
-from drake_mh.cache import temporary_cache
+from drake_mh._support.cache import temporary_cache
 from drake_mh.planning.problems import load_problem_robot
 from drake_mh.scene import Scene, pair_table
 from drake_mh.scene.pair_table import LOWEST

@@ -28,7 +28,7 @@ import numpy as np
 from numba.core import types
 from numba.typed import Dict
 
-from drake_mh._borrow import borrow
+from drake_mh._support.borrow import borrow
 from drake_mh.planning.rrt_connect._clock import now
 from drake_mh.planning.rrt_connect._kernels import BUDGET, FOUND, TIMEOUT, _drop_collinear, _shortcut, _uniform
 from drake_mh.planning.rrt_connect._motion import _probe_collides, certified_motion, motion_capacity, workspaces
@@ -261,7 +261,7 @@ def prm_kernel(q_start, goals, init_path, init_goal, lower, upper, ints, floats,
     stats[:] = 0.0
     state = np.empty(1, np.uint64)
     state[0] = seed
-    arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller (drake_mh._borrow)
+    arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller (drake_mh._support.borrow)
     resolution, margin = options[2], options[3]
     lanes = (int(options[4]), int(options[5]))
     capacity = motion_capacity(upper - lower, reach, resolution, margin)

@@ -152,7 +152,7 @@ def _example_copy(name: str, limits: dict, edit=None, tag: str = ""):
     import re
     from pathlib import Path
 
-    from drake_mh.cache import atomic_write_bytes, cache_dir, content_hash
+    from drake_mh._support.cache import atomic_write_bytes, cache_dir, content_hash
     from drake_mh.errors import MeshNotFound
     from drake_mh.robot.examples import EXAMPLE_ARMS, example_robot_data_root
     from drake_mh.robot.robot import DRAKE_MH_NS

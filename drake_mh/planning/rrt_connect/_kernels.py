@@ -16,7 +16,7 @@ import math
 import numba
 import numpy as np
 
-from drake_mh._borrow import borrow
+from drake_mh._support.borrow import borrow
 from drake_mh.planning.rrt_connect._clock import now
 from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capacity, workspaces
 from drake_mh.planning.rrt_connect._stats import ITERATIONS, NN_SCANS, NODES, OUT_OF_DOMAIN, SHORTCUTS_KEPT, \
@@ -309,7 +309,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     stats[:] = 0.0
     state = np.empty(1, np.uint64)
     state[0] = seed
-    arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._borrow)
+    arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._support.borrow)
     capacity = motion_capacity(upper - lower, reach, resolution, margin)
     owner = workspaces(arrays, q_start.shape[0], reach.shape[0], max(first_lanes, block_lanes), capacity, probes,
                        interior, clearance, self_clearance)
@@ -325,7 +325,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
           time_limit, max_evals, shortcut_iterations, shortcut_min_gain, by_values, clock, profile, stats_owner,
           domain_radius):
     """:func:`plan_kernel` on its workspace ``owner``. The arrays that every motion passes on are
-    borrowed from the arguments (held by the caller for the whole call: :mod:`drake_mh._borrow`)."""
+    borrowed from the arguments (held by the caller for the whole call: :mod:`drake_mh._support.borrow`)."""
     (ws, mws), buf, v_WO, reach, stats = borrow((owner, buf_owner, v_WO_owner, reach_owner, stats_owner))
     ctx = CheckContext(arrays, ws, mws)  # one pointer for every call below (drake_mh.scene._check_context)
     lanes = (first_lanes, block_lanes)
@@ -464,7 +464,7 @@ def certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance
     """``(M,)`` bool: whether each straight motion ``QA[i] -> QB[i]`` (``QA[i]`` free) is certified
     by :func:`._motion.certified_motion`, the planner's check (for tests and other callers)."""
     buf = np.zeros(2, np.int64)
-    arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._borrow)
+    arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._support.borrow)
     span = np.zeros(QA.shape[1])
     for i in range(QA.shape[0]):
         for j in range(QA.shape[1]):

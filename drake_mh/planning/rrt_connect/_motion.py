@@ -6,7 +6,7 @@ its whole length: its interpolated states in batched calls with early exit (the 
 "Motions in Microseconds via Vectorized Sampling-Based Planning", ICRA 2024), at clearances
 raised by a margin that certifies the motion between the states (the Lipschitz bound of
 :mod:`drake_mh.scene._segment_kernel`), refined only where a state is within the margin. Its
-callers pass the arrays borrowed (:mod:`drake_mh._borrow`) in one
+callers pass the arrays borrowed (:mod:`drake_mh._support.borrow`) in one
 :class:`~drake_mh.scene._check_context.CheckContext` with the workspaces (:func:`workspaces`: its
 per-motion arrays come from :func:`motion_workspace`).
 """

@@ -26,7 +26,7 @@ import sys
 import time
 from pathlib import Path
 
-from drake_mh.cache import cache_dir, content_hash
+from drake_mh._support.cache import cache_dir, content_hash
 
 log = logging.getLogger(__name__)
 
@@ -42,7 +42,7 @@ checkout tells our choice from a user's ``NUMBA_CACHE_DIR``)."""
 def fingerprint(package: Path | None = None) -> str:
     """A content hash of every ``.py`` file of ``package`` (default: drake_mh) that mentions
     numba, with its path (16 hex digits)."""
-    root = Path(package or Path(__file__).parent)
+    root = Path(package or Path(__file__).parents[1])
     parts: list[bytes | str] = []
     for path in sorted(root.rglob("*.py")):
         data = path.read_bytes()
