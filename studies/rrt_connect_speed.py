@@ -26,7 +26,7 @@ downloaded here), and a third method runs interleaved on them: ``rrt_connect (no
 tables)``, the same planner on a copy of each scene whose self-collision pairs have no floor
 tables (:mod:`drake_mh.scene.pair_table`): the code before those tables, as the same-run
 baseline (same trees: the tables change the cost of each check, not its answer).
-The batched checks are the scene's :func:`drake_mh.scene._state_kernels.check_states` (early
+The batched checks are the scene's :func:`drake_mh.scene.kernels.states.check_states` (early
 exit, two clearances per link and link pair); the MotionBenchMaker-like figures of
 :mod:`drake_mh.planning.rrt_connect` (issue #18's 0.5 ms target) come from the problem sets of
 :mod:`drake_mh.planning.problems`, not from this study's scenes.

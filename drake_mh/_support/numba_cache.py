@@ -3,8 +3,8 @@
 Numba checks a cached function against the modification time of the file that defines it, and
 nothing else: a kernel compiled with a helper from another file (inlined or linked into it)
 keeps the helper's old code after the helper's file changes. Measured here: after a change to
-the packed arrays' layout in ``scene/_packing.py``, ``Scene.collision_free`` of one
-configuration (compiled in the unchanged ``scene/_entry_kernels.py``) read the new buffers with
+the packed arrays' layout in ``scene/kernels/packing.py``, ``Scene.collision_free`` of one
+configuration (compiled in the unchanged ``scene/kernels/entry.py``) read the new buffers with
 the old offsets and accepted a MotionBenchMaker goal that the same code rejects from a clean
 cache. Editable installs (the README's) meet this after every ``git pull``.
 

@@ -5,7 +5,7 @@
 * :mod:`drake_mh.scene.penetration` — lower bounds of the exact distance where a sphere of the
   model penetrates an obstacle.
 * :mod:`drake_mh.scene.exact` — the exact distances behind ``Scene.distances`` / ``min_distance``
-  (compiled kernels :mod:`~drake_mh.scene._exact_kernels`, certified GJK :mod:`~drake_mh.scene._gjk`).
+  (compiled kernels :mod:`~drake_mh.scene.kernels.exact`, certified GJK :mod:`~drake_mh.scene.kernels.gjk`).
 * :mod:`drake_mh.scene.segment_distance` — exact capsule vs box/cylinder/capsule distances (the
   pairs where Drake's GJK is optimistic).
 """

@@ -1,6 +1,6 @@
 """Batched collision queries on the sphere model: the arrays the compiled kernels read.
 
-:class:`CollisionModel` flattens what :mod:`drake_mh.scene._collision_kernels` needs from a
+:class:`CollisionModel` flattens what :mod:`drake_mh.scene.kernels.collision` needs from a
 :class:`drake_mh.scene.Scene`:
 
 * the robot's kinematic chain (from :class:`drake_mh.kinematics.BatchKinematics`);
@@ -24,9 +24,9 @@ import functools
 
 import numpy as np
 
-from drake_mh.scene import _collision_kernels as K
-from drake_mh.scene import _entry_kernels as E
-from drake_mh.scene._packing import pack
+from drake_mh.scene.kernels import collision as K
+from drake_mh.scene.kernels import entry as E
+from drake_mh.scene.kernels.packing import pack
 from drake_mh.scene.pair_table import empty_tables
 from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere
 
@@ -239,7 +239,7 @@ class CollisionModel:
         return np.ascontiguousarray(gap)
 
     def packed(self, obstacles: tuple, pairs: tuple) -> tuple:
-        """``(ints, floats)``: :func:`._packing.pack` of the chain, the spheres, ``obstacles``
+        """``(ints, floats)``: :func:`.kernels.packing.pack` of the chain, the spheres, ``obstacles``
         (:func:`obstacle_arrays`; their bounding radii and :meth:`static_gaps`) and ``pairs``
         (:attr:`pair_arrays` or :attr:`no_pair_arrays`)."""
         kinds, R_WO, p_WO, _, dims = obstacles
@@ -248,14 +248,14 @@ class CollisionModel:
 
     def free_function(self, obstacles: tuple):
         """``f(Q (N, nq), clearance, self_clearance) -> (N,) bool`` against ``obstacles`` (None if
-        ``Q`` is not finite): :func:`._collision_kernels.collision_free` with every array packed
+        ``Q`` is not finite): :func:`.kernels.collision.collision_free` with every array packed
         and bound once (a call from Python then costs the kernel plus about a microsecond).
         ``Q`` must be a C-contiguous float64 array (compiled for that layout only), the
         clearances Python floats >= 0: the caller checks them.
 
         ``f.make_one()`` returns ``(entry, buffer)``: ``entry(q (nq,) float64, clearance,
         self_clearance, buffer) -> 1 / 0 / -1 / -2`` (free / not / not finite / a clearance not in
-        [0, inf)) checks one configuration (:func:`._entry_kernels.collision_free_one`)
+        [0, inf)) checks one configuration (:func:`.kernels.entry.collision_free_one`)
         through the compiled entry point of its one signature: no type dispatch, no allocation
         (about 0.3 µs in the kernel and 0.15 µs of call). ``q`` must be a float64 array of shape
         ``(nq,)`` (any strides), the clearances Python floats: the caller checks those types
@@ -278,7 +278,7 @@ class CollisionModel:
         return free
 
     def free(self, Q: np.ndarray, obstacles: tuple, clearance: float, self_clearance: float) -> np.ndarray:
-        """``(N,)`` bool: :func:`._collision_kernels.collision_free` of ``Q (N, nq)``."""
+        """``(N,)`` bool: :func:`.kernels.collision.collision_free` of ``Q (N, nq)``."""
         Q = np.ascontiguousarray(Q, dtype=float)
         out = self.free_function(obstacles)(Q, float(clearance), float(self_clearance))
         if out is None:
@@ -289,7 +289,7 @@ class CollisionModel:
         """``f(Q (N, nq), overall=False) -> (N, K)`` clearance per obstacle, or ``(N, 1)`` the
         smallest over them with ``overall`` (None if ``Q`` is not finite): :meth:`clearances`
         with ``per_obstacle`` for the obstacles where they are, every array packed and bound once
-        (:func:`._entry_kernels.obstacle_clearances_packed`). ``Q`` must be a C-contiguous
+        (:func:`.kernels.entry.obstacle_clearances_packed`). ``Q`` must be a C-contiguous
         float64 array: the caller checks it."""
         ints, floats = self.packed(obstacles, self.no_pair_arrays)
         v_WO = np.ascontiguousarray(obstacles[3], dtype=float)
@@ -303,7 +303,7 @@ class CollisionModel:
 
     def clearances(self, QT: np.ndarray, obstacles: tuple, per_obstacle: bool, fine_below: float = np.inf,
                    tau=None) -> np.ndarray:
-        """:func:`._collision_kernels.link_clearances` of ``QT (nq, N)``: ``(N, K)`` per obstacle,
+        """:func:`.kernels.collision.link_clearances` of ``QT (nq, N)``: ``(N, K)`` per obstacle,
         or ``(N, G + P)`` per link and link pair."""
         N = QT.shape[1]
         width = len(obstacles[0]) if per_obstacle else self.num_links + self.num_pairs
@@ -351,7 +351,7 @@ class CollisionModel:
     @functools.cached_property
     def reach(self) -> np.ndarray:
         """``(G + P, nq)``: how far [m] the geometry behind each constraint value can move per
-        unit of joint j's motion (the Lipschitz constants of :mod:`._segment_kernel`).
+        unit of joint j's motion (the Lipschitz constants of :mod:`.kernels.segments`).
 
         Rows ``0..G-1`` (links): the elementwise largest :attr:`sphere_reach` row of the link's
         spheres: the link's value (smallest sphere clearance) changes no faster than its

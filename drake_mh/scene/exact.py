@@ -10,12 +10,12 @@ lookup, the refinement dispatch and a ``DistancePair`` (1.3 µs), then a sort �
 
 How distances are computed now (:class:`ExactDistances`, one per scene):
 
-* **link geometry vs obstacle** for every link shape :mod:`drake_mh.scene._exact_kernels`
+* **link geometry vs obstacle** for every link shape :mod:`drake_mh.scene.kernels.exact`
   handles (sphere, capsule, box, cylinder, ellipsoid, convex mesh): one compiled call per
   configuration computes the geometries' world poses from ``q`` (the robot's compiled chain)
   and every pair's exact distance — closed form for sphere/capsule pairs, the golden-section
   axis search of :mod:`drake_mh.scene.segment_distance` for capsule links vs boxes and
-  cylinders, the certified GJK of :mod:`drake_mh.scene._gjk` for the other shapes (Drake's
+  cylinders, the certified GJK of :mod:`drake_mh.scene.kernels.gjk` for the other shapes (Drake's
   GJK was measured up to 16 mm optimistic there). These pairs are filtered out of Drake's
   query in the scene's context (:meth:`ExactDistances.exclude`).
 * Where the exact method does not hold — a capsule's axis inside a box or cylinder, or
@@ -29,7 +29,7 @@ How distances are computed now (:class:`ExactDistances`, one per scene):
   stopping when the bound reaches the smallest distance found.
 
 Guarantee: every value is the exact signed distance, or (certified GJK) at most
-:data:`drake_mh.scene._gjk.TOLERANCE` below it — never above it where Drake is optimistic.
+:data:`drake_mh.scene.kernels.gjk.TOLERANCE` below it — never above it where Drake is optimistic.
 """
 
 from __future__ import annotations
@@ -38,8 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drake_mh.scene import _exact_kernels as X
-from drake_mh.scene import _gjk
+from drake_mh.scene.kernels import exact as X
+from drake_mh.scene.kernels import gjk
 from drake_mh.scene.segment_distance import primitive_code
 
 __all__ = ["DistancePair", "ExactDistances", "drake_reference", "exclude_from_drake", "link_kinds"]
@@ -114,7 +114,7 @@ def link_kinds(robot, robot_ids) -> dict:
 
 
 def _link_arrays(shape, kind, X_AG: np.ndarray, anchor: int, hull_start: int):
-    """One row of ``g_int`` / ``g_float`` (layout in :mod:`drake_mh.scene._exact_kernels`) and
+    """One row of ``g_int`` / ``g_float`` (layout in :mod:`drake_mh.scene.kernels.exact`) and
     the hull vertices it adds."""
     from drake_mh.geometry.shapes import Box, Capsule, ConvexPolytope, Cylinder, Ellipsoid, Sphere
 
@@ -124,28 +124,28 @@ def _link_arrays(shape, kind, X_AG: np.ndarray, anchor: int, hull_start: int):
     row_f[9:12] = X_AG[:3, 3]
     vertices = np.zeros((0, 3))
     if isinstance(shape, Sphere):
-        row_i[4], row_f[15], row_f[19] = _gjk.POINT, shape.radius, shape.radius
+        row_i[4], row_f[15], row_f[19] = gjk.POINT, shape.radius, shape.radius
     elif isinstance(shape, Capsule):
-        row_i[4], row_f[12], row_f[15] = _gjk.SEGMENT, 0.5 * shape.length, shape.radius
+        row_i[4], row_f[12], row_f[15] = gjk.SEGMENT, 0.5 * shape.length, shape.radius
         row_f[19] = 0.5 * shape.length + shape.radius
     elif isinstance(shape, Box):
         half = 0.5 * np.asarray(shape.size, dtype=float)
-        row_i[4], row_f[12:15], row_f[19] = _gjk.BOX, half, np.linalg.norm(half)
+        row_i[4], row_f[12:15], row_f[19] = gjk.BOX, half, np.linalg.norm(half)
     elif isinstance(shape, Cylinder):
-        row_i[4], row_f[12:14] = _gjk.CYLINDER, (shape.radius, 0.5 * shape.length)
+        row_i[4], row_f[12:14] = gjk.CYLINDER, (shape.radius, 0.5 * shape.length)
         row_f[19] = np.hypot(shape.radius, 0.5 * shape.length)
     elif isinstance(shape, Ellipsoid):
-        row_i[4], row_f[12:15], row_f[19] = _gjk.ELLIPSOID, (shape.a, shape.b, shape.c), max(shape.a, shape.b, shape.c)
+        row_i[4], row_f[12:15], row_f[19] = gjk.ELLIPSOID, (shape.a, shape.b, shape.c), max(shape.a, shape.b, shape.c)
     elif isinstance(shape, ConvexPolytope):
         vertices = np.asarray(shape.vertices, dtype=float)
         centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
-        row_i[4], row_i[3] = _gjk.HULL, len(vertices)
+        row_i[4], row_i[3] = gjk.HULL, len(vertices)
         row_f[16:19], row_f[19] = centre, np.linalg.norm(vertices - centre, axis=1).max()
     return row_i, row_f, vertices
 
 
 def obstacle_rows(obstacles) -> tuple[np.ndarray, np.ndarray]:
-    """``(o_int (K, 2), o_float (K, 20))`` of the obstacles (layout in :mod:`_exact_kernels`)."""
+    """``(o_int (K, 2), o_float (K, 20))`` of the obstacles (layout in :mod:`.kernels.exact`)."""
     from drake_mh.geometry.shapes import Capsule, Sphere
 
     obstacles = list(obstacles)
@@ -159,11 +159,11 @@ def obstacle_rows(obstacles) -> tuple[np.ndarray, np.ndarray]:
         o_int[k, 0] = sdf_kind
         shape = obstacle.shape
         if isinstance(shape, Sphere):
-            o_int[k, 1], o_float[k, 18] = _gjk.POINT, shape.radius
+            o_int[k, 1], o_float[k, 18] = gjk.POINT, shape.radius
         elif isinstance(shape, Capsule):
-            o_int[k, 1], o_float[k, 15], o_float[k, 18] = _gjk.SEGMENT, 0.5 * shape.length, shape.radius
+            o_int[k, 1], o_float[k, 15], o_float[k, 18] = gjk.SEGMENT, 0.5 * shape.length, shape.radius
         else:  # box: half sizes; cylinder: radius, half length (as the SDF dims)
-            o_int[k, 1] = _gjk.BOX if sdf_kind == 1 else _gjk.CYLINDER
+            o_int[k, 1] = gjk.BOX if sdf_kind == 1 else gjk.CYLINDER
             o_float[k, 15:18] = dims
     return o_int, o_float
 
@@ -260,7 +260,7 @@ class ExactDistances:
         state = self.state()
         best, n_need, n_rows = X.exact_pairs(
             q, *self._chain, self.g_int, self.g_float, self.vertices, state.o_int, state.o_float, self.self_pairs,
-            max_distance, min_only, _gjk.TOLERANCE, self.R_WG, self.p_WG, state.out, state.status, state.need,
+            max_distance, min_only, gjk.TOLERANCE, self.R_WG, self.p_WG, state.out, state.status, state.need,
             state.order)
         if n_need < 0:
             self.robot.check_q(q)  # raises, naming the joints

@@ -19,7 +19,7 @@ pair's distance (a joint carrying both links moves them rigidly), and each of th
 sphere, in the frame of the links' common ancestor, about an axis fixed there while the other
 joints stay put: so no configuration of the cell brings two spheres closer than the grown
 spheres at the centre are. The kernels read the floor of a configuration's cell
-(:func:`drake_mh.scene._pair_kernel.pair_floor`) and skip the sphere pairs where it already
+(:func:`drake_mh.scene.kernels.pairs.pair_floor`) and skip the sphere pairs where it already
 shows the pair clear; answers are unchanged (where the floor is not enough, the sphere pairs are
 compared as before).
 

@@ -44,7 +44,7 @@ import functools
 import numba
 import numpy as np
 
-from drake_mh.scene._exact_kernels import _closest_segments
+from drake_mh.scene.kernels.exact import _closest_segments
 from drake_mh.scene.segment_distance import CAPSULE, SPHERE, _sdf, primitive_code, segment_min_sdf
 from drake_mh.geometry.shapes import Box, Cylinder
 

@@ -442,7 +442,7 @@ class Scene:
 
         Never more than the exact distance (penetration included); at most
         ``sphere_model.bound`` less where the exact distance is >= 0 (module docstring).
-        Compiled (:mod:`drake_mh.scene._collision_kernels`): each link's bounding sphere first,
+        Compiled (:mod:`drake_mh.scene.kernels.collision`): each link's bounding sphere first,
         its spheres only where they can hold the minimum.
 
         Raises:

@@ -4,7 +4,7 @@ A motion the library returns is executed as straight lines in joint space betwee
 configurations; checking its points says nothing about what it sweeps between them (the
 framework follower's hybrid run, seed 2, passed 21 mm through an obstacle between two verified
 points). :func:`certify_segments` proves a segment clear *for every configuration on it*, or
-finds a configuration on it that is not, by the bisection of :mod:`._segment_kernel`:
+finds a configuration on it that is not, by the bisection of :mod:`.kernels.segments`:
 
 * each constraint value (per link: its spheres' clearance to the obstacles; per checked link
   pair: their spheres' distance) is Lipschitz along the segment, with a constant computed from
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from drake_mh.errors import SceneError
-from drake_mh.scene import _segment_kernel as SK
+from drake_mh.scene.kernels import segments as SK
 
 MIN_PIECE = 1e-9
 """Shortest piece of a segment (in its parameter t in [0, 1]) before a piece is undecided."""

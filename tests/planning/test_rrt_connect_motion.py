@@ -10,9 +10,9 @@ from drake_mh.planning.rrt_connect import planner
 from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capacity, workspaces
 from drake_mh.planning.rrt_connect._stats import STAT_NAMES
 from drake_mh.scene import Box, Scene, Sphere
-from drake_mh.scene._check_context import CheckContext
-from drake_mh.scene._packing import _unpack
-from drake_mh.scene._state_kernels import check_blocks
+from drake_mh.scene.kernels.context import CheckContext
+from drake_mh.scene.kernels.packing import _unpack
+from drake_mh.scene.kernels.states import check_blocks
 
 PANDA = drake_mh.load_robot("panda")
 

@@ -89,7 +89,7 @@ def test_reach_balls_hold_every_links_bounding_centre(prismatic_every):
 
 def test_static_gaps_change_no_answer(scene):
     """collision_free with the static gaps as built and with none (every pair tested)."""
-    from drake_mh.scene import _entry_kernels as E
+    from drake_mh.scene.kernels import entry as E
     from drake_mh.scene.benchmark import benchmark_scene
 
     bench = benchmark_scene(scene.robot, "10 mixed")

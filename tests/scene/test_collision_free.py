@@ -56,7 +56,7 @@ def test_kernel_matches_numpy_reference(seed):
 
 def test_grouped_links_match_numpy_reference():
     """The Panda with its hand (778 spheres, links of several sphere groups): the clearance
-    kernel skips groups (scene/_collision_kernels._groups_sd) and stays exact where it must be."""
+    kernel skips groups (scene/kernels/collision._groups_sd) and stays exact where it must be."""
     from drake_mh.planning.problems import load_problem_robot
 
     hand = load_problem_robot("panda_hand_mbm")

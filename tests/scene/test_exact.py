@@ -9,8 +9,8 @@ import drake_mh
 from pydrake.math import RollPitchYaw, RotationMatrix
 from drake_mh.errors import DrakeMhError, InvalidConfiguration, SceneError
 from drake_mh.scene import Box, Capsule, Cylinder, Scene, Sphere
-from drake_mh.scene import _exact_kernels as X
-from drake_mh.scene import _gjk
+from drake_mh.scene.kernels import exact as X
+from drake_mh.scene.kernels import gjk
 from drake_mh.scene.exact import drake_reference
 from drake_mh.geometry.shapes import ConvexPolytope, Ellipsoid
 from sphere_fixtures import mesh_arm_urdf, primitive_arm_urdf
@@ -279,30 +279,30 @@ def test_gjk_certificate_on_random_pairs():
     rng = np.random.default_rng(0)
     out = np.empty(8)
     for trial in range(600):
-        kind_a = [_gjk.HULL, _gjk.ELLIPSOID, _gjk.BOX, _gjk.CYLINDER, _gjk.SEGMENT, _gjk.POINT][trial % 6]
+        kind_a = [gjk.HULL, gjk.ELLIPSOID, gjk.BOX, gjk.CYLINDER, gjk.SEGMENT, gjk.POINT][trial % 6]
         vertices = rng.normal(size=(30, 3)) * 0.1
         vertices = np.ascontiguousarray(vertices[ConvexHull(vertices).vertices])
         dims_a = rng.uniform(0.03, 0.2, 3)
-        kind_b, dims_b = [(_gjk.BOX, rng.uniform(0.05, 0.2, 3)), (_gjk.CYLINDER, np.array([0.05, 0.15, 0.0])),
-                          (_gjk.SEGMENT, np.array([0.15, 0.0, 0.0])), (_gjk.POINT, np.zeros(3))][(trial // 6) % 4]
+        kind_b, dims_b = [(gjk.BOX, rng.uniform(0.05, 0.2, 3)), (gjk.CYLINDER, np.array([0.05, 0.15, 0.0])),
+                          (gjk.SEGMENT, np.array([0.15, 0.0, 0.0])), (gjk.POINT, np.zeros(3))][(trial // 6) % 4]
         R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
         p = rng.normal(size=3)
         p *= rng.uniform(0.0, 0.8) / np.linalg.norm(p)
-        status = _gjk.gjk(kind_a, dims_a, R, p, vertices, 0, len(vertices), kind_b, dims_b, 1e-10, out)
+        status = gjk.gjk(kind_a, dims_a, R, p, vertices, 0, len(vertices), kind_b, dims_b, 1e-10, out)
         lb, ub = out[0], out[1]
         assert lb <= ub + 1e-15
-        if status == _gjk.SEPARATED:
+        if status == gjk.SEPARATED:
             assert ub - lb <= 1e-10
             assert np.linalg.norm(out[2:5] - out[5:8]) == pytest.approx(ub, abs=1e-12)
-        elif status == _gjk.NOT_CONVERGED and lb > 0:  # round-off stalled a curved pair
+        elif status == gjk.NOT_CONVERGED and lb > 0:  # round-off stalled a curved pair
             assert ub - lb <= 1e-8
         # sampled points of A (in B's frame) vs B's support: lb never above any sampled distance
         directions = rng.normal(size=(2000, 3))
         directions /= np.linalg.norm(directions, axis=1, keepdims=True)
         local, a_pt, b_pt = np.empty(3), np.empty(3), np.empty(3)
         for d in directions[:50]:
-            _gjk._support_a(kind_a, dims_a, R, p, vertices, 0, len(vertices), *d, local, a_pt)
-            _gjk.support(kind_b, dims_b, vertices, 0, 0, *(-d), b_pt)
+            gjk._support_a(kind_a, dims_a, R, p, vertices, 0, len(vertices), *d, local, a_pt)
+            gjk.support(kind_b, dims_b, vertices, 0, 0, *(-d), b_pt)
             assert lb <= np.linalg.norm(a_pt - b_pt) + 1e-12
 
 

@@ -1,4 +1,4 @@
-"""Self-collision of meshed links: the pruned sphere-pair clearance (scene/_pair_kernel.py)
+"""Self-collision of meshed links: the pruned sphere-pair clearance (scene/kernels/pairs.py)
 against the full product of sphere pairs, on the Panda with its hand (778 spheres, up to 131
 per link, where the pruning matters)."""
 

@@ -9,7 +9,7 @@ from drake_mh._support.cache import temporary_cache
 from drake_mh.planning.problems import load_problem_robot
 from drake_mh.scene import Scene, pair_table
 from drake_mh.scene.pair_table import LOWEST
-from drake_mh.scene._pair_kernel import pair_floor
+from drake_mh.scene.kernels.pairs import pair_floor
 from drake_mh.scene.batch import CollisionModel
 
 

@@ -33,9 +33,9 @@ from drake_mh.planning.rrt_connect._clock import now
 from drake_mh.planning.rrt_connect._kernels import BUDGET, FOUND, TIMEOUT, _drop_collinear, _shortcut, _uniform
 from drake_mh.planning.rrt_connect._motion import _probe_collides, certified_motion, motion_capacity, workspaces
 from drake_mh.planning.rrt_connect._stats import STAT_NAMES, T_FOUND, T_TOTAL
-from drake_mh.scene._check_context import CheckContext
-from drake_mh.scene._collision_kernels import collision_free
-from drake_mh.scene._packing import _unpack
+from drake_mh.scene.kernels.context import CheckContext
+from drake_mh.scene.kernels.collision import collision_free
+from drake_mh.scene.kernels.packing import _unpack
 
 PRM_STAT_NAMES = ("batches", "samples", "free_samples", "pruned", "graph_nodes", "searches", "edges_checked",
                   "edges_invalid", "improvements")

@@ -26,7 +26,7 @@ via Vectorized Sampling-Based Planning", ICRA 2024):
   bound once (:func:`.planner._binding`): a plan is often called after other work, with its
   code and data out of the CPU's caches, where every Python step costs microseconds;
 * **batched motion checks with early exit** (the scene's
-  :func:`drake_mh.scene._state_kernels.check_states`): the interpolated states of a motion go
+  :func:`drake_mh.scene.kernels.states.check_states`): the interpolated states of a motion go
   through the scene's sphere model in SIMD blocks, the first block spread over the whole
   motion ("rake" order), and a block stops at the first sphere found in collision;
 * **every edge certified** (:func:`._motion.certified_motion`): each constraint row (a link against
@@ -65,7 +65,7 @@ planning time is ``solve_motion``'s, which here includes certifying every edge):
   pick, bookshelf small / tall / thin, box, cage; 15 problems each, 2 seeds): 100 % verified,
   median 0.98 ms CPU (1.08 wall), p95 3.5 ms CPU, without self-collision (load 2.6-4);
   re-measured with the scene's public state check
-  (:func:`drake_mh.scene._state_kernels.check_states`) and with the kernel before it, run after
+  (:func:`drake_mh.scene.kernels.states.check_states`) and with the kernel before it, run after
   run on the same 105 problems x 2 seeds (identical paths): at load 2.0, median 0.43-0.45 ms
   CPU (before: 0.44-0.46), p95 3.0-3.1 ms (before: 3.4); at load 1.5 both 0.50-0.52 ms. With self-collision (load 2.6-4): 1.25 ms with the link pairs of MoveIt's Panda
   SRDF ignored; 4.9 ms with every pair Drake's filter keeps (there link1-link3 and link5-link7

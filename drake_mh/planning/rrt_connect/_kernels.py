@@ -21,8 +21,8 @@ from drake_mh.planning.rrt_connect._clock import now
 from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capacity, workspaces
 from drake_mh.planning.rrt_connect._stats import ITERATIONS, NN_SCANS, NODES, OUT_OF_DOMAIN, SHORTCUTS_KEPT, \
     SHORTCUTS_TRIED, T_FOUND, T_NN, T_SAMPLE, T_SHORTCUT, T_TOTAL
-from drake_mh.scene._check_context import CheckContext
-from drake_mh.scene._packing import _unpack
+from drake_mh.scene.kernels.context import CheckContext
+from drake_mh.scene.kernels.packing import _unpack
 
 FOUND, BUDGET, TIMEOUT = 0, 1, 2
 """Outcomes of :func:`plan_kernel`."""
@@ -327,7 +327,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
     """:func:`plan_kernel` on its workspace ``owner``. The arrays that every motion passes on are
     borrowed from the arguments (held by the caller for the whole call: :mod:`drake_mh._support.borrow`)."""
     (ws, mws), buf, v_WO, reach, stats = borrow((owner, buf_owner, v_WO_owner, reach_owner, stats_owner))
-    ctx = CheckContext(arrays, ws, mws)  # one pointer for every call below (drake_mh.scene._check_context)
+    ctx = CheckContext(arrays, ws, mws)  # one pointer for every call below (drake_mh.scene.kernels.context)
     lanes = (first_lanes, block_lanes)
     nq, G = q_start.shape[0], goals.shape[0]
     rng = seed

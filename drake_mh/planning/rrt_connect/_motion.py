@@ -2,12 +2,12 @@
 
 :func:`certified_motion` decides whether a straight joint-space motion is collision-free over
 its whole length: its interpolated states in batched calls with early exit (the scene's
-:func:`drake_mh.scene._state_kernels.check_states`, VAMP's design: Thomason, Kingston, Kavraki,
+:func:`drake_mh.scene.kernels.states.check_states`, VAMP's design: Thomason, Kingston, Kavraki,
 "Motions in Microseconds via Vectorized Sampling-Based Planning", ICRA 2024), at clearances
 raised by a margin that certifies the motion between the states (the Lipschitz bound of
-:mod:`drake_mh.scene._segment_kernel`), refined only where a state is within the margin. Its
+:mod:`drake_mh.scene.kernels.segments`), refined only where a state is within the margin. Its
 callers pass the arrays borrowed (:mod:`drake_mh._support.borrow`) in one
-:class:`~drake_mh.scene._check_context.CheckContext` with the workspaces (:func:`workspaces`: its
+:class:`~drake_mh.scene.kernels.context.CheckContext` with the workspaces (:func:`workspaces`: its
 per-motion arrays come from :func:`motion_workspace`).
 """
 
@@ -21,10 +21,10 @@ import numpy as np
 from drake_mh.planning.rrt_connect._clock import now
 from drake_mh.planning.rrt_connect._stats import BY_MARGIN, BY_PROBES, MOTIONS, REFINE_EVALS, REFINED, REJECTED, \
     STATES, T_CERTIFY, T_CHECK
-from drake_mh.scene._pair_kernel import segment_floor
-from drake_mh.scene._segment_kernel import CERTIFIED
-from drake_mh.scene._segment_kernel import certify_segments as _certify_segments
-from drake_mh.scene._state_kernels import CLEAR, COLLISION, check_blocks, check_states, state_workspace
+from drake_mh.scene.kernels.pairs import segment_floor
+from drake_mh.scene.kernels.segments import CERTIFIED
+from drake_mh.scene.kernels.segments import certify_segments as _certify_segments
+from drake_mh.scene.kernels.states import CLEAR, COLLISION, check_blocks, check_states, state_workspace
 from drake_mh.scene.pair_table import LOWEST
 
 CERTIFIED_ROW = -1.0
@@ -82,7 +82,7 @@ def motion_workspace(nq, C, G, capacity, probes, interior, clearance, self_clear
 @numba.njit(cache=True)
 def workspaces(arrays, nq, C, lanes, capacity, probes, interior, clearance, self_clearance):
     """``(state workspace, motion workspace)`` of a plan
-    (:func:`~drake_mh.scene._state_kernels.state_workspace`, :func:`motion_workspace`) for a
+    (:func:`~drake_mh.scene.kernels.states.state_workspace`, :func:`motion_workspace`) for a
     scene's unpacked ``arrays``, ``C`` constraint rows, at most ``lanes`` states per call,
     ``probes`` probe states per motion and ``interior`` per motion between two free ends (0:
     none, at most 8) and the plan's clearances."""
@@ -135,7 +135,7 @@ def _refine(qa, qb, tau, order, n, lam, inv_lam, speeds, plain, clearance, self_
 
     A state at ``t`` whose rows keep ``V_c >= clearance_c + Λ_c τ`` certifies ``[t - τ, t + τ]``
     (the Lipschitz bound), so a piece ``[t0, t1]`` is certified when ``τ0 + τ1 >= t1 - t0``.
-    ``tau[w]`` is state ``order[w]``'s ``τ`` (:func:`~drake_mh.scene._state_kernels.check_states`:
+    ``tau[w]`` is state ``order[w]``'s ``τ`` (:func:`~drake_mh.scene.kernels.states.check_states`:
     from the clearance values of the rows below their margins, for a link also from where the
     joint axes are in that state and the motion's joint ``speeds``; a state that kept every
     margin has ``τ >= 1 / 2n``). Each round checks, in one batched call, the middle of the gap
@@ -238,10 +238,10 @@ def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance,
 
     Every constraint row ``c`` (a link against the obstacles, a checked link pair) changes
     along the motion no faster than ``Λ_c = Σ_j reach[c, j] |Δq_j|`` per unit of t (the
-    Lipschitz bound of :mod:`drake_mh.scene._segment_kernel`, from
+    Lipschitz bound of :mod:`drake_mh.scene.kernels.segments`, from
     :attr:`~drake_mh.scene.batch.CollisionModel.reach`). A link pair with a floor table
     (:mod:`drake_mh.scene.pair_table`) whose cells along the motion all keep the pair's clearance
-    is certified on the whole motion by them (:func:`drake_mh.scene._pair_kernel.segment_floor`):
+    is certified on the whole motion by them (:func:`drake_mh.scene.kernels.pairs.segment_floor`):
     its ``Λ_c`` is :data:`CERTIFIED_ROW` and no state checks that pair (its clearance rows are
     ``-inf``: neither its bounding spheres, nor its table, nor its sphere pairs).
 
@@ -254,7 +254,7 @@ def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance,
        the ``n + 1`` states ``t = i / n`` (ends included), in VAMP's "rake" order (``lanes[0]``
        states spread over the whole motion first, so that a collision is found early, then
        blocks of ``lanes[1]``), are checked block by block
-       (:func:`drake_mh.scene._state_kernels.check_states`), each row at its clearance raised
+       (:func:`drake_mh.scene.kernels.states.check_states`), each row at its clearance raised
        by the margin ``Λ_c / (2 n)`` and, where a sphere is below that, at the plain
        clearance. A state below the plain clearance rejects the motion at once (early exit).
        If every state keeps the margins, every piece is certified, since
@@ -269,11 +269,11 @@ def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance,
        clearance values the check reports for those rows (41 configurations per refined
        MotionBenchMaker motion, against 84 for the boolean bisection at halving margins it
        replaced and 70 for the other choice; certified motions 23 -> 18.5 µs; 26 with the
-       links' local bound on ``τ``, :func:`drake_mh.scene._state_kernels._link_tau`: the
+       links' local bound on ``τ``, :func:`drake_mh.scene.kernels.states._link_tau`: the
        refinement 15.4 -> 12.4 µs per refined motion), else (any
        other value, e.g. True) the scene's
-       :func:`drake_mh.scene._segment_kernel.certify_segments` (the bound on clearance values
-       from :func:`~drake_mh.scene._collision_kernels.link_clearances`). The choice is made at
+       :func:`drake_mh.scene.kernels.segments.certify_segments` (the bound on clearance values
+       from :func:`~drake_mh.scene.kernels.collision.link_clearances`). The choice is made at
        compile time from the argument's type, so the default (None) does not compile the
        second: 35 s less from an empty numba cache.
     """

@@ -11,14 +11,14 @@
 * ``CLEAR`` — every sphere of every configuration keeps its link's margin from every obstacle
   and every checked link pair keeps its pair's margin.
 
-It differs from :func:`drake_mh.scene._collision_kernels.collision_free` (one boolean per
+It differs from :func:`drake_mh.scene.kernels.collision.collision_free` (one boolean per
 configuration at one clearance, a block stopping only when *all* of its configurations
 collide) in both respects. The margins are per constraint row (a link against the obstacles,
 a checked link pair), so a caller can ask each row for the extra clearance that certifies the
 motion between the configurations: ``rrt_connect`` asks ``Λ_c / 2n`` (the Lipschitz bound of
 :mod:`drake_mh.scene.segments`), and a ``CLEAR`` answer certifies a whole motion in one pass.
 
-The geometry is :mod:`._collision_kernels`' (same sphere model, bounding spheres, closed-form
+The geometry is :mod:`.collision`' (same sphere model, bounding spheres, closed-form
 obstacle tests, squared distances, so the same conservative guarantee): forward kinematics of
 the block with the lane index innermost (SIMD), each link's bounding sphere against each
 obstacle's bounding sphere and then its shape over all lanes, and the link's spheres only for
@@ -34,7 +34,7 @@ Typical use (compiled code; the workspace is allocated once per plan)::
 
     arrays = _packing._unpack(ints, floats)                  # a scene's packed arrays
     ws = state_workspace(F, G, S, P, lanes)
-    ctx = CheckContext(arrays, ws, None)                     # one pointer (drake_mh.scene._check_context)
+    ctx = CheckContext(arrays, ws, None)                     # one pointer (drake_mh.scene.kernels.context)
     answer = check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, inv_lam, speeds, ctx,
                           out, tau)
 """
@@ -47,8 +47,8 @@ import numba
 import numpy as np
 
 from drake_mh.kinematics.kernels import _frames_block
-from drake_mh.scene._collision_kernels import _centre_block, _obstacle_free, _point_distance, _point_free
-from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
+from drake_mh.scene.kernels.collision import _centre_block, _obstacle_free, _point_distance, _point_free
+from drake_mh.scene.kernels.pairs import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
 CLEAR, NEAR, COLLISION = 0, 1, 2
 """Answers of :func:`check_states`."""
@@ -216,9 +216,9 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, in
         speeds: ``(nq,)`` ``|Δq_j|`` of the motion the configurations lie on (per unit of its
             parameter), for the links' local bound on ``tau`` (:func:`_link_tau`); all zero:
             the static bound ``(v_c - plain_c) / Λ_c`` only.
-        ctx: :class:`~drake_mh.scene._check_context.CheckContext` of the scene's unpacked
-            arrays (:func:`drake_mh.scene._packing._unpack` of
-            :func:`~drake_mh.scene._packing.pack`'s buffers) and a :func:`state_workspace`.
+        ctx: :class:`~drake_mh.scene.kernels.context.CheckContext` of the scene's unpacked
+            arrays (:func:`drake_mh.scene.kernels.packing._unpack` of
+            :func:`~drake_mh.scene.kernels.packing.pack`'s buffers) and a :func:`state_workspace`.
         out: ``(N,)`` bool; ``out[n0 + b]`` is set to whether configuration ``n0 + b`` keeps
             every margin (unless the answer is COLLISION: then ``out`` is not written).
             The workspace's ``rows_near[c]`` is set for each row below its margin (a link or a

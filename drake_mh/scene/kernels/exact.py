@@ -14,7 +14,7 @@ obstacle, the exact signed distance:
   outside the obstacle, otherwise the pair is marked ``NEEDS_DRAKE`` (the axis's deepest point
   is not the penetration depth);
 * box, cylinder, ellipsoid and convex-hull links vs any obstacle: the certified GJK of
-  :mod:`drake_mh.scene._gjk`; ``NEEDS_DRAKE`` when the cores overlap (or the search stops
+  :mod:`drake_mh.scene.kernels.gjk`; ``NEEDS_DRAKE`` when the cores overlap (or the search stops
   without a positive lower bound: its bound inside is no penetration depth). A search that
   stops short with a positive bound keeps that bound (never above the truth; not seen in tests).
 
@@ -42,7 +42,7 @@ import numba
 import numpy as np
 
 from drake_mh.kinematics.kernels import fk_jacobian_one
-from drake_mh.scene import _gjk
+from drake_mh.scene.kernels import gjk
 from drake_mh.scene.segment_distance import _GOLDEN, _ITERATIONS, BOX, CYLINDER, _gradient, _sdf
 
 LINK_DRAKE, LINK_POINT, LINK_SEGMENT, LINK_GJK = 0, 1, 2, 3
@@ -289,9 +289,9 @@ def pair_distance(g, k, g_int, g_float, vertices, o_int, o_float, R_WG, p_WG, ou
         c_link[j] = p_WG[g, j]
     _to_obstacle(o_float, k, c_link, p_O)
     res = np.empty(8)
-    status = _gjk.gjk(g_int[g, 4], g_float[g, 12:15], R_OG, p_O, vertices, g_int[g, 2], g_int[g, 3],
+    status = gjk.gjk(g_int[g, 4], g_float[g, 12:15], R_OG, p_O, vertices, g_int[g, 2], g_int[g, 3],
                       o_int[k, 1], o_float[k, 15:18], tol, res)
-    if status == _gjk.INTERSECTING or (status == _gjk.NOT_CONVERGED and res[0] <= tol):
+    if status == gjk.INTERSECTING or (status == gjk.NOT_CONVERGED and res[0] <= tol):
         out[i, 0] = np.inf  # overlapping cores: Drake's penetration depth (its EPA)
         return NEEDS_DRAKE
     r_other = o_float[k, 18]
@@ -343,7 +343,7 @@ def exact_pairs(q, parent, KR, Kp, perm, kind, qidx, g_int, g_float, vertices, o
             status[i] = SKIPPED
             if link == LINK_DRAKE:
                 continue
-            cheap = link == LINK_POINT or (link == LINK_SEGMENT and o_int[k, 1] <= _gjk.SEGMENT)
+            cheap = link == LINK_POINT or (link == LINK_SEGMENT and o_int[k, 1] <= gjk.SEGMENT)
             if cheap:
                 status[i] = pair_distance(g, k, g_int, g_float, vertices, o_int, o_float, R_WG, p_WG, out, i,
                                           work, tol)

@@ -30,7 +30,7 @@ import numba
 import numpy as np
 
 from drake_mh.kinematics.kernels import _frames_block
-from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
+from drake_mh.scene.kernels.pairs import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
 LANES = 128
 """Configurations per block (measured: 32 / 64 / 128 lanes gave 164 / 137 / 123 ns per Panda
@@ -45,7 +45,7 @@ PER_LINK, PER_OBSTACLE, OVERALL = 0, 1, 2
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
 def _centre_block(m, a, offsets, i, R, p, cx, cy, cz):
     """World position of offset ``offsets[i] (3,)`` fixed in moving frame ``a`` (-1: the world),
-    read in place (no view: :func:`._pair_kernel._lane_point`)."""
+    read in place (no view: :func:`.pairs._lane_point`)."""
     o0, o1, o2 = offsets[i, 0], offsets[i, 1], offsets[i, 2]
     if a < 0:
         for b in range(m):
@@ -342,7 +342,7 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
 def _compact_centres(c, offsets, r, Rc, pc, ccx, ccy, ccz):
     """World position of offset ``offsets[r] (3,)`` for the ``c`` compacted lanes of pose
-    ``(Rc, pc)`` (:func:`_gather`), read in place (no view: :func:`._pair_kernel._lane_point`)."""
+    ``(Rc, pc)`` (:func:`_gather`), read in place (no view: :func:`.pairs._lane_point`)."""
     o0, o1, o2 = offsets[r, 0], offsets[r, 1], offsets[r, 2]
     for i in range(c):
         ccx[i] = pc[0, i] + Rc[0, 0, i] * o0 + Rc[0, 1, i] * o1 + Rc[0, 2, i] * o2
@@ -417,7 +417,7 @@ def link_clearances(QT, tau, fine_below, pair_fine_below, mode, parent, KR, Kp, 
     lower bound of it) where that is at least ``fine_below``; then per checked link pair the
     smallest sphere-sphere clearance where that is below the pair's ``pair_fine_below (P,)``
     (above it, a lower bound of it at least the bounding spheres' value:
-    :func:`._pair_kernel.pair_clearance`, or the pair's floor table where that is at least
+    :func:`.pairs.pair_clearance`, or the pair's floor table where that is at least
     ``pair_fine_below``: :mod:`drake_mh.scene.pair_table`; ``-inf``: the bounding spheres' value).
     """
     F, G, N, K, P = parent.shape[0], g_anchor.shape[0], QT.shape[1], kinds.shape[0], pair_a.shape[0]

@@ -1,6 +1,6 @@
 """A scene's unpacked arrays and a check's workspaces behind one pointer, for compiled callers.
 
-The batched state check (:func:`drake_mh.scene._state_kernels.check_states`) reads 28 arrays of
+The batched state check (:func:`drake_mh.scene.kernels.states.check_states`) reads 28 arrays of
 the scene and 25 of its workspace. Passed as two tuples, a call copies every array's fields
 (pointer, shape, strides: about 450 machine words) and costs about 0.3 µs more than the same
 call on a few arrays (measured on forward kinematics alone, 1 state: 0.58 against 0.27 µs), on
@@ -28,8 +28,8 @@ class CheckContextType(types.StructRef):
 
 
 class CheckContext(structref.StructRefProxy):
-    """``(arrays, ws, mws)``: the scene's unpacked arrays (:func:`drake_mh.scene._packing._unpack`),
-    the state check's workspace (:func:`drake_mh.scene._state_kernels.state_workspace`) and the
+    """``(arrays, ws, mws)``: the scene's unpacked arrays (:func:`drake_mh.scene.kernels.packing._unpack`),
+    the state check's workspace (:func:`drake_mh.scene.kernels.states.state_workspace`) and the
     caller's own workspace (``rrt_connect``: :func:`drake_mh.planning.rrt_connect._motion.motion_workspace`;
     anything, e.g. ``None``, for a caller that has none). Holds references to them, unless they
     are borrowed (:mod:`drake_mh._support.borrow`): then whoever owns them must keep them alive."""

@@ -1,6 +1,6 @@
 """The entry points of the collision kernels that Python calls (:mod:`drake_mh.scene.batch`).
 
-Each reads the arrays of :func:`drake_mh.scene._packing.pack` from two buffers (numba's
+Each reads the arrays of :func:`drake_mh.scene.kernels.packing.pack` from two buffers (numba's
 dispatch costs per argument: 6 arguments instead of 33), takes the configurations as the caller
 has them, ``Q (N, nq)``, and checks their finiteness while transposing them to the kernels'
 layout (:func:`_transposed_finite`). The one-configuration path (:func:`collision_free_one`) is
@@ -17,9 +17,9 @@ import numpy as np
 from numpy.lib.stride_tricks import as_strided
 
 from drake_mh.kinematics.kernels import _frames_block
-from drake_mh.scene._collision_kernels import _groups_free, _point_free, _range_free, collision_free, link_clearances
-from drake_mh.scene._packing import _rows, _unpack, _unpack_views
-from drake_mh.scene._pair_kernel import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
+from drake_mh.scene.kernels.collision import _groups_free, _point_free, _range_free, collision_free, link_clearances
+from drake_mh.scene.kernels.packing import _rows, _unpack, _unpack_views
+from drake_mh.scene.kernels.pairs import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
 
 @numba.njit(cache=True, inline="always")
@@ -56,8 +56,8 @@ def collision_free_packed(Q, clearance, self_clearance, ints, floats, out):
 @numba.njit(cache=True)
 def obstacle_clearances_packed(Q, mode, ints, floats, v_WO, out):
     """``out``: :func:`link_clearances` of ``Q (N, nq)`` per obstacle (``mode``
-    :data:`~._collision_kernels.PER_OBSTACLE`, ``out (N, K)``) or over all obstacles
-    (:data:`~._collision_kernels.OVERALL`, ``out (N, 1)``), obstacles where they are, on the
+    :data:`~.collision.PER_OBSTACLE`, ``out (N, K)``) or over all obstacles
+    (:data:`~.collision.OVERALL`, ``out (N, 1)``), obstacles where they are, on the
     buffers of :func:`pack` (no link pairs); ``False`` (nothing computed) if ``Q`` holds a NaN
     or an infinity. One call from Python passes 6 arguments instead of 33 (numba's dispatch cost
     about 12 µs of a one-configuration call)."""

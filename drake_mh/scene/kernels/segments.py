@@ -1,7 +1,7 @@
 """Numba kernel behind :mod:`drake_mh.scene.segments`: certify straight joint-space segments.
 
 Per segment ``q(t) = q_a + t (q_b - q_a)``, ``t in [0, 1]``, every constraint value ``V_c``
-of :func:`drake_mh.scene._collision_kernels.link_clearances` (per link: clearance to the
+of :func:`drake_mh.scene.kernels.collision.link_clearances` (per link: clearance to the
 obstacles; per checked link pair: self clearance) is Lipschitz in ``t`` with constant
 ``Λ_c = Σ_j reach[c, j] |Δq_j|`` (plus the obstacles' largest displacement for link rows),
 because each value is a distance that changes no faster than the geometry moves
@@ -17,7 +17,7 @@ shorter than ``min_piece`` (undecided: a touching contact cannot be certified ei
 
 A link pair with a floor table (:mod:`drake_mh.scene.pair_table`) whose cells along the segment
 all keep the self-clearance is certified by them on the whole segment
-(:func:`drake_mh.scene._pair_kernel.segment_floor`, also its ``lower_self``): its value is
+(:func:`drake_mh.scene.kernels.pairs.segment_floor`, also its ``lower_self``): its value is
 then not computed beyond the bounding spheres.
 """
 
@@ -27,8 +27,8 @@ import numba
 import numpy as np
 
 from drake_mh._support.borrow import borrow
-from drake_mh.scene._collision_kernels import FASTMATH, PER_LINK, link_clearances
-from drake_mh.scene._pair_kernel import segment_floor
+from drake_mh.scene.kernels.collision import FASTMATH, PER_LINK, link_clearances
+from drake_mh.scene.kernels.pairs import segment_floor
 
 CERTIFIED, BLOCKED, UNDECIDED = 1, 0, -1
 

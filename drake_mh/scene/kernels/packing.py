@@ -1,4 +1,4 @@
-"""The arrays of the collision kernels (:mod:`drake_mh.scene._collision_kernels`) in two
+"""The arrays of the collision kernels (:mod:`drake_mh.scene.kernels.collision`) in two
 buffers, one of int64 and one of float64 (:func:`pack`), and their views again inside compiled
 code (:func:`_unpack`, :func:`_unpack_views`): a call from Python then passes 6 arguments
 instead of 32 (numba's dispatch costs per argument), and planners hand one tuple around.
@@ -89,7 +89,7 @@ def _unpack(ints, floats):
 def _unpack_views(ints, floats):
     """:func:`_unpack` with ``as_strided`` views instead of reshapes (about 1 ns instead of
     200 for all of them; any-layout array types): for
-    :func:`drake_mh.scene._entry_kernels.collision_free_one`."""
+    :func:`drake_mh.scene.kernels.entry.collision_free_one`."""
     (F, G, S, K, P, T, U, i_parent, i_perm, i_kind, i_qidx, i_anchor, i_start, i_kinds, i_a, i_b, i_meta, i_ustart,
      i_ustart_s, f_KR, f_Kp, f_offset, f_radius, f_soffset, f_sradius, f_RWO, f_pWO, f_dims, f_orad, f_ogap, f_grid,
      f_vals, f_caps, f_uoffset, f_uradius) = _offsets(ints)
@@ -108,7 +108,7 @@ def _unpack_views(ints, floats):
 def pack(parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
          kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
          u_offset, u_radius):
-    """``(ints, floats)``: the arrays of :func:`drake_mh.scene._collision_kernels.collision_free`
+    """``(ints, floats)``: the arrays of :func:`drake_mh.scene.kernels.collision.collision_free`
     in two buffers (module docstring)."""
     sizes = [len(parent), len(g_anchor), len(s_radius), len(kinds), len(pair_a), len(t_vals), len(u_radius)]
     ints = np.concatenate([np.asarray(sizes), parent, np.ravel(perm), kind, qidx, g_anchor, g_start, kinds,
