@@ -2,7 +2,7 @@
 """Generate every bundled robot model in ``drake_mh/urdf/`` from its DH table.
 
 Run ``python scripts/generate_urdfs.py`` after changing a table below; the files are
-checked in and ``tests/test_urdf_models.py`` asserts they equal this script's output, so
+checked in and ``tests/robot/test_urdf_models.py`` asserts they equal this script's output, so
 they are never edited by hand. ``python scripts/generate_urdfs.py --check`` exits 1 when a
 checked-in file is stale. Sources and interpretations are in each file's header and in
 ``docs/robots.md``.

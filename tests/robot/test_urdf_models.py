@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from pydrake.all import AddMultibodyPlantSceneGraph, BodyIndex, DiagramBuilder, Parser, Role
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 URDF_DIR = ROOT / "drake_mh" / "urdf"
 PI = math.pi
 
