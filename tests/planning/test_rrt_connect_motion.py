@@ -1,4 +1,4 @@
-"""rrt_connect's motion check (drake_mh.planning.rrt_connect._motion): its workspace holds the
+"""rrt_connect's motion check (drake_mh.planning.motion.check): its workspace holds the
 longest motion within the joint limits, and a motion longer than the workspace gets the same
 answer from arrays of its own."""
 
@@ -7,8 +7,8 @@ import numpy as np
 
 import drake_mh
 from drake_mh.planning.rrt_connect import planner
-from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capacity, workspaces
-from drake_mh.planning.rrt_connect._stats import STAT_NAMES
+from drake_mh.planning.motion.check import certified_motion, motion_capacity, workspaces
+from drake_mh.planning.motion.stats import STAT_NAMES
 from drake_mh.scene import Box, Scene, Sphere
 from drake_mh.scene.kernels.context import CheckContext
 from drake_mh.scene.kernels.packing import _unpack

@@ -13,7 +13,7 @@ Method of :func:`drake_mh.planning.solve_motion`:
   ``rrt_connect``'s shortcut) and replaces the best path when shorter.
 
 Design: the search (:func:`._kernels.prm_kernel`) is one numba call, like ``rrt_connect``'s
-plan, with the same motion check (:func:`drake_mh.planning.rrt_connect._motion.certified_motion`);
+plan, with the same motion check (:func:`drake_mh.planning.motion.check.certified_motion`);
 samples are checked free by the scene's batched state check. Nodes that cannot lie on a
 shorter path than the best are dropped at each batch (their straight-line distance through them
 already exceeds it).

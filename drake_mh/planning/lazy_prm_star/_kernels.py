@@ -10,7 +10,7 @@ the path it finds (lazy PRM: Bohlin & Kavraki, ICRA 2000): first the probe state
 unknown edges, then each edge whole, from the start; an edge that fails is removed and the search
 repeated. A new shortest path of the graph is shortcut and replaces the best path if shorter.
 Every edge of a returned path is certified by the planner's motion check
-(:func:`drake_mh.planning.rrt_connect._motion.certified_motion`).
+(:func:`drake_mh.planning.motion.check.certified_motion`).
 
 Informed sampling (Gammell, Barfoot, Srinivasa, "Informed sampling for asymptotically optimal
 path planning", T-RO 2018): once a path of length ``c`` is known, only configurations ``x`` with
@@ -29,17 +29,17 @@ from numba.core import types
 from numba.typed import Dict
 
 from drake_mh._support.borrow import borrow
-from drake_mh.planning.rrt_connect._clock import now
+from drake_mh.planning.motion.clock import now
 from drake_mh.planning.rrt_connect._kernels import BUDGET, FOUND, TIMEOUT, _drop_collinear, _shortcut, _uniform
-from drake_mh.planning.rrt_connect._motion import _probe_collides, certified_motion, motion_capacity, workspaces
-from drake_mh.planning.rrt_connect._stats import STAT_NAMES, T_FOUND, T_TOTAL
+from drake_mh.planning.motion.check import _probe_collides, certified_motion, motion_capacity, workspaces
+from drake_mh.planning.motion.stats import STAT_NAMES, T_FOUND, T_TOTAL
 from drake_mh.scene.kernels.context import CheckContext
 from drake_mh.scene.kernels.collision import collision_free
 from drake_mh.scene.kernels.packing import _unpack
 
 PRM_STAT_NAMES = ("batches", "samples", "free_samples", "pruned", "graph_nodes", "searches", "edges_checked",
                   "edges_invalid", "improvements")
-"""Statistics of the search, after the motion check's (:data:`~drake_mh.planning.rrt_connect._stats.STAT_NAMES`,
+"""Statistics of the search, after the motion check's (:data:`~drake_mh.planning.motion.stats.STAT_NAMES`,
 whose counts the check adds to): ``graph_nodes`` the nodes of the last graph searched."""
 _N0 = len(STAT_NAMES)
 BATCHES, SAMPLES, FREE_SAMPLES, PRUNED, GRAPH_NODES, SEARCHES, EDGES_CHECKED, EDGES_INVALID, IMPROVEMENTS = \

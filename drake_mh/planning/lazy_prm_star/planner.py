@@ -15,7 +15,7 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument
 from drake_mh.planning.lazy_prm_star import _kernels as K
-from drake_mh.planning.rrt_connect import _stats as S
+from drake_mh.planning.motion import stats as S
 from drake_mh.planning.rrt_connect import planner as rrt
 
 DEFAULT_SAMPLES = 1000

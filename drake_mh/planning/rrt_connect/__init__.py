@@ -20,7 +20,7 @@ via Vectorized Sampling-Based Planning", ICRA 2024):
 * **one compiled call** (:func:`._kernels.plan_kernel`): sampling, nearest neighbours
   (linear scan: trees stay small), motion checks, path extraction and shortcutting run in
   numba without Python in the loop; the deadline is read inside the kernel from the
-  monotonic clock (:mod:`._clock`), the budget counts tree nodes; randomness is splitmix64
+  monotonic clock (:mod:`drake_mh.planning.motion.clock`), the budget counts tree nodes; randomness is splitmix64
   seeded from the caller's generator (same seed, same path). Python calls it through the
   compiled entry point of its one signature, the options in one vector and the scene's arrays
   bound once (:func:`.planner._binding`): a plan is often called after other work, with its
@@ -29,7 +29,7 @@ via Vectorized Sampling-Based Planning", ICRA 2024):
   :func:`drake_mh.scene.kernels.states.check_states`): the interpolated states of a motion go
   through the scene's sphere model in SIMD blocks, the first block spread over the whole
   motion ("rake" order), and a block stops at the first sphere found in collision;
-* **every edge certified** (:func:`._motion.certified_motion`): each constraint row (a link against
+* **every edge certified** (:func:`drake_mh.planning.motion.check.certified_motion`): each constraint row (a link against
   the obstacles, a checked link pair) changes along a motion no faster than
   ``Λ_c = Σ_j reach[c, j] |Δq_j|`` (the Lipschitz bound of
   :mod:`drake_mh.scene.segments`), so the same batched check, asked for each row's clearance

@@ -2,7 +2,7 @@
 
 Everything from the first sample to the shortcut path runs in one numba call
 (:func:`plan_kernel`); the only Python is the call itself. Every motion (tree edge, direct
-connection, shortcut) is certified by :func:`._motion.certified_motion`.
+connection, shortcut) is certified by :func:`drake_mh.planning.motion.check.certified_motion`.
 
 Randomness: splitmix64 (Steele, Lea, Flood, "Fast splittable pseudorandom number generators",
 OOPSLA 2014) on a state array seeded from the caller's ``numpy.random.Generator``: the same
@@ -17,9 +17,9 @@ import numba
 import numpy as np
 
 from drake_mh._support.borrow import borrow
-from drake_mh.planning.rrt_connect._clock import now
-from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capacity, workspaces
-from drake_mh.planning.rrt_connect._stats import ITERATIONS, NN_SCANS, NODES, OUT_OF_DOMAIN, SHORTCUTS_KEPT, \
+from drake_mh.planning.motion.clock import now
+from drake_mh.planning.motion.check import certified_motion, motion_capacity, workspaces
+from drake_mh.planning.motion.stats import ITERATIONS, NN_SCANS, NODES, OUT_OF_DOMAIN, SHORTCUTS_KEPT, \
     SHORTCUTS_TRIED, T_FOUND, T_NN, T_SAMPLE, T_SHORTCUT, T_TOTAL
 from drake_mh.scene.kernels.context import CheckContext
 from drake_mh.scene.kernels.packing import _unpack
@@ -202,7 +202,7 @@ def _shortcut(path, iterations, min_gain, rng, ctx, lanes, v_WO, reach, clearanc
               resolution, margin, max_evals, by_values, stats, clock, buf, profile, start, time_limit):
     """Random shortcutting (Geraerts & Overmars, "Creating high-quality paths for motion
     planning", IJRR 2007): join two random points of the path by a certified straight motion
-    (:func:`._motion.certified_motion`) when that is shorter, ``iterations`` draws or until the
+    (:func:`drake_mh.planning.motion.check.certified_motion`) when that is shorter, ``iterations`` draws or until the
     deadline. The pieces kept of the old segments are parts of certified segments.
 
     A draw that would shorten the path by less than ``min_gain`` of its length
@@ -274,7 +274,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     or with probability ``goal_bias`` a root of the other tree), then CONNECTs the other tree
     to the new node (repeated ``step`` extensions until reached or blocked); then the trees
     swap (``balance``: the smaller tree grows next, as VAMP does). Every edge is certified by
-    :func:`._motion.certified_motion`. The direct motion to each goal (nearest first) is tried before any tree.
+    :func:`drake_mh.planning.motion.check.certified_motion`. The direct motion to each goal (nearest first) is tried before any tree.
 
     With a ``domain_radius`` (dynamic domain, :data:`DOMAIN_MIN_RADIUS`), a node whose extension
     failed takes that radius, and a sample farther than its nearest node's radius from it is
@@ -284,9 +284,9 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     Args:
         seed: uint64, the splitmix64 state to start from.
         options: ``(15,)`` float64, the values of :data:`OPTION_NAMES` (the planner's options,
-            ``clock`` the address of :func:`._clock.clock_address`, ``profile`` 0 or 1).
+            ``clock`` the address of :func:`drake_mh.planning.motion.clock.clock_address`, ``profile`` 0 or 1).
         by_values: None (the batched check's refinement) or True (the bisection on clearance
-            values), :func:`._motion.certified_motion`'s; a compile-time choice.
+            values), :func:`drake_mh.planning.motion.check.certified_motion`'s; a compile-time choice.
         max_nodes: most nodes added to the trees (the budget), roots not counted; and at most
             :data:`SAMPLES_PER_NODE` times as many iterations.
         time_limit: [s] of the monotonic clock from the start of this call (``inf``: none).
@@ -399,7 +399,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
         if profile:
             stats[T_NN] += now(clock, buf) - t0
         # a motion that ends on a node (a root of the other tree, or q_new below) has both ends free: its
-        # probes are inside it (._motion.INTERIOR_PROBES)
+        # probes are inside it (drake_mh.planning.motion.check.INTERIOR_PROBES)
         if certified_motion(V[a, i], q_new, ctx, lanes, v_WO, reach, clearance, self_clearance, resolution,
                             margin, max_evals, by_values, stats, clock, buf, profile, biased and reached):
             ia = count[a]
@@ -462,7 +462,7 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
 def certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance, resolution, margin, first_lanes,
                     block_lanes, probes, max_evals, by_values, clock, stats):
     """``(M,)`` bool: whether each straight motion ``QA[i] -> QB[i]`` (``QA[i]`` free) is certified
-    by :func:`._motion.certified_motion`, the planner's check (for tests and other callers)."""
+    by :func:`drake_mh.planning.motion.check.certified_motion`, the planner's check (for tests and other callers)."""
     buf = np.zeros(2, np.int64)
     arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._support.borrow)
     span = np.zeros(QA.shape[1])

@@ -17,9 +17,9 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument
 from drake_mh.planning.rrt_connect import _kernels as K
-from drake_mh.planning.rrt_connect import _stats as S
-from drake_mh.planning.rrt_connect._clock import clock_address
-from drake_mh.planning.rrt_connect._motion import PROBES
+from drake_mh.planning.motion import stats as S
+from drake_mh.planning.motion.clock import clock_address
+from drake_mh.planning.motion.check import PROBES
 
 _CLOCK = clock_address()
 
@@ -54,18 +54,18 @@ class RRTConnectConfig:
             the same here, where the margin sets the count.
         margin: [m] largest extra clearance the batched check asks of a motion's states so
             that the motion between them is certified with no further work (states are
-            added while ``Λ_c / 2n`` exceeds it, see :func:`._motion.certified_motion`); a motion
+            added while ``Λ_c / 2n`` exceeds it, see :func:`drake_mh.planning.motion.check.certified_motion`); a motion
             that passes within its margins is refined (``certify``). 0.01 and 0.04 measured
             within 15 % of 0.02.
         probes: states of a motion checked first, before any of its setup, at the plain
-            clearances (0-8; t = 1, 1/2, 1/4, 1/8, ...: :data:`._motion.PROBES`): a motion
+            clearances (0-8; t = 1, 1/2, 1/4, 1/8, ...: :data:`drake_mh.planning.motion.check.PROBES`): a motion
             that collides mostly stops there. They only reject; the motion's own states
             certify.
         interior_probes: the same for a motion whose two ends are known free (the direct motion
             to a goal, a motion that ends on a tree node, a shortcut between two points of the
             certified path): states inside it, middle first (0-8; t = 1/2, 1/4, 3/4, 1/8, ...:
-            :data:`._motion.INTERIOR_PROBES`). 4 checked 1,144 states in a median
-            MotionBenchMaker plan, against 1,350 with :data:`._motion.PROBES` for them (same paths).
+            :data:`drake_mh.planning.motion.check.INTERIOR_PROBES`). 4 checked 1,144 states in a median
+            MotionBenchMaker plan, against 1,350 with :data:`drake_mh.planning.motion.check.PROBES` for them (same paths).
         lanes: states of a motion checked next, in one batched call, spread along it (VAMP's
             "rake": a collision that the probes missed is mostly found there).
         block: states per batched call after the first. Probes 4 / lanes 64 / block 64 took
@@ -288,7 +288,7 @@ def plan_smooth(problem, goals, rng, deadline, budget, **options):
 
 def _by_values(config: RRTConnectConfig):
     """The kernels' ``by_values`` argument: None for the batched check's refinement (the default), True
-    for the bisection on clearance values (a compile-time choice: :func:`._motion.certified_motion`)."""
+    for the bisection on clearance values (a compile-time choice: :func:`drake_mh.planning.motion.check.certified_motion`)."""
     return None if config.certify == "boolean" else True
 
 

@@ -18,8 +18,8 @@ import math
 import numba
 import numpy as np
 
-from drake_mh.planning.rrt_connect._clock import now
-from drake_mh.planning.rrt_connect._stats import BY_MARGIN, BY_PROBES, MOTIONS, REFINE_EVALS, REFINED, REJECTED, \
+from drake_mh.planning.motion.clock import now
+from drake_mh.planning.motion.stats import BY_MARGIN, BY_PROBES, MOTIONS, REFINE_EVALS, REFINED, REJECTED, \
     STATES, T_CERTIFY, T_CHECK
 from drake_mh.scene.kernels.pairs import segment_floor
 from drake_mh.scene.kernels.segments import CERTIFIED
