@@ -216,7 +216,7 @@ def demo_animation(out: Path) -> object | None:
 def cmd_demo(args: argparse.Namespace) -> int:
     """``drake-mh demo``."""
     from drake_mh.cli import _smoke
-    from drake_mh.study.commands import run_and_print
+    from drake_mh.cli.study import run_and_print
     from drake_mh.study.report.document import Document, Heading, Link, Markdown, Paragraph, to_html, to_markdown
     from drake_mh.study.store import write_atomic
 

@@ -28,7 +28,7 @@ has no text element) reports what happened. ``status_file`` receives the same st
 The page a user opens is the app's own (:mod:`drake_mh.viz.app_page`): the status box and the
 controls first, in Table 1's order, and Meshcat's 3-D view beside them (Meshcat's own panel
 lists the controls after its Scene / Animations folders, below the fold). The obstacle is drawn
-translucent red, distinct from the (orange) robots. :func:`drake_mh.viz.cli.run_app` is ``drake-mh app``: it
+translucent red, distinct from the (orange) robots. :func:`drake_mh.cli.app.run_app` is ``drake-mh app``: it
 prints the page's URL, runs the loop, and ends with its own "app stopped" line on Ctrl-C.
 
 Everything runs in the thread that created Meshcat (Drake requires it): one loop polls the

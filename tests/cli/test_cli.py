@@ -11,7 +11,7 @@ import pytest
 
 from drake_mh.cli import COMMAND_MODULES, build_parser, main
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 TOY = '''
 from drake_mh.study import Study
 
@@ -46,7 +46,7 @@ def test_help_lists_subcommands(capsys):
 
 
 def test_subcommand_modules_plug_in():
-    assert "drake_mh.ik.cli" in COMMAND_MODULES and "drake_mh.viz.cli" in COMMAND_MODULES
+    assert "drake_mh.cli.ik" in COMMAND_MODULES and "drake_mh.cli.app" in COMMAND_MODULES
     parser = build_parser()  # modules that do not exist yet are skipped
     assert parser.prog == "drake-mh"
 
@@ -194,7 +194,7 @@ def test_log_handler_follows_the_current_stderr(monkeypatch, capsys):
     import io
     import logging
 
-    from drake_mh.cli import _configure_logging
+    from drake_mh.cli.main import _configure_logging
 
     _configure_logging(verbose=False, quiet=False)
     old = io.StringIO()

@@ -28,12 +28,12 @@ PROG = "drake-mh"
 
 #: subcommand modules in help order; each defines ``register(subparsers, common)``
 COMMAND_MODULES: tuple[str, ...] = (
-    "drake_mh.cli",  # robots
-    "drake_mh.ik.cli",  # ik (from the IK issue)
-    "drake_mh.study.commands",  # study, report
+    "drake_mh.cli.main",  # robots
+    "drake_mh.cli.ik",  # ik (from the IK issue)
+    "drake_mh.cli.study",  # study, report
     "drake_mh.study.demo",  # demo
-    "drake_mh.viz.cli",  # app (from the visualisation issue)
-    "drake_mh.viz.plan_cli",  # plan (one motion: issue #18)
+    "drake_mh.cli.app",  # app (from the visualisation issue)
+    "drake_mh.cli.plan",  # plan (one motion: issue #18)
 )
 
 
@@ -158,7 +158,7 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
 def cmd_robots(args: argparse.Namespace) -> int:
     """``drake-mh robots [PATH_OR_NAME] [--ee-frame NAME] [--package NAME=DIR] [--check]``."""
     from drake_mh.errors import InvalidArgument
-    from drake_mh.smoke import _short, catalogue_entry, kernel_errors, run_smoke, sphere_check
+    from drake_mh.cli.robots import _short, catalogue_entry, kernel_errors, run_smoke, sphere_check
 
     if args.name is None:
         if args.ee_frame or args.package:
@@ -183,7 +183,7 @@ def cmd_robots(args: argparse.Namespace) -> int:
 
 
 def _smoke():
-    module = _load_command_module("drake_mh.smoke")
+    module = _load_command_module("drake_mh.cli.robots")
     return getattr(module, "run_smoke", None) if module is not None else None
 
 
