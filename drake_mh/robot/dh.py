@@ -32,6 +32,7 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument, InvalidDHTable, InvalidLimits
 from drake_mh.robot.inertia import capsule_inertia, combine_inertias
+from drake_mh.robot.loading import DRAKE_MH_NS, DRAKE_NS
 
 __all__ = [
     "Capsule",
@@ -44,8 +45,6 @@ __all__ = [
     "DRAKE_MH_NS",
 ]
 
-DRAKE_NS = "http://drake.mit.edu"
-DRAKE_MH_NS = "https://github.com/drake-mh/ns"
 CONVENTIONS = ("standard", "modified")
 
 #: Default effective density of a link [kg/m^3] when its mass is not given: the solid

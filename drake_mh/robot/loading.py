@@ -36,6 +36,9 @@ from drake_mh.robot.packages import UriResolver
 logger = logging.getLogger(__name__)
 
 DRAKE_NS = "http://drake.mit.edu"
+"""XML namespace of Drake's own model extensions (e.g. ``drake:declare_convex``)."""
+DRAKE_MH_NS = "https://github.com/drake-mh/ns"
+"""XML namespace of drake_mh's own URDF attributes (e.g. ``drake_mh:jerk``); Drake ignores it."""
 FORMATS = ("urdf", "sdf", "mjcf")
 
 
@@ -458,8 +461,6 @@ def weld_free_bodies(plant) -> None:
 
 def read_extra_limits(root: ET.Element, source: str) -> dict[str, dict[str, float]]:
     """Jerk limits (``drake_mh:jerk``) and raw ``<limit effort>`` per joint from the URDF."""
-    from drake_mh.robot.robot import DRAKE_MH_NS
-
     jerk_key = f"{{{DRAKE_MH_NS}}}jerk"
     jerk, effort = {}, {}
     for joint in root.findall("joint"):

@@ -49,9 +49,6 @@ logger = logging.getLogger(__name__)
 URDF_DIR = Path(__file__).resolve().parents[1] / "urdf"
 """Folder of the bundled robot models (``urdf/`` at the repository root links here)."""
 
-DRAKE_MH_NS = "https://github.com/drake-mh/ns"
-"""XML namespace of drake_mh's own URDF attributes (e.g. ``drake_mh:jerk``); Drake ignores it."""
-
 _MODEL_SUFFIXES = (".urdf", ".xacro", ".sdf", ".xml")
 
 

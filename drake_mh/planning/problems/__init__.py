@@ -155,7 +155,7 @@ def _example_copy(name: str, limits: dict, edit=None, tag: str = ""):
     from drake_mh._support.cache import atomic_write_bytes, cache_dir, content_hash
     from drake_mh.errors import MeshNotFound
     from drake_mh.robot.examples import EXAMPLE_ARMS, example_robot_data_root
-    from drake_mh.robot.robot import DRAKE_MH_NS
+    from drake_mh.robot.loading import DRAKE_MH_NS, DRAKE_NS
 
     root = example_robot_data_root()
     if root is None:
@@ -164,7 +164,7 @@ def _example_copy(name: str, limits: dict, edit=None, tag: str = ""):
     rel, ee = EXAMPLE_ARMS[name]
     path = Path(root) / rel
     text = path.read_text(encoding="utf-8")
-    edited = re.sub(r"<robot ", f'<robot xmlns:drake="http://drake.mit.edu" xmlns:drake_mh="{DRAKE_MH_NS}" ', text,
+    edited = re.sub(r"<robot ", f'<robot xmlns:drake="{DRAKE_NS}" xmlns:drake_mh="{DRAKE_MH_NS}" ', text,
                     count=1)
     for joint, attributes in limits.items():
         edited, n = re.subn(rf'(<joint name="{joint}".*?<limit )', rf"\g<1>{attributes} ", edited, count=1,
