@@ -205,7 +205,7 @@ def solve_hybrid(problem: IKProblem, seed=0, budget: int | None = None, timeout:
 
     Args:
         problem: the IK problem.
-        seed: an integer >= 0 seeds the first phase's starts (:func:`drake_mh.ik.kernels.uniform_hash`)
+        seed: an integer >= 0 seeds the first phase's starts (:func:`drake_mh._support.random.uniform_at`)
             and ``numpy.random.default_rng`` of the population phase; anything else
             ``default_rng`` accepts (``None``, a ``Generator``, a ``SeedSequence``) seeds the
             generator, whose first draw seeds the starts.

@@ -18,7 +18,7 @@ instead of 98.7 % / 255; Panda ``pinv`` 97 instead of 125, ``dls`` 136 instead o
 99.7-100 %). A search box narrower than the limits (``paths.continuity.LocalIKProblem``)
 clamps instead (``LMSettings.project_limits``). The first start is the
 mid-range configuration (or ``q_ref`` when the problem has one), later starts are uniform
-within the limits (random restarts, drawn by :func:`drake_mh.ik.kernels.uniform_hash` from the
+within the limits (random restarts, drawn by :func:`drake_mh._support.random.uniform_at` from the
 seed) until the budget or the timeout is spent. Both run in the compiled restart loop of
 :mod:`drake_mh.ik.lm` (:func:`~drake_mh.ik.lm.lm_run`, one candidate): Python is entered once
 per converged point (for the obstacle check and Drake's verification) or per ~0.15 ms.

@@ -3,7 +3,7 @@
 The Jacobian baselines (:mod:`drake_mh.ik.jacobian`) and both phases of the hybrid
 (:mod:`drake_mh.ik.hybrid`) share this machinery. They run :func:`lm_run` (via
 :meth:`BatchLM.run`): iterations *and* restarts inside one compiled call, FK and Jacobian of
-each candidate by :func:`drake_mh.ik.kernels.fk_jacobian_one`, returning when a candidate
+each candidate by :func:`drake_mh.kinematics.kernels.fk_jacobian_one`, returning when a candidate
 converges or its starts run out. :meth:`BatchLM.iterate` (one iteration per call: the batched
 kernel ``Robot.batch.fk_jacobian(Q (K, nq))`` and :func:`lm_step`) remains for step-by-step
 use. Per candidate k, an iteration
@@ -40,9 +40,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from drake_mh.ik.kernels import fk_jacobian_one, uniform_hash
+from drake_mh._support.random import uniform_at
+from drake_mh.kinematics.kernels import fk_jacobian_one
 
-__all__ = ["LMSettings", "BatchLM", "lm_step", "lm_run", "fk_jacobian_one", "uniform_hash", "CONVERGED", "STALLED",
+__all__ = ["LMSettings", "BatchLM", "lm_step", "lm_run", "CONVERGED", "STALLED",
            "RUNNING"]
 
 #: row states: iterating, converged (to the solver's tolerances), stalled (to be restarted)
@@ -336,7 +337,7 @@ def lm_run(starts, n_starts, gen_seed, cursor, max_evals, Qt, Qa, Ea, Ja, fa, la
     Args:
         starts: ``(M, nq)`` given starting points within the limits: starts ``0 .. M-1``.
         n_starts: number of starts; starts ``M .. n_starts-1`` are drawn uniformly within
-            the limits by :func:`uniform_hash` with ``gen_seed`` (start c, joint j: draw
+            the limits by :func:`drake_mh._support.random.uniform_at` with ``gen_seed`` (start c, joint j: draw
             ``c nq + j``), so they depend on the seed and the index only.
         gen_seed: ``uint64`` seed of the generated starts.
         cursor: index of the next unused start.
@@ -384,7 +385,7 @@ def lm_run(starts, n_starts, gen_seed, cursor, max_evals, Qt, Qa, Ea, Ja, fa, la
                     Qt[k, j] = starts[cursor, j]
             else:  # uniform within the limits, from the counter-based generator
                 for j in range(nq):
-                    Qt[k, j] = lower[j] + (upper[j] - lower[j]) * uniform_hash(gen_seed, cursor * nq + j)
+                    Qt[k, j] = lower[j] + (upper[j] - lower[j]) * uniform_at(gen_seed, cursor * nq + j)
             cursor += 1
             fresh[k] = True
             iters[k] = 0

@@ -4,7 +4,7 @@
   ``jacobian(Q) -> (N, 6, nq)``, points and frames of a population) and
   :func:`compile_chain`, the joint frames and axes read from the plant;
 * :mod:`.kernels` — the compiled FK/Jacobian kernels themselves, the documented entry points
-  that other packages' compiled code calls (:func:`~.kernels.fk_jacobian`,
+  that other packages' compiled code calls (:func:`~.kernels.frames_block`,
   :func:`~.kernels.fk_jacobian_one`, ...).
 """
 

@@ -60,10 +60,22 @@ def _sincos_block(x, s_out, c_out, m):
 
 
 @numba.njit(cache=True, fastmath=_FASTMATH, inline="always")
-def _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs):
-    """World poses of every moving frame for configurations n0 .. n0+m-1.
+def frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs):
+    """World poses of every moving frame for configurations n0 .. n0+m-1: the forward kinematics
+    that the other packages' compiled kernels (the scene's collision checks) build on.
 
-    R: (F, 3, 3, BLOCK), p: (F, 3, BLOCK) — block index innermost. A revolute frame whose
+    Args:
+        QT: ``(nq, N)`` configurations, coordinate first [rad or m].
+        n0, m: the first configuration and how many (``m <= BLOCK``).
+        parent, KR, Kp, perm, kind, qidx: the compiled chain as
+            :class:`~drake_mh.kinematics.BatchKinematics` passes it (``(F,)`` parents, ``(F, 3, 3)``
+            and ``(F, 3)`` fixed rotations and offsets, ``(F,)`` signed-permutation flags, joint
+            kinds and coordinate indices).
+        R, p: outputs, ``R_WF (F, 3, 3, BLOCK)`` and ``p_WF (F, 3, BLOCK)`` [m], block index
+            innermost (lane ``b`` is configuration ``n0 + b``).
+        sn, cs: ``(BLOCK,)`` scratch.
+
+    A revolute frame whose
     fixed rotation is a signed permutation (``perm``) takes its parent's columns and the joint's
     rotation in one pass (3-4 ns less per Panda configuration than copying the columns first;
     the same operations, so the same bits).
@@ -160,7 +172,7 @@ def fk_jacobian(QT, parent, KR, Kp, perm, kind, qidx, anchor, ER, Ep, on_path, w
     pe = np.empty((3, BLOCK))
     for n0 in range(0, N, BLOCK):
         m = min(BLOCK, N - n0)
-        _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
+        frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
         _attached_block(m, anchor, ER, Ep, R, p, Re, pe)
         for b in range(m):
             n = n0 + b
@@ -209,7 +221,7 @@ def points(QT, parent, KR, Kp, perm, kind, qidx, point_anchor, point_offset, out
     cs = np.empty(BLOCK)
     for n0 in range(0, N, BLOCK):
         m = min(BLOCK, N - n0)
-        _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
+        frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
         for s in range(point_anchor.shape[0]):
             a = point_anchor[s]
             o0, o1, o2 = point_offset[s, 0], point_offset[s, 1], point_offset[s, 2]
@@ -233,7 +245,7 @@ def moving_frames(QT, parent, KR, Kp, perm, kind, qidx, R_out, p_out):
     cs = np.empty(BLOCK)
     for n0 in range(0, N, BLOCK):
         m = min(BLOCK, N - n0)
-        _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
+        frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
         for k in range(F):
             for b in range(m):
                 for i in range(3):

@@ -86,7 +86,7 @@ class ARO(Optimizer):
         t, T = min(self.nit, self.T), self.T
         U = self.rng.random((P, 8 + (D if self.amnn else 2 * D)))
         N = self._no_normals if self.amnn else self.rng.standard_normal((2, P))
-        return _move(self.X, U, N, t, T, self.amnn, self.lower, self.upper)
+        return rabbit_moves(self.X, U, N, t, T, self.amnn, self.lower, self.upper)
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
         if self.X is None:
@@ -96,7 +96,7 @@ class ARO(Optimizer):
 
 
 @numba.njit(cache=True)
-def _move(X, U, N, t, T, amnn, lower, upper):
+def rabbit_moves(X, U, N, t, T, amnn, lower, upper):
     """One generation of candidate moves (detour or hiding) for every rabbit, then the
     variant's bound handling. Returns the candidates ``(P, D)``.
 

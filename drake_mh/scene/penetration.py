@@ -44,7 +44,7 @@ import functools
 import numba
 import numpy as np
 
-from drake_mh.scene.kernels.exact import _closest_segments
+from drake_mh.scene.kernels.exact import closest_segments
 from drake_mh.scene.segment_distance import CAPSULE, SPHERE, _sdf, primitive_code, segment_min_sdf
 from drake_mh.geometry.shapes import Box, Cylinder
 
@@ -99,7 +99,7 @@ def _segment_bound(kind, dims, R_WO, p_WO, pts, half_length, radius, corners, no
     if kind == SPHERE or kind == CAPSULE:  # the closest points of the axis and the obstacle's core
         lo, hi = np.zeros(3), np.zeros(3)
         lo[2], hi[2] = -dims[1], dims[1]  # a sphere's core is a point (dims[1] = 0)
-        return _closest_segments(a, b, lo, hi, np.empty(3), np.empty(3)) - dims[0] - radius
+        return closest_segments(a, b, lo, hi, np.empty(3), np.empty(3)) - dims[0] - radius
     f = segment_min_sdf(kind, dims, a, b)[1]
     if f <= 0.0:
         f = _sat_segment(a, b, corners, normals, edges)

@@ -125,7 +125,7 @@ class Scene:
         self._free_function = None
         self._free_one = None  # its one-configuration entry and buffer (batch.CollisionModel.free_function)
         self._clearance_function = None  # batch_obstacle_distances' (batch.CollisionModel.obstacle_clearance_function)
-        self._planner_binding = None  # a planner's arguments for these obstacles (rrt_connect.planner._binding)
+        self._planner_bindings: dict = {}  # what planners bound to these obstacles (planner_binding)
         self._polytopes = None  # the obstacles' polytopes for its penetration correction (penetration.py)
         self._q_shape, self._nq = (robot.nq,), robot.nq
         self._self_capsule_pairs: list = []
@@ -469,7 +469,8 @@ class Scene:
     def _obstacles_changed(self) -> None:
         """Drop what was bound to the obstacles (rebuilt on the next query)."""
         self._obstacle_arrays = self._free_function = self._free_one = self._clearance_function = None
-        self._polytopes = self._planner_binding = None
+        self._polytopes = None
+        self._planner_bindings = {}
 
     @property
     def obstacle_arrays(self) -> tuple:
@@ -480,6 +481,20 @@ class Scene:
             self._obstacle_arrays = obstacle_arrays(self._obstacles.values())
             self._free_function = self._free_one = self._clearance_function = None
         return self._obstacle_arrays
+
+    def planner_binding(self, key, build):
+        """``build(self)``, computed once per ``key`` and kept until the obstacles change (:meth:`add`,
+        :meth:`move`, :meth:`remove`): what a compiled planner derives from :attr:`obstacle_arrays`
+        and :attr:`collision_model` (its kernel's arguments) is built once, not at every plan.
+
+        Args:
+            key: names the planner's binding (hashable, e.g. the planner's function).
+            build: ``build(scene) -> value``; it reads the scene, never changes it.
+        """
+        value = self._planner_bindings.get(key)
+        if value is None:
+            value = self._planner_bindings[key] = build(self)
+        return value
 
     def _free(self):
         """The compiled boolean query bound to the current obstacles (rebuilt when they change)."""

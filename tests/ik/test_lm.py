@@ -1,5 +1,5 @@
 """The compiled LM machinery (drake_mh.ik.lm): single-configuration kinematics against Drake,
-the counter-based start generator, the restart loop (convergence verified by Drake, limits,
+the restart loop (convergence verified by Drake, limits,
 chunking, determinism), and the hybrid's phases."""
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from random_models import random_chain_urdf
 
 from drake_mh.ik import IKProblem, solve_ik
 from drake_mh.ik.hybrid import HybridConfig
-from drake_mh.ik.kernels import fk_jacobian_one, uniform_hash
 from drake_mh.ik.lm import STALLED, BatchLM, LMSettings, _compiled_chain
+from drake_mh.kinematics.kernels import fk_jacobian_one
 from drake_mh.robot import Robot
 
 FIRST = HybridConfig().first_lm
@@ -35,16 +35,6 @@ def test_single_configuration_kinematics_match_drake(panda, six_dof, prismatic):
             T, J = _fk_one(robot, q)
             assert np.abs(T - robot.fk_drake(q)).max() < 1e-12
             assert np.abs(J - robot.jacobian_drake(q)).max() < 1e-12
-
-
-def test_uniform_hash_is_deterministic_and_uniform():
-    u = np.array([uniform_hash(np.uint64(7), n) for n in range(20_000)])
-    assert np.array_equal(u, [uniform_hash(np.uint64(7), n) for n in range(20_000)])
-    assert u.min() >= 0.0 and u.max() < 1.0
-    counts = np.histogram(u, bins=10, range=(0, 1))[0]
-    assert np.all(np.abs(counts - 2000) < 5 * np.sqrt(2000))  # chi-square-sized deviations only
-    other = np.array([uniform_hash(np.uint64(8), n) for n in range(1000)])
-    assert abs(np.corrcoef(u[:1000], other)[0, 1]) < 0.1  # another seed, another stream
 
 
 def _trac_ik_problem(robot, seed):

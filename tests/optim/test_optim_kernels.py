@@ -269,7 +269,7 @@ def test_aro_move(amnn, t):
     X = np.clip(X, LOWER, UPPER)
     U = rng.random((P, 8 + (D if amnn else 2 * D)))
     N = np.empty((2, 0)) if amnn else rng.standard_normal((2, P)) * 3.0
-    Xn = aro._move(X, U, N, t, 30, amnn, LOWER, UPPER)
+    Xn = aro.rabbit_moves(X, U, N, t, 30, amnn, LOWER, UPPER)
     np.testing.assert_allclose(Xn, aro_reference(X, U, N, t, 30, amnn), rtol=1e-12, atol=1e-12)
     assert inside(Xn)
 

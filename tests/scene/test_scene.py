@@ -409,3 +409,20 @@ def test_self_capsule_pairs_are_exact():
             assert pairs[key] <= d + 2e-4, key                   # other geometry of the links may be closer
             assert any(abs(p.distance - d) < 2e-4 for p in scene.distances(q)
                        if p.is_self and tuple(sorted((p.link, p.other))) == key), key
+
+
+def test_a_planner_binding_is_built_once_per_key_and_again_after_the_obstacles_change():
+    scene = Scene(PANDA)
+    scene.add("ball", Sphere(0.1), [0.5, 0.0, 0.5])
+    built = []
+
+    def build(s):
+        built.append(s.obstacle_arrays[2].copy())  # the obstacles' positions p_WO (K, 3)
+        return len(built)
+
+    assert scene.planner_binding("a", build) == 1 and scene.planner_binding("a", build) == 1
+    assert scene.planner_binding("b", build) == 2
+    scene.move("ball", [0.4, 0.0, 0.5])
+    assert scene.planner_binding("a", build) == 3 and built[2][0, 0] == pytest.approx(0.4, abs=1e-15)
+    scene.remove("ball")
+    assert scene.planner_binding("a", build) == 4 and built[3].shape == (0, 3)

@@ -29,13 +29,11 @@ from numba.core import types
 from numba.typed import Dict
 
 from drake_mh._support.borrow import borrow
-from drake_mh.planning.motion.clock import now
-from drake_mh.planning.rrt_connect._kernels import BUDGET, FOUND, TIMEOUT, _drop_collinear, _shortcut, _uniform
-from drake_mh.planning.motion.check import _probe_collides, certified_motion, motion_capacity, workspaces
-from drake_mh.planning.motion.stats import STAT_NAMES, T_FOUND, T_TOTAL
-from drake_mh.scene.kernels.context import CheckContext
-from drake_mh.scene.kernels.collision import collision_free
-from drake_mh.scene.kernels.packing import _unpack
+from drake_mh._support.random import below, uniform
+from drake_mh.planning.motion import (certified_motion, drop_collinear, motion_capacity, now, probe_collides,
+                                      shortcut, workspaces)
+from drake_mh.planning.motion.stats import BUDGET, FOUND, STAT_NAMES, T_FOUND, T_TOTAL, TIMEOUT
+from drake_mh.scene.kernels import CheckContext, collision_free, unpack
 
 PRM_STAT_NAMES = ("batches", "samples", "free_samples", "pruned", "graph_nodes", "searches", "edges_checked",
                   "edges_invalid", "improvements")
@@ -62,8 +60,8 @@ VALID, INVALID = np.int8(1), np.int8(-1)
 @numba.njit(cache=True)
 def _gauss(rng):
     """A standard normal draw (Box-Muller) from the splitmix64 state ``rng``."""
-    u = 1.0 - _uniform(rng)  # (0, 1]
-    return math.sqrt(-2.0 * math.log(u)) * math.cos(2.0 * math.pi * _uniform(rng))
+    u = 1.0 - uniform(rng)  # (0, 1]
+    return math.sqrt(-2.0 * math.log(u)) * math.cos(2.0 * math.pi * uniform(rng))
 
 
 @numba.njit(cache=True)
@@ -82,7 +80,7 @@ def _informed(rng, qs, qg, c_best, out):
     for j in range(n):
         c_min += (qg[j] - qs[j]) ** 2
     c_min = math.sqrt(c_min)
-    scale = _uniform(rng) ** (1.0 / n) / math.sqrt(norm)
+    scale = uniform(rng) ** (1.0 / n) / math.sqrt(norm)
     conjugate = 0.5 * math.sqrt(max(c_best * c_best - c_min * c_min, 0.0))
     out[0] *= scale * 0.5 * c_best
     for j in range(1, n):
@@ -242,7 +240,7 @@ def prm_kernel(q_start, goals, init_path, init_goal, lower, upper, ints, floats,
     waypoints do not join the graph (a graph holding a path already shortcut would rarely find a
     shorter one through random samples: its own paths zigzag). Each time the graph's shortest
     path shortens, that path is shortcut
-    (:func:`~drake_mh.planning.rrt_connect._kernels._shortcut`, ``shortcut_iterations`` draws)
+    (:func:`~drake_mh.planning.motion.shortcut`, ``shortcut_iterations`` draws)
     and kept if shorter than the best.
 
     Args:
@@ -261,7 +259,7 @@ def prm_kernel(q_start, goals, init_path, init_goal, lower, upper, ints, floats,
     stats[:] = 0.0
     state = np.empty(1, np.uint64)
     state[0] = seed
-    arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller (drake_mh._support.borrow)
+    arrays = unpack(borrow(ints), borrow(floats))  # held by the caller (drake_mh._support.borrow)
     resolution, margin = options[2], options[3]
     lanes = (int(options[4]), int(options[5]))
     capacity = motion_capacity(upper - lower, reach, resolution, margin)
@@ -320,7 +318,7 @@ def _search(owner, buf_owner, start, arrays, q_start, goals, init_path, init_goa
                 if count == 0:  # the straight motion to a goal is the path: nothing shorter exists
                     attempts = ATTEMPTS_PER_SAMPLE * batch
                     break
-                g = reachable[min(int(_uniform(rng) * count), count - 1)]
+                g = reachable[below(rng, count)]
                 _informed(rng, q_start, goals[g], c_best, q)
                 inside = True
                 for j in range(nq):
@@ -329,7 +327,7 @@ def _search(owner, buf_owner, start, arrays, q_start, goals, init_path, init_goa
                     continue
             else:
                 for j in range(nq):
-                    q[j] = lower[j] + _uniform(rng) * (upper[j] - lower[j])
+                    q[j] = lower[j] + uniform(rng) * (upper[j] - lower[j])
             QT[:, drawn] = q
             drawn += 1
         stats[SAMPLES] += drawn
@@ -381,7 +379,7 @@ def _search(owner, buf_owner, start, arrays, q_start, goals, init_path, init_goa
             for r in range(len(nodes) - 1, 0, -1):
                 i, j = nodes[r], nodes[r - 1]
                 key = min(i, j) * _KEY + max(i, j)
-                if key not in status and _probe_collides(V[i], V[j], ctx, True):
+                if key not in status and probe_collides(V[i], V[j], ctx, True):
                     stats[EDGES_CHECKED] += 1
                     status[key] = INVALID
                     stats[EDGES_INVALID] += 1
@@ -409,9 +407,9 @@ def _search(owner, buf_owner, start, arrays, q_start, goals, init_path, init_goa
                 found = np.empty((len(nodes), nq))
                 for r in range(len(nodes)):
                     found[r] = V[nodes[len(nodes) - 1 - r]]
-                found = _shortcut(_drop_collinear(found), shortcut_iterations, shortcut_min_gain, rng, ctx, lanes,
-                                  v_WO, reach, clearance, self_clearance, resolution, margin, max_evals, None, stats,
-                                  clock, buf, False, start, time_limit)
+                found = shortcut(drop_collinear(found), shortcut_iterations, shortcut_min_gain, rng, ctx, lanes,
+                                 v_WO, reach, clearance, self_clearance, resolution, margin, max_evals, None, stats,
+                                 clock, buf, False, start, time_limit)
                 length = _length(found)
                 if length < c_best:
                     if c_best == math.inf:

@@ -15,8 +15,11 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument
 from drake_mh.planning.lazy_prm_star import _kernels as K
+from drake_mh.planning.motion import clock_address, scene_arguments
 from drake_mh.planning.motion import stats as S
 from drake_mh.planning.rrt_connect import planner as rrt
+
+_CLOCK = clock_address()
 
 DEFAULT_SAMPLES = 1000
 """Samples drawn (the budget) when ``solve_motion``'s ``budget`` is None: the search then ends
@@ -73,7 +76,7 @@ class LazyPRMStarConfig:
 
     def vector(self) -> np.ndarray:
         """The kernel's ``options`` (:data:`._kernels.OPTION_NAMES`)."""
-        values = {**dataclasses.asdict(self), "clock": rrt._CLOCK}
+        values = {**dataclasses.asdict(self), "clock": _CLOCK}
         return np.array([float(values[name]) for name in K.OPTION_NAMES])
 
     @classmethod
@@ -108,8 +111,7 @@ def prepare(problem, **options) -> float:
 
 
 def _kernel_call(problem, goals, init_path, init_goal, seed, samples, time_limit, config):
-    binding = rrt._binding(problem.scene)
-    ints, floats, v_WO, reach, lower, upper = binding[:6]
+    ints, floats, v_WO, reach, lower, upper = scene_arguments(problem.scene)
     stats = np.zeros(K.N_STATS)
     path, outcome, goal = K.prm_kernel(
         np.ascontiguousarray(problem.q_start, dtype=float), np.ascontiguousarray(goals, dtype=float),
@@ -143,10 +145,10 @@ def plan(problem, goals, rng, deadline, budget, **options):
     info.update(warm_start_time=warm_time, warm_start_length=warm_length,
                 t_first=(warm_time if len(init) else warm_time + stats[S.T_FOUND]) if found else float("nan"),
                 t_search=stats[S.T_TOTAL], prepare_time=prepare_time)
-    if outcome == K.FOUND:
+    if outcome == S.FOUND:
         info["goal"] = goal
         return path, info
-    why = "budget" if outcome == K.BUDGET else "timeout"
+    why = "budget" if outcome == S.BUDGET else "timeout"
     info["message"] = (f"no path: {why} reached after {info['samples']} samples ({info['free_samples']} free) and "
                        f"{info['edges_checked']} edges checked"
                        + ("" if not config.warm_start else f"; the warm start found none ({warm_info.get('message')})"))

@@ -1,4 +1,4 @@
-"""Certified straight motions for the compiled RRT-Connect (:mod:`._kernels`).
+"""Certified straight motions for the compiled planners (``rrt_connect``, ``lazy_prm_star``).
 
 :func:`certified_motion` decides whether a straight joint-space motion is collision-free over
 its whole length: its interpolated states in batched calls with early exit (the scene's
@@ -21,10 +21,9 @@ import numpy as np
 from drake_mh.planning.motion.clock import now
 from drake_mh.planning.motion.stats import BY_MARGIN, BY_PROBES, MOTIONS, REFINE_EVALS, REFINED, REJECTED, \
     STATES, T_CERTIFY, T_CHECK
-from drake_mh.scene.kernels.pairs import segment_floor
-from drake_mh.scene.kernels.segments import CERTIFIED
-from drake_mh.scene.kernels.segments import certify_segments as _certify_segments
-from drake_mh.scene.kernels.states import CLEAR, COLLISION, check_blocks, check_states, state_workspace
+from drake_mh.scene.kernels import (CERTIFIED, CLEAR, COLLISION, check_blocks, check_states, segment_floor,
+                                    state_workspace)
+from drake_mh.scene.kernels import certify_segments as _certify_segments
 from drake_mh.scene.pair_table import LOWEST
 
 CERTIFIED_ROW = -1.0
@@ -210,7 +209,7 @@ def _refine(qa, qb, tau, order, n, lam, inv_lam, speeds, plain, clearance, self_
 
 
 @numba.njit(cache=True, inline="always")
-def _probe_collides(qa, qb, ctx, interior):
+def probe_collides(qa, qb, ctx, interior):
     """Whether one of the motion's probe states (:data:`PROBES`, or :data:`INTERIOR_PROBES` for
     a motion whose ends are known free; as many as the workspace says) collides at the plain
     clearances: one batched call before any of the motion's setup."""
@@ -245,7 +244,7 @@ def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance,
     its ``Λ_c`` is :data:`CERTIFIED_ROW` and no state checks that pair (its clearance rows are
     ``-inf``: neither its bounding spheres, nor its table, nor its sphere pairs).
 
-    0. The probes (:func:`_probe_collides`: states of :data:`PROBES`, or with ``interior`` of
+    0. The probes (:func:`probe_collides`: states of :data:`PROBES`, or with ``interior`` of
        :data:`INTERIOR_PROBES`, as many as the workspace says, 0 to skip): one batched call at
        the plain clearances, before any of the motion's setup; a probe that collides rejects
        the motion (the statistics' ``BY_PROBES``). A probe certifies nothing, so the answer is
@@ -285,7 +284,7 @@ def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance,
     nq = qa.shape[0]
     G, C = g_anchor.shape[0], reach.shape[0]
     stats[STATES] += mws[16][1] if interior else mws[16][0]
-    if _probe_collides(qa, qb, ctx, interior):
+    if probe_collides(qa, qb, ctx, interior):
         stats[MOTIONS] += 1
         stats[REJECTED] += 1
         stats[BY_PROBES] += 1

@@ -4,9 +4,9 @@ Everything from the first sample to the shortcut path runs in one numba call
 (:func:`plan_kernel`); the only Python is the call itself. Every motion (tree edge, direct
 connection, shortcut) is certified by :func:`drake_mh.planning.motion.check.certified_motion`.
 
-Randomness: splitmix64 (Steele, Lea, Flood, "Fast splittable pseudorandom number generators",
-OOPSLA 2014) on a state array seeded from the caller's ``numpy.random.Generator``: the same
-seed gives the same path, whatever else runs in the process.
+Randomness: splitmix64 (:mod:`drake_mh._support.random`) on a state array seeded from the caller's
+``numpy.random.Generator``: the same seed gives the same path, whatever else runs in the process.
+The shortcut and the motion check are shared with ``lazy_prm_star`` (:mod:`drake_mh.planning.motion`).
 """
 
 from __future__ import annotations
@@ -17,15 +17,11 @@ import numba
 import numpy as np
 
 from drake_mh._support.borrow import borrow
-from drake_mh.planning.motion.clock import now
-from drake_mh.planning.motion.check import certified_motion, motion_capacity, workspaces
-from drake_mh.planning.motion.stats import ITERATIONS, NN_SCANS, NODES, OUT_OF_DOMAIN, SHORTCUTS_KEPT, \
-    SHORTCUTS_TRIED, T_FOUND, T_NN, T_SAMPLE, T_SHORTCUT, T_TOTAL
-from drake_mh.scene.kernels.context import CheckContext
-from drake_mh.scene.kernels.packing import _unpack
-
-FOUND, BUDGET, TIMEOUT = 0, 1, 2
-"""Outcomes of :func:`plan_kernel`."""
+from drake_mh._support.random import below, uniform
+from drake_mh.planning.motion import certified_motion, drop_collinear, motion_capacity, now, shortcut, workspaces
+from drake_mh.planning.motion.stats import BUDGET, FOUND, ITERATIONS, NN_SCANS, NODES, OUT_OF_DOMAIN, T_FOUND, T_NN, \
+    T_SAMPLE, T_TOTAL, TIMEOUT
+from drake_mh.scene.kernels import CheckContext, unpack
 
 OPTION_NAMES = ("step", "resolution", "margin", "lanes", "block", "probes", "interior_probes", "goal_bias",
                 "balance", "max_certify_evaluations", "shortcut_iterations", "shortcut_min_gain", "clock", "profile",
@@ -45,34 +41,6 @@ SAMPLES_PER_NODE = 1000
 """Most iterations per node of the budget (``max_nodes``): samples that the dynamic domain draws
 again add no node, so without this bound a tree whose every node failed, with a small radius,
 could sample forever when no deadline is given (VAMP bounds its iterations too)."""
-
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
-_MIX2 = np.uint64(0x94D049BB133111EB)
-_S30, _S27, _S31, _S11 = np.uint64(30), np.uint64(27), np.uint64(31), np.uint64(11)
-
-
-@numba.njit(cache=True, inline="always")
-def _next(state):
-    """splitmix64: the next 64 random bits (``state`` a ``(1,)`` uint64 array)."""
-    z = state[0] + _GOLDEN
-    state[0] = z
-    z = (z ^ (z >> _S30)) * _MIX1
-    z = (z ^ (z >> _S27)) * _MIX2
-    return z ^ (z >> _S31)
-
-
-@numba.njit(cache=True, inline="always")
-def _uniform(state):
-    """Uniform in [0, 1) with 53 random bits."""
-    return np.float64(_next(state) >> _S11) * (1.0 / 9007199254740992.0)
-
-
-@numba.njit(cache=True, inline="always")
-def _below(state, n):
-    """Uniform integer in [0, n)."""
-    return min(int(_uniform(state) * n), n - 1)
-
 
 @numba.njit(cache=True)
 def _nearest(V, n, q):
@@ -163,107 +131,6 @@ def _root(P, tree, i):
 
 
 @numba.njit(cache=True)
-def _drop_collinear(path):
-    """Remove waypoints that lie on the segment between their neighbours (the straight runs of
-    CONNECT: the union of certified collinear segments is the one segment)."""
-    M, nq = path.shape
-    keep = np.ones(M, np.bool_)
-    last = 0
-    for k in range(1, M - 1):
-        a, b, c = path[last], path[k], path[k + 1]
-        ab, ac, dot = 0.0, 0.0, 0.0
-        for j in range(nq):
-            ab += (b[j] - a[j]) ** 2
-            ac += (c[j] - a[j]) ** 2
-            dot += (b[j] - a[j]) * (c[j] - a[j])
-        # b on [a, c]: |ab| |ac| == ab·ac (parallel, same direction) and |ab| <= |ac|
-        if ab <= ac and ac > 0.0 and dot * dot >= ab * ac * (1.0 - 1e-14) and dot > 0.0:
-            keep[k] = False
-        else:
-            last = k
-    return path[keep].copy()
-
-
-@numba.njit(cache=True)
-def _arc_lengths(path):
-    """``(M,)`` the path's length [rad] from its first waypoint to each waypoint."""
-    M, nq = path.shape
-    s = np.zeros(M)
-    for k in range(M - 1):
-        d = 0.0
-        for j in range(nq):
-            d += (path[k + 1, j] - path[k, j]) ** 2
-        s[k + 1] = s[k] + math.sqrt(d)
-    return s
-
-
-@numba.njit(cache=True)
-def _shortcut(path, iterations, min_gain, rng, ctx, lanes, v_WO, reach, clearance, self_clearance,
-              resolution, margin, max_evals, by_values, stats, clock, buf, profile, start, time_limit):
-    """Random shortcutting (Geraerts & Overmars, "Creating high-quality paths for motion
-    planning", IJRR 2007): join two random points of the path by a certified straight motion
-    (:func:`drake_mh.planning.motion.check.certified_motion`) when that is shorter, ``iterations`` draws or until the
-    deadline. The pieces kept of the old segments are parts of certified segments.
-
-    A draw that would shorten the path by less than ``min_gain`` of its length
-    (``(v - u) - |qb - qa| < min_gain · L``) is not checked: such shortcuts mostly hug the path,
-    so most of them are certified (the expensive answer, many states near obstacles) for little
-    length (see :class:`~.planner.RRTConnectConfig`'s ``shortcut_min_gain``)."""
-    t0 = now(clock, buf) if profile else 0.0
-    nq = path.shape[1]
-    qa, qb = np.empty(nq), np.empty(nq)  # copied into the new path
-    s = _arc_lengths(path)
-    for _ in range(iterations):
-        M = path.shape[0]
-        if M <= 2 or now(clock, buf) - start > time_limit:
-            break
-        L = s[M - 1]
-        u, v = _uniform(rng) * L, _uniform(rng) * L
-        if u > v:
-            u, v = v, u
-        i = 0
-        while i < M - 2 and s[i + 1] <= u:
-            i += 1
-        k = i
-        while k < M - 2 and s[k + 1] <= v:
-            k += 1
-        if k == i:
-            continue
-        ha, hb = s[i + 1] - s[i], s[k + 1] - s[k]
-        ta = (u - s[i]) / ha if ha > 0 else 0.0
-        tb = (v - s[k]) / hb if hb > 0 else 0.0
-        chord = 0.0
-        for j in range(nq):
-            qa[j] = path[i, j] + ta * (path[i + 1, j] - path[i, j])
-            qb[j] = path[k, j] + tb * (path[k + 1, j] - path[k, j])
-            chord += (qb[j] - qa[j]) ** 2
-        if (v - u) - math.sqrt(chord) < min_gain * L:
-            continue
-        stats[SHORTCUTS_TRIED] += 1
-        if not certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance, resolution,
-                                margin, max_evals, by_values, stats, clock, buf, profile, True):
-            continue
-        stats[SHORTCUTS_KEPT] += 1
-        # path[:i+1], qa (unless it is path[i]), qb (unless it is path[k+1]), path[k+1:]
-        add_a, add_b = ta > 0.0, tb < 1.0
-        new = np.empty((i + 1 + add_a + add_b + M - k - 1, nq))
-        new[:i + 1] = path[:i + 1]
-        r = i + 1
-        if add_a:
-            new[r] = qa
-            r += 1
-        if add_b:
-            new[r] = qb
-            r += 1
-        new[r:] = path[k + 1:]
-        path = new
-        s = _arc_lengths(path)
-    if profile:
-        stats[T_SHORTCUT] += now(clock, buf) - t0
-    return path
-
-
-@numba.njit(cache=True)
 def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearance, self_clearance, seed, max_nodes,
                 time_limit, options, by_values, stats):
     """RRT-Connect (Kuffner & LaValle, "RRT-Connect: An efficient approach to single-query path
@@ -309,7 +176,7 @@ def plan_kernel(q_start, goals, lower, upper, ints, floats, v_WO, reach, clearan
     stats[:] = 0.0
     state = np.empty(1, np.uint64)
     state[0] = seed
-    arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._support.borrow)
+    arrays = unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._support.borrow)
     capacity = motion_capacity(upper - lower, reach, resolution, margin)
     owner = workspaces(arrays, q_start.shape[0], reach.shape[0], max(first_lanes, block_lanes), capacity, probes,
                        interior, clearance, self_clearance)
@@ -377,12 +244,12 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
             V, P, D = _grown(V, P, D, count, cap)
         b = 1 - a
         t0 = now(clock, buf) if profile else 0.0
-        biased = _uniform(rng) < goal_bias
+        biased = uniform(rng) < goal_bias
         if biased:
-            q_rand[:] = V[b, _below(rng, roots[b])]
+            q_rand[:] = V[b, below(rng, roots[b])]
         else:
             for j in range(nq):
-                q_rand[j] = lower[j] + _uniform(rng) * (upper[j] - lower[j])
+                q_rand[j] = lower[j] + uniform(rng) * (upper[j] - lower[j])
         if profile:
             t1 = now(clock, buf)
             stats[T_SAMPLE] += t1 - t0
@@ -438,10 +305,10 @@ def _plan(owner, buf_owner, start, arrays, q_start, goals, lower, upper, v_WO_ow
                         g = _root(P, a, ia)
                     stats[NODES] += added
                     stats[T_FOUND] = now(clock, buf) - start  # the first certified path, before the shortcut
-                    path = _drop_collinear(path)
-                    path = _shortcut(path, shortcut_iterations, shortcut_min_gain, rng, ctx, lanes, v_WO,
-                                     reach, clearance, self_clearance, resolution, margin, max_evals, by_values, stats,
-                                     clock, buf, profile, start, time_limit)
+                    path = drop_collinear(path)
+                    path = shortcut(path, shortcut_iterations, shortcut_min_gain, rng, ctx, lanes, v_WO,
+                                    reach, clearance, self_clearance, resolution, margin, max_evals, by_values, stats,
+                                    clock, buf, profile, start, time_limit)
                     stats[T_TOTAL] += now(clock, buf) - start
                     return path, FOUND, g
                 jn = count[b]
@@ -464,7 +331,7 @@ def certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance
     """``(M,)`` bool: whether each straight motion ``QA[i] -> QB[i]`` (``QA[i]`` free) is certified
     by :func:`drake_mh.planning.motion.check.certified_motion`, the planner's check (for tests and other callers)."""
     buf = np.zeros(2, np.int64)
-    arrays = _unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._support.borrow)
+    arrays = unpack(borrow(ints), borrow(floats))  # held by the caller: no reference counts (drake_mh._support.borrow)
     span = np.zeros(QA.shape[1])
     for i in range(QA.shape[0]):
         for j in range(QA.shape[1]):

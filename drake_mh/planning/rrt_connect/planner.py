@@ -16,10 +16,9 @@ import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.planning.rrt_connect import _kernels as K
+from drake_mh.planning.motion import PROBES, clock_address, scene_arguments
 from drake_mh.planning.motion import stats as S
-from drake_mh.planning.motion.clock import clock_address
-from drake_mh.planning.motion.check import PROBES
+from drake_mh.planning.rrt_connect import _kernels as K
 
 _CLOCK = clock_address()
 
@@ -205,25 +204,18 @@ def _arguments(scene) -> tuple:
 
 def _binding(scene) -> tuple:
     """``(ints, floats, v_WO, reach, lower, upper, entries, stats)`` of the scene's current
-    obstacles: the arrays float64 and contiguous as the kernels take them, the kernel's entry
+    obstacles: the arrays as the kernels take them (:func:`~drake_mh.planning.motion.scene_arguments`), the kernel's entry
     points for them (:func:`_call`; shared by every binding whose arrays have the same types, so
     that a new scene costs no compilation in a plan) and the statistics array a plan writes
     (read at once: like the scene's Drake context, not for plans in concurrent threads). Kept on
-    the scene until its obstacles change."""
-    arrays = scene._obstacle_arrays  # None after add/move/remove: the property rebuilds it
-    if arrays is None:
-        arrays = scene.obstacle_arrays
-    cached = scene._planner_binding
-    if cached is not None and cached[0] is arrays:
-        return cached[1]
-    model = scene.collision_model
-    ints, floats = model.packed(arrays, model.pair_arrays)
-    robot = scene.robot
-    bound = (ints, floats, np.ascontiguousarray(arrays[3], dtype=float), np.ascontiguousarray(model.reach),
-             np.ascontiguousarray(robot.lower, dtype=float), np.ascontiguousarray(robot.upper, dtype=float))
-    bound += (_ENTRIES.setdefault(tuple(numba.typeof(a) for a in bound), {}), np.zeros(_NSTATS))
-    scene._planner_binding = (arrays, bound)
-    return bound
+    the scene until its obstacles change (:meth:`~drake_mh.scene.Scene.planner_binding`)."""
+    return scene.planner_binding(_binding, _bind)
+
+
+def _bind(scene) -> tuple:
+    """:func:`_binding` built anew."""
+    bound = scene_arguments(scene)
+    return bound + (_ENTRIES.setdefault(tuple(numba.typeof(a) for a in bound), {}), np.zeros(_NSTATS))
 
 
 def _call(binding: tuple, arguments: tuple):
@@ -310,10 +302,10 @@ def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
     if config.profile:
         info.update(zip(S.STAT_NAMES[_COUNTS:], values[_COUNTS:]))
     info["prepare_time"] = prepare_time
-    if outcome == K.FOUND:
+    if outcome == S.FOUND:
         info["goal"] = int(goal)
         return path, info
-    why = "budget" if outcome == K.BUDGET else "timeout"
+    why = "budget" if outcome == S.BUDGET else "timeout"
     info["message"] = (f"no path: {why} reached after {info['nodes']} tree nodes and {info['motions']} motion checks"
                        + (f" (budget: tree nodes, and {K.SAMPLES_PER_NODE} samples per node; {info['out_of_domain']} "
                           f"samples drawn again by the dynamic domain)" if why == "budget" else ""))

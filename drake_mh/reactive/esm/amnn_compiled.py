@@ -9,7 +9,7 @@ the layer's compiled work at P = 32 (~13-15 us; ``studies/amnn_speed.py``). Here
 compiled function runs layer 0 and, for ``l = 1 .. L``:
 
 * the agent update of eqs. (12)-(18) and the box projection of eq. (19):
-  :func:`drake_mh.optim.aro._move` (the same kernel ``ARO(variant="amnn")`` calls), with the
+  :func:`drake_mh.optim.aro.rabbit_moves` (the same kernel ``ARO(variant="amnn")`` calls), with the
   uniforms drawn inside the kernel from the optimizer's ``numpy.random.Generator``
   (``gen.random((P, 8 + D))`` per layer: the same stream, in the same order, as
   ``ARO._ask`` draws);
@@ -52,7 +52,7 @@ from drake_mh.kinematics import kernels as _kernels
 from drake_mh.errors import InvalidArgument
 from drake_mh.kinematics.kernels import fk_jacobian as _fk_jacobian
 from drake_mh.optim import aro
-from drake_mh.optim.aro import _move
+from drake_mh.optim.aro import rabbit_moves
 from drake_mh.reactive.esm import kernels as esm_kernels
 from drake_mh.reactive.esm.kernels import esm_values as _esm_values
 from drake_mh.reactive.esm.kernels import feasible_columns as _feasible_columns
@@ -112,7 +112,7 @@ def _build(fingerprint: int):
         best_x = np.full(D, np.nan)
         best_f = np.inf
         for t in range(T + 1):
-            Xn = X if t == 0 else _move(X, gen.random((P, 8 + D)), no_normals, t, T, True, lower, upper)
+            Xn = X if t == 0 else rabbit_moves(X, gen.random((P, 8 + D)), no_normals, t, T, True, lower, upper)
             Xe = Xn
             if sweeps >= 0:
                 Xr[:] = Xn

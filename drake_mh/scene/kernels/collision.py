@@ -29,7 +29,7 @@ import math
 import numba
 import numpy as np
 
-from drake_mh.kinematics.kernels import _frames_block
+from drake_mh.kinematics.kernels import frames_block
 from drake_mh.scene.kernels.pairs import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
 LANES = 128
@@ -271,7 +271,7 @@ def collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qi
         nw = (m + 7) // 8
         for b in range(m, 8 * nw):  # lanes past m read 0
             hit[b] = 0
-        _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
+        frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
         for b in range(m):
             alive[b] = True
         for g in range(G):
@@ -439,7 +439,7 @@ def link_clearances(QT, tau, fine_below, pair_fine_below, mode, parent, KR, Kp, 
         m = used = min(LANES, N - n0)  # a short batch (segment bisection) computes its lanes only
         for b in range(m):
             tb[b] = tau[n0 + b]
-        _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
+        frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
         for g in range(G):  # bounding spheres: a lower bound per link and obstacle
             _centre_block(m, g_anchor[g], g_offset, g, R, p, cx, cy, cz)
             for b in range(m):

@@ -28,7 +28,7 @@ class CheckContextType(types.StructRef):
 
 
 class CheckContext(structref.StructRefProxy):
-    """``(arrays, ws, mws)``: the scene's unpacked arrays (:func:`drake_mh.scene.kernels.packing._unpack`),
+    """``(arrays, ws, mws)``: the scene's unpacked arrays (:func:`drake_mh.scene.kernels.packing.unpack`),
     the state check's workspace (:func:`drake_mh.scene.kernels.states.state_workspace`) and the
     caller's own workspace (``rrt_connect``: :func:`drake_mh.planning.motion.check.motion_workspace`;
     anything, e.g. ``None``, for a caller that has none). Holds references to them, unless they

@@ -16,9 +16,9 @@ import numba
 import numpy as np
 from numpy.lib.stride_tricks import as_strided
 
-from drake_mh.kinematics.kernels import _frames_block
+from drake_mh.kinematics.kernels import frames_block
 from drake_mh.scene.kernels.collision import _groups_free, _point_free, _range_free, collision_free, link_clearances
-from drake_mh.scene.kernels.packing import _rows, _unpack, _unpack_views
+from drake_mh.scene.kernels.packing import _rows, unpack, _unpack_views
 from drake_mh.scene.kernels.pairs import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
 
@@ -46,7 +46,7 @@ def collision_free_packed(Q, clearance, self_clearance, ints, floats, out):
         return False
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
-     u_offset, u_radius) = _unpack(ints, floats)
+     u_offset, u_radius) = unpack(ints, floats)
     collision_free(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius,
                    g_start, s_offset, s_radius, kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta,
                    t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius, out)
@@ -67,7 +67,7 @@ def obstacle_clearances_packed(Q, mode, ints, floats, v_WO, out):
         return False
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,
-     u_offset, u_radius) = _unpack(ints, floats)
+     u_offset, u_radius) = unpack(ints, floats)
     link_clearances(QT, np.zeros(N), np.inf, np.zeros(0), mode, parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset,
                     g_radius, g_start, s_offset, s_radius, kinds, R_WO, p_WO, v_WO, dims, pair_a, pair_b, t_meta,
                     t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius, out)
@@ -82,7 +82,7 @@ def _free_one(QT, clearance, self_clearance, parent, KR, Kp, perm, kind, qidx, g
     stopping at the first sphere below the clearance. Same tests in the same order, so the same
     answer. ``pairs``: :attr:`drake_mh.scene.batch.CollisionModel.pair_arrays`."""
     pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start, u_offset, u_radius = pairs
-    _frames_block(QT, 0, 1, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
+    frames_block(QT, 0, 1, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
     for g in range(g_anchor.shape[0]):
         a = g_anchor[g]
         x, y, z = _lane_point(a, g_offset, g, 0, R, p, 0)

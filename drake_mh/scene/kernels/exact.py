@@ -90,7 +90,7 @@ def _segment_ends(g, g_float, R_WG, p_WG, a, b):
 
 
 @numba.njit(cache=True)
-def _closest_segments(p1, q1, p2, q2, c1, c2):
+def closest_segments(p1, q1, p2, q2, c1, c2):
     """Closest points ``c1`` on segment p1-q1 and ``c2`` on p2-q2 (Ericson, Real-Time Collision
     Detection, sec. 5.1.9, degenerate segments included); returns their distance."""
     d10, d11, d12 = q1[0] - p1[0], q1[1] - p1[1], q1[2] - p1[2]
@@ -274,7 +274,7 @@ def pair_distance(g, k, g_int, g_float, vertices, o_int, o_float, R_WG, p_WG, ou
         for j in range(3):
             a_O[j] = o_float[k, 9 + j] - h * o_float[k, 3 * j + 2]
             b_O[j] = o_float[k, 9 + j] + h * o_float[k, 3 * j + 2]
-        core = _closest_segments(a, b, a_O, b_O, c_link, c_other)
+        core = closest_segments(a, b, a_O, b_O, c_link, c_other)
         _unit(c_link, c_other, n)
         r_other = o_float[k, 18]
         _write(out, i, core - r_link - r_other, c_link, r_link, c_other, r_other, n)
@@ -330,7 +330,7 @@ def exact_pairs(q, parent, KR, Kp, perm, kind, qidx, g_int, g_float, vertices, o
         a, b, c, d = work[0], work[1], work[5], work[6]
         _segment_ends(ga, g_float, R_WG, p_WG, a, b)
         _segment_ends(gb, g_float, R_WG, p_WG, c, d)
-        core = _closest_segments(a, b, c, d, work[2], work[3])
+        core = closest_segments(a, b, c, d, work[2], work[3])
         _unit(work[2], work[3], work[4])
         _write(out, i, core - g_float[ga, 15] - g_float[gb, 15], work[2], g_float[ga, 15], work[3],
                g_float[gb, 15], work[4])

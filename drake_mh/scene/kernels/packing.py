@@ -1,6 +1,6 @@
 """The arrays of the collision kernels (:mod:`drake_mh.scene.kernels.collision`) in two
 buffers, one of int64 and one of float64 (:func:`pack`), and their views again inside compiled
-code (:func:`_unpack`, :func:`_unpack_views`): a call from Python then passes 6 arguments
+code (:func:`unpack`, :func:`_unpack_views`): a call from Python then passes 6 arguments
 instead of 32 (numba's dispatch costs per argument), and planners hand one tuple around.
 """
 
@@ -64,7 +64,7 @@ def _offsets(ints):
 
 
 @numba.njit(cache=True, inline="always")
-def _unpack(ints, floats):
+def unpack(ints, floats):
     """Views of the arrays :func:`pack` laid out in two buffers (no copies), C-ordered: the
     array types a call from Python passes too, so the kernels they reach compile once."""
     (F, G, S, K, P, T, U, i_parent, i_perm, i_kind, i_qidx, i_anchor, i_start, i_kinds, i_a, i_b, i_meta, i_ustart,
@@ -87,7 +87,7 @@ def _unpack(ints, floats):
 
 @numba.njit(cache=True, inline="always")
 def _unpack_views(ints, floats):
-    """:func:`_unpack` with ``as_strided`` views instead of reshapes (about 1 ns instead of
+    """:func:`unpack` with ``as_strided`` views instead of reshapes (about 1 ns instead of
     200 for all of them; any-layout array types): for
     :func:`drake_mh.scene.kernels.entry.collision_free_one`."""
     (F, G, S, K, P, T, U, i_parent, i_perm, i_kind, i_qidx, i_anchor, i_start, i_kinds, i_a, i_b, i_meta, i_ustart,

@@ -32,7 +32,7 @@ changes the cost, never the answer.
 
 Typical use (compiled code; the workspace is allocated once per plan)::
 
-    arrays = _packing._unpack(ints, floats)                  # a scene's packed arrays
+    arrays = unpack(ints, floats)                  # a scene's packed arrays
     ws = state_workspace(F, G, S, P, lanes)
     ctx = CheckContext(arrays, ws, None)                     # one pointer (drake_mh.scene.kernels.context)
     answer = check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, inv_lam, speeds, ctx,
@@ -46,7 +46,7 @@ import math
 import numba
 import numpy as np
 
-from drake_mh.kinematics.kernels import _frames_block
+from drake_mh.kinematics.kernels import frames_block
 from drake_mh.scene.kernels.collision import _centre_block, _obstacle_free, _point_distance, _point_free
 from drake_mh.scene.kernels.pairs import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
@@ -217,7 +217,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, in
             parameter), for the links' local bound on ``tau`` (:func:`_link_tau`); all zero:
             the static bound ``(v_c - plain_c) / Λ_c`` only.
         ctx: :class:`~drake_mh.scene.kernels.context.CheckContext` of the scene's unpacked
-            arrays (:func:`drake_mh.scene.kernels.packing._unpack` of
+            arrays (:func:`drake_mh.scene.kernels.packing.unpack` of
             :func:`~drake_mh.scene.kernels.packing.pack`'s buffers) and a :func:`state_workspace`.
         out: ``(N,)`` bool; ``out[n0 + b]`` is set to whether configuration ``n0 + b`` keeps
             every margin (unless the answer is COLLISION: then ``out`` is not written).
@@ -244,7 +244,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, in
     nw = (m + 7) // 8
     for b in range(m, 8 * nw):  # lanes past m read 0
         hit[b] = 0
-    _frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
+    frames_block(QT, n0, m, parent, KR, Kp, perm, kind, qidx, R, p, sn, cs)
     for b in range(m):
         keep[b] = True
         tau_l[b] = math.inf

@@ -1,4 +1,4 @@
-"""rrt_connect's motion check (drake_mh.planning.motion.check): its workspace holds the
+"""The compiled planners' motion check (drake_mh.planning.motion.check): its workspace holds the
 longest motion within the joint limits, and a motion longer than the workspace gets the same
 answer from arrays of its own."""
 
@@ -6,13 +6,13 @@ import numba
 import numpy as np
 
 import drake_mh
+from drake_mh.planning.motion import (STAT_NAMES, certified_motion, clock_address, motion_capacity, scene_arguments,
+                                      workspaces)
 from drake_mh.planning.rrt_connect import planner
-from drake_mh.planning.motion.check import certified_motion, motion_capacity, workspaces
-from drake_mh.planning.motion.stats import STAT_NAMES
 from drake_mh.scene import Box, Scene, Sphere
-from drake_mh.scene.kernels.context import CheckContext
-from drake_mh.scene.kernels.packing import _unpack
-from drake_mh.scene.kernels.states import check_blocks
+from drake_mh.scene.kernels import CheckContext, check_blocks, unpack
+
+CLOCK = clock_address()
 
 PANDA = drake_mh.load_robot("panda")
 
@@ -39,7 +39,7 @@ def panda_reach():
 
 @numba.njit
 def _answers(QA, QB, ints, floats, v_WO, reach, capacity, clock, probes=0, interior=0):
-    arrays = _unpack(ints, floats)
+    arrays = unpack(ints, floats)
     # owned: no borrowing
     ws, mws = workspaces(arrays, QA.shape[1], reach.shape[0], 32, capacity, probes, interior, 0.0, 0.0)
     stats, buf = np.zeros(len(STAT_NAMES)), np.zeros(2, np.int64)
@@ -66,9 +66,9 @@ def test_the_capacity_bounds_every_motion_within_the_limits():
 def test_a_motion_longer_than_the_workspace_gets_the_same_answer():
     scene = shelf_scene()
     QA, QB = free_motions(scene, 1, 300, 40, 0.5)
-    ints, floats, v_WO, reach = planner._arguments(scene)
-    big, stats_big = _answers(QA, QB, ints, floats, v_WO, reach, 4096, planner._CLOCK)
-    small, stats_small = _answers(QA, QB, ints, floats, v_WO, reach, 2, planner._CLOCK)
+    ints, floats, v_WO, reach = scene_arguments(scene)[:4]
+    big, stats_big = _answers(QA, QB, ints, floats, v_WO, reach, 4096, CLOCK)
+    small, stats_small = _answers(QA, QB, ints, floats, v_WO, reach, 2, CLOCK)
     assert 0 < big.sum() < len(big)
     np.testing.assert_array_equal(big, small)
     np.testing.assert_array_equal(stats_big, stats_small)
@@ -81,12 +81,12 @@ def test_probes_reject_colliding_motions_before_their_setup_and_change_no_answer
     probes."""
     scene = shelf_scene()
     QA, QB = free_motions(scene, 5, 600, 150, 0.6)
-    ints, floats, v_WO, reach = planner._arguments(scene)
-    none, stats_none = _answers(QA, QB, ints, floats, v_WO, reach, 4096, planner._CLOCK, 0)
+    ints, floats, v_WO, reach = scene_arguments(scene)[:4]
+    none, stats_none = _answers(QA, QB, ints, floats, v_WO, reach, 4096, CLOCK, 0)
     assert 10 <= none.sum() <= len(none) - 10
     assert stats_none[STAT_NAMES.index("rejected_by_probes")] == 0
     for probes in (1, 4, 8):
-        ok, stats = _answers(QA, QB, ints, floats, v_WO, reach, 4096, planner._CLOCK, probes)
+        ok, stats = _answers(QA, QB, ints, floats, v_WO, reach, 4096, CLOCK, probes)
         np.testing.assert_array_equal(ok, none)
         by_probes = stats[STAT_NAMES.index("rejected_by_probes")]
         assert 0 < by_probes <= stats[STAT_NAMES.index("rejected")] == stats_none[STAT_NAMES.index("rejected")]
@@ -94,9 +94,9 @@ def test_probes_reject_colliding_motions_before_their_setup_and_change_no_answer
     assert np.all(~ok[~ends])  # a motion whose end collides is never certified
     # the interior probes (for motions whose ends are free) neither: same answers, some rejected by them
     inside = ends & scene.collision_free(QA)
-    ref, _ = _answers(QA[inside], QB[inside], ints, floats, v_WO, reach, 4096, planner._CLOCK, 0)
+    ref, _ = _answers(QA[inside], QB[inside], ints, floats, v_WO, reach, 4096, CLOCK, 0)
     for interior in (1, 4, 8):
-        ok, stats = _answers(QA[inside], QB[inside], ints, floats, v_WO, reach, 4096, planner._CLOCK, 4, interior)
+        ok, stats = _answers(QA[inside], QB[inside], ints, floats, v_WO, reach, 4096, CLOCK, 4, interior)
         np.testing.assert_array_equal(ok, ref)
         assert stats[STAT_NAMES.index("states")] > 0 and stats[STAT_NAMES.index("rejected_by_probes")] > 0
 
@@ -107,10 +107,10 @@ def test_the_refinement_of_the_rows_that_came_near_never_certifies_a_collision()
     certificate and dense exact sampling, and some are rejected only by the refinement."""
     scene = shelf_scene()
     QA, QB = free_motions(scene, 7, 600, 200, 0.3)
-    ints, floats, v_WO, reach = planner._arguments(scene)
+    ints, floats, v_WO, reach = scene_arguments(scene)[:4]
     refined, outcome = [], []
     for a, b in zip(QA, QB):
-        ok, stats = _answers(a[None], b[None], ints, floats, v_WO, reach, 4096, planner._CLOCK)
+        ok, stats = _answers(a[None], b[None], ints, floats, v_WO, reach, 4096, CLOCK)
         refined.append(stats[STAT_NAMES.index("refined")] > 0)
         outcome.append(ok[0])
     refined, outcome = np.array(refined), np.array(outcome)
@@ -127,7 +127,7 @@ def _taus(QA, QB, t, lam, ints, floats, margin_scale, local):
     """``(kept, tau)`` of ``check_blocks`` for the states ``QA + t (QB - QA)``, rows at the
     clearance 0 plus ``margin_scale · Λ_c`` (the motion's ``Λ_c`` in ``lam (M, C)``); with
     ``local`` the links' bound from the state's joint axes and the motion's speeds."""
-    arrays = _unpack(ints, floats)
+    arrays = unpack(ints, floats)
     G = arrays[6].shape[0]
     C = lam.shape[1]
     ws, _ = workspaces(arrays, QA.shape[1], C, 1, 4, 0, 0, 0.0, 0.0)
@@ -153,7 +153,7 @@ def test_a_states_tau_certifies_the_motion_around_it():
     keeps it); with them a link's local bound is at least that, and certifies as much."""
     scene = shelf_scene()
     QA, QB = free_motions(scene, 3, 800, 300, 0.4, clearance=0.01)
-    ints, floats, v_WO, reach = planner._arguments(scene)
+    ints, floats, v_WO, reach = scene_arguments(scene)[:4]
     lam = np.ascontiguousarray(np.abs(QB - QA) @ reach.T)
     t = np.zeros(len(QA))
     kept, tau = _taus(QA, QB, t, lam, ints, floats, 0.05, False)
