@@ -9,6 +9,8 @@ Methods (:func:`available_ik_methods`):
 * ``pinv``, ``dls``: Jacobian baselines with random restarts, :mod:`drake_mh.ik.jacobian`;
 * ``drake_snopt``, ``drake_ipopt``: Drake's ``InverseKinematics``, :mod:`drake_mh.ik.drake`.
 
+The methods are one explicit table, :data:`METHODS` (name -> :class:`IKMethod`).
+
 A target that is provably out of reach (:meth:`IKProblem.unreachable_reason`) returns
 ``success=False`` at once with both distances in the message, for every method.
 
@@ -21,21 +23,23 @@ once per process; the time it took is reported as ``IKResult.prepare_time``.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import numbers
 import time
 import weakref
+from collections.abc import Callable
 
 import numpy as np
 
-from drake_mh.errors import InvalidArgument, InvalidIKProblem, UnknownMethod
+from drake_mh._support.registry import Registry
+from drake_mh.errors import InvalidArgument, InvalidIKProblem
 from drake_mh.ik.problem import IKProblem
 from drake_mh.ik.result import IKResult, verify
+from drake_mh.optim import available_methods
 from drake_mh.optim.base import make_rng
 
-__all__ = ["solve_ik", "prepare", "available_ik_methods", "GRADIENT_METHODS", "DEFAULT_LOCAL_BUDGET"]
-
-#: the non-metaheuristic methods, in report order
-GRADIENT_METHODS: tuple[str, ...] = ("hybrid", "pinv", "dls", "drake_snopt", "drake_ipopt")
+__all__ = ["solve_ik", "prepare", "available_ik_methods", "METHODS", "IKMethod", "GRADIENT_METHODS",
+           "DEFAULT_LOCAL_BUDGET"]
 
 #: configurations evaluated by ``hybrid``, ``pinv`` and ``dls`` when neither budget nor timeout is given
 DEFAULT_LOCAL_BUDGET = 200_000
@@ -45,11 +49,80 @@ DEFAULT_LOCAL_BUDGET = 200_000
 _PREPARED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
+@dataclasses.dataclass(frozen=True)
+class IKMethod:
+    """A method of :func:`solve_ik` (an entry of :data:`METHODS`).
+
+    Attributes:
+        solve: ``solve(problem, name, seed, budget, timeout, config, start, params) -> IKResult``,
+            its clock started at ``start`` (``budget``/``timeout`` as :func:`solve_ik` got them).
+        config: ``"module:Class"`` of its configuration object (``solve_ik(config=...)``);
+            ``None``: it takes optimizer options as keywords instead (the metaheuristics).
+        prepare_budget: the budget of :func:`prepare`'s small solve (``None``: two generations).
+    """
+
+    solve: Callable
+    config: str | None = None
+    prepare_budget: int | None = None
+
+    def config_class(self) -> type:
+        """The class named by :attr:`config`."""
+        module, _, name = self.config.partition(":")
+        return getattr(importlib.import_module(module), name)
+
+
+def _solve_metaheuristic(problem, name, seed, budget, timeout, config, start, params):
+    from drake_mh.ik.metaheuristic import solve_metaheuristic
+
+    return solve_metaheuristic(problem, name, seed, budget, timeout, start=start, **params)
+
+
+def _solve_hybrid(problem, name, seed, budget, timeout, config, start, params):
+    from drake_mh.ik.hybrid import solve_hybrid
+
+    if budget is None and timeout is None:
+        budget = DEFAULT_LOCAL_BUDGET
+    return solve_hybrid(problem, seed, budget, timeout, config, start=start)
+
+
+def _solve_jacobian(problem, name, seed, budget, timeout, config, start, params):
+    from drake_mh.ik.jacobian import solve_jacobian
+
+    if budget is None and timeout is None:
+        budget = DEFAULT_LOCAL_BUDGET
+    return solve_jacobian(problem, name, seed, budget, timeout, config, start=start)
+
+
+def _solve_drake(problem, name, seed, budget, timeout, config, start, params):
+    from drake_mh.ik.drake import solve_drake
+
+    return solve_drake(problem, name, seed, budget, timeout, config, start=start)
+
+
+METHODS = Registry("IK method", case_sensitive=False)
+"""The methods of :func:`solve_ik`: name -> :class:`IKMethod` (case-insensitive); the library's
+optimizers first, then the gradient methods in report order."""
+for _name in available_methods():
+    METHODS.add(_name, IKMethod(_solve_metaheuristic), description=f"metaheuristic IK with the {_name} optimizer")
+METHODS.add("hybrid", IKMethod(_solve_hybrid, "drake_mh.ik.hybrid:HybridConfig", 120),
+            description="global population search + batched Levenberg-Marquardt")
+METHODS.add("pinv", IKMethod(_solve_jacobian, "drake_mh.ik.jacobian:JacobianConfig", 20),
+            description="pseudo-inverse Jacobian iterations with random restarts")
+METHODS.add("dls", IKMethod(_solve_jacobian, "drake_mh.ik.jacobian:JacobianConfig", 20),
+            description="damped least-squares Jacobian iterations with random restarts")
+METHODS.add("drake_snopt", IKMethod(_solve_drake, "drake_mh.ik.drake:DrakeIKConfig", 1),
+            description="Drake's InverseKinematics solved by SNOPT, random restarts")
+METHODS.add("drake_ipopt", IKMethod(_solve_drake, "drake_mh.ik.drake:DrakeIKConfig", 1),
+            description="Drake's InverseKinematics solved by IPOPT, random restarts")
+del _name
+
+#: the non-metaheuristic methods, in report order
+GRADIENT_METHODS: tuple[str, ...] = tuple(name for name in METHODS.names() if METHODS.get(name).config is not None)
+
+
 def available_ik_methods() -> list[str]:
     """Names accepted by :func:`solve_ik`: the library's optimizers, then the gradient methods."""
-    from drake_mh.optim import available_methods
-
-    return list(available_methods()) + list(GRADIENT_METHODS)
+    return METHODS.names()
 
 
 def _check_limits(budget, timeout):
@@ -68,16 +141,11 @@ def _check_limits(budget, timeout):
     return budget, timeout
 
 
-def _check_config(name: str, config) -> None:
+def _check_config(name: str, method: IKMethod, config) -> None:
     """``config`` must be ``None`` or the configuration class of method ``name``."""
-    if config is None or name not in GRADIENT_METHODS:
+    if config is None or method.config is None:
         return
-    if name == "hybrid":
-        from drake_mh.ik.hybrid import HybridConfig as expected
-    elif name in ("pinv", "dls"):
-        from drake_mh.ik.jacobian import JacobianConfig as expected
-    else:
-        from drake_mh.ik.drake import DrakeIKConfig as expected
+    expected = method.config_class()
     if not isinstance(config, expected):
         raise InvalidArgument(f"config of {name} must be a {expected.__name__} (or None); "
                               f"got {type(config).__name__}")
@@ -116,17 +184,15 @@ def solve_ik(problem: IKProblem, method: str = "hybrid", seed=0, budget: int | N
     if not isinstance(problem, IKProblem):
         raise InvalidIKProblem(f"solve_ik needs an IKProblem, got {type(problem).__name__}; "
                                "build one with drake_mh.IKProblem(robot, target, ...)")
-    name = method.lower() if isinstance(method, str) else method
-    methods = available_ik_methods()
-    if name not in methods:
-        raise UnknownMethod(str(method), methods, what="IK method")
+    entry = METHODS.get(method)
+    name = method.lower()
     budget, timeout = _check_limits(budget, timeout)
     if not (type(seed) is int and seed >= 0):  # ints are fine (and building a Generator costs 7 µs)
         make_rng(seed)  # a bad seed fails here, with a message, not deep inside numpy
-    _check_config(name, config)
-    if params and name in GRADIENT_METHODS:
+    _check_config(name, entry, config)
+    if params and entry.config is not None:
         raise InvalidArgument(f"{name} takes no optimizer options ({sorted(params)}); pass config=... instead")
-    if config is not None and name not in GRADIENT_METHODS:
+    if config is not None and entry.config is None:
         raise InvalidArgument(f"{name} takes its options as keyword arguments (pop_size=..., ...), not config")
     prepare_time = prepare(problem, name, config, **params)
     result = _solve(problem, name, seed, budget, timeout, config, time.perf_counter(), params)
@@ -164,7 +230,7 @@ def prepare(problem: IKProblem, method: str = "hybrid", config=None, **params) -
     problem.unreachable_reason()  # computes and caches the robot's reach bound
     # enough for each method to run its whole loop once: a generation and a few LM iterations
     # (hybrid), a few Jacobian steps, two optimizer generations, one Drake start
-    budget = {"hybrid": 120, "pinv": 20, "dls": 20, "drake_snopt": 1, "drake_ipopt": 1}.get(name)
+    budget = METHODS.get(name).prepare_budget
     if budget is None:
         budget = 2 * int(params.get("pop_size") or 50) + 1
     _solve(problem, name, 0, budget, None, config, time.perf_counter(), params, check_reach=False)
@@ -184,22 +250,4 @@ def _solve(problem: IKProblem, name: str, seed, budget, timeout, config, start: 
     if reason is not None:
         q = problem.q_ref if problem.q_ref is not None else 0.5 * (problem.lower + problem.upper)
         return verify(problem, q, method=name, start=start, nfe=0, message=reason)
-    if name == "hybrid":
-        from drake_mh.ik.hybrid import solve_hybrid
-
-        if budget is None and timeout is None:
-            budget = DEFAULT_LOCAL_BUDGET
-        return solve_hybrid(problem, seed, budget, timeout, config, start=start)
-    if name in ("pinv", "dls"):
-        from drake_mh.ik.jacobian import solve_jacobian
-
-        if budget is None and timeout is None:
-            budget = DEFAULT_LOCAL_BUDGET
-        return solve_jacobian(problem, name, seed, budget, timeout, config, start=start)
-    if name in ("drake_snopt", "drake_ipopt"):
-        from drake_mh.ik.drake import solve_drake
-
-        return solve_drake(problem, name, seed, budget, timeout, config, start=start)
-    from drake_mh.ik.metaheuristic import solve_metaheuristic
-
-    return solve_metaheuristic(problem, name, seed, budget, timeout, start=start, **params)
+    return METHODS.get(name).solve(problem, name, seed, budget, timeout, config, start, params)

@@ -20,7 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from drake_mh.errors import NoFiniteValue, UnknownMethod
+from drake_mh._support.registry import Registry
+from drake_mh.errors import NoFiniteValue
 from drake_mh.optim.abc import ABC
 from drake_mh.optim.ao import AO
 from drake_mh.optim.aro import ARO
@@ -47,15 +48,17 @@ __all__ = [
     "ABC", "AO", "ARO", "BAT", "CMAES", "DE", "E3GSA", "GA", "GSA", "PSO", "RandomSearch", "WOA", "WOAGreedy",
 ]
 
-#: method name -> ask/tell class; metaheuristics first, then the reference baselines
-METHODS: dict[str, type[Optimizer]] = {
-    cls.name: cls for cls in (PSO, BAT, GSA, E3GSA, WOA, WOAGreedy, AO, GA, ABC, ARO, CMAES, DE, RandomSearch)
-}
+METHODS = Registry("optimizer", case_sensitive=False)
+"""The optimizers of :func:`minimize`: name -> ask/tell class (:class:`~drake_mh._support.registry.Registry`,
+case-insensitive); metaheuristics first, then the reference baselines."""
+for _cls in (PSO, BAT, GSA, E3GSA, WOA, WOAGreedy, AO, GA, ABC, ARO, CMAES, DE, RandomSearch):
+    METHODS.add(_cls.name, _cls, description=" ".join(_cls.__doc__.split("\n\n")[0].split()))
+del _cls
 
 
 def available_methods() -> list[str]:
     """Names accepted by :func:`minimize` (lowercase)."""
-    return list(METHODS)
+    return METHODS.names()
 
 
 def get_method(name: str) -> type[Optimizer]:
@@ -64,10 +67,7 @@ def get_method(name: str) -> type[Optimizer]:
     Raises:
         UnknownMethod: the name is not in :func:`available_methods`.
     """
-    cls = METHODS.get(str(name).lower()) if isinstance(name, str) else None
-    if cls is None:
-        raise UnknownMethod(str(name), METHODS, what="optimizer")
-    return cls
+    return METHODS.get(name)
 
 
 def minimize(f: Callable[[np.ndarray], Any], bounds: Any, method: str = "pso", budget: int = 10_000,

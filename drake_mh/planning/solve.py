@@ -1,7 +1,8 @@
 """``solve_motion``: one entry point for every motion planner, one verification for all.
 
-Methods register themselves with :func:`register` (one folder each under
-:mod:`drake_mh.planning`); :func:`available_motion_methods` lists them. A method's
+The planners are one explicit table, :data:`drake_mh.planning.methods.METHODS` (one folder or
+module each under :mod:`drake_mh.planning`, imported on first use); :func:`available_motion_methods`
+lists them and :func:`register` adds one of your own. A method's
 ``plan.prepare(problem, **options)``, if it has one, loads what it needs (compiled kernels,
 and, with a warm-start option, the warm-start planner's) before the clock starts: a timeout
 measures planning, not loading (``info["prepare_time"]``). It gets the same options as the plan
@@ -22,60 +23,33 @@ import time
 
 import numpy as np
 
-from drake_mh.errors import InvalidArgument, InvalidMotionProblem, UnknownMethod
+from drake_mh.errors import InvalidArgument, InvalidMotionProblem
+from drake_mh.planning.methods import METHODS
 from drake_mh.planning.problem import MotionProblem
 from drake_mh.planning.result import MotionResult
 from drake_mh.planning.verify import check_retime, verify_motion
 
-_METHODS: dict = {}
-_LOADED = False
-
-#: submodules of drake_mh.planning that are not planners; every other one registers its methods
-#: when imported (an optional peer that cannot be imported registers nothing)
-_CORE = frozenset({"problem", "result", "verify", "solve", "problems"})
-
 
 def register(name: str, description: str):
-    """Decorator: register a planner under ``name`` (see the module docstring)."""
-
-    def wrap(function):
-        _METHODS[name] = (function, description)
-        return function
-
-    return wrap
-
-
-def _load() -> None:
-    global _LOADED
-    if not _LOADED:
-        import importlib
-        import pkgutil
-
-        import drake_mh.planning as package
-
-        for module in pkgutil.iter_modules(package.__path__):
-            if module.name not in _CORE and not module.name.startswith("_"):
-                importlib.import_module(f"drake_mh.planning.{module.name}")
-        _LOADED = True
+    """Decorator: add a planner of your own to :data:`~drake_mh.planning.methods.METHODS` under
+    ``name`` (see the module docstring for what a planner is)."""
+    return METHODS.register(name, description)
 
 
 def available_motion_methods() -> dict:
-    """``{name: one-line description}`` of the registered planners."""
-    _load()
-    return {name: description for name, (_, description) in _METHODS.items()}
+    """``{name: one-line description}`` of the planners present here (an optional peer that
+    cannot be imported is absent)."""
+    return METHODS.available()
 
 
 def get_motion_method(name: str):
-    """The registered planner ``plan(problem, goals, rng, deadline, budget, **options)`` named
+    """The planner ``plan(problem, goals, rng, deadline, budget, **options)`` named
     ``name`` (e.g. to warm-start one planner from another).
 
     Raises:
         UnknownMethod: no such method.
     """
-    _load()
-    if not isinstance(name, str) or name not in _METHODS:
-        raise UnknownMethod(name, list(_METHODS), what="motion planning method")
-    return _METHODS[name][0]
+    return METHODS.get(name)
 
 
 def prepare_motion_method(method, problem: MotionProblem, **options) -> float:
@@ -166,18 +140,15 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
     Raises:
         UnknownMethod, InvalidArgument, InvalidMotionProblem.
     """
-    _load()
     if not isinstance(problem, MotionProblem):
         raise InvalidArgument(f"problem must be a drake_mh.planning.MotionProblem, got {type(problem).__name__}")
-    if not isinstance(method, str) or method not in _METHODS:
-        raise UnknownMethod(method, list(_METHODS), what="motion planning method")
+    function = METHODS.get(method)
     if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, numbers.Real)
                                 or not np.isfinite(timeout) or timeout <= 0):
         raise InvalidArgument(f"timeout must be a number of seconds > 0 or None, got {timeout!r}")
     if budget is not None and (isinstance(budget, bool) or not isinstance(budget, numbers.Integral) or budget < 1):
         raise InvalidArgument(f"budget must be an integer >= 1 or None, got {budget!r}")
     check_retime(retime)
-    function, _ = _METHODS[method]
     rng = np.random.default_rng(seed)
     goal_start = time.perf_counter()
     goals = goal_configurations(problem)

@@ -8,10 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_mh.planning.solve import register
 
-
-@register("straight", "the straight joint-space line to the nearest goal configuration (baseline)")
 def plan(problem, goals, rng, deadline, budget, **options):
+    """The straight line from ``problem.q_start`` to the nearest row of ``goals`` (no options)."""
     i = int(np.argmin(np.linalg.norm(goals - problem.q_start, axis=1)))
     return np.stack([problem.q_start, goals[i]]), {"goal": i}

@@ -28,10 +28,7 @@ dropping nodes that cannot improve); any finite run is an approximation.
 from __future__ import annotations
 
 from drake_mh.planning.lazy_prm_star.planner import DEFAULT_SAMPLES, LazyPRMStarConfig, plan, prepare
-from drake_mh.planning.solve import register
 
 __all__ = ["LazyPRMStarConfig", "plan", "prepare", "DEFAULT_SAMPLES"]
 
-plan.prepare = prepare
-register("lazy_prm_star", "informed lazy PRM* (asymptotically optimal), warm-started by rrt_connect, every edge "
-                          "certified; 1,000 samples or the deadline")(plan)
+plan.prepare = prepare  # solve_motion loads the kernels before its clock starts

@@ -6,18 +6,19 @@ is :meth:`drake_mh.scene.Scene.collision_free` for one configuration (the proble
 clearances), and its motion validator is :meth:`~drake_mh.scene.Scene.segment_free` (a
 certified segment) by default: how the planners are set up is in :mod:`.planners`.
 
-Where ``ompl`` cannot be imported, nothing is registered (a study then reports the methods as
-unavailable); :data:`OMPL_AVAILABLE` says which.
+Where ``ompl`` cannot be imported, the methods are absent from
+:data:`drake_mh.planning.methods.METHODS` (a study then reports them as unavailable);
+:data:`OMPL_AVAILABLE` says which.
 """
 
 try:
     import ompl.base  # noqa: F401
     import ompl.geometric  # noqa: F401
     import ompl.util  # noqa: F401
-except ImportError:  # the optional peer is not installed: register nothing
+except ImportError:  # the optional peer is not installed
     OMPL_AVAILABLE = False
 else:
     OMPL_AVAILABLE = True
-    from drake_mh.planning.ompl_peer import planners  # noqa: F401  (registers the methods)
+    from drake_mh.planning.ompl_peer import planners  # noqa: F401
 
 __all__ = ["OMPL_AVAILABLE"]

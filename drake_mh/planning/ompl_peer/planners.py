@@ -53,7 +53,6 @@ import ompl.geometric as og
 import ompl.util as ou
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.planning.solve import register
 
 OMPL_VERSION = "2.0.1"
 """The OMPL wheel these planners were written and measured against."""
@@ -237,13 +236,12 @@ def plan_ompl(problem, goals, rng, deadline, budget, planner: str, **options):
     return Q, info
 
 
-@register("ompl_rrtconnect", f"OMPL {OMPL_VERSION} RRT-Connect with our checker (per-state Python callback, "
-                             "certified motion validator), simplified (optional peer)")
 def plan_rrtconnect(problem, goals, rng, deadline, budget, **options):
+    """``ompl_rrtconnect``: :func:`plan_ompl` with OMPL's RRT-Connect."""
     return plan_ompl(problem, goals, rng, deadline, budget, "rrtconnect", **options)
 
 
-@register("ompl_bitstar", f"OMPL {OMPL_VERSION} BIT* (anytime, path length; 1 s after its first solution) with "
-                          "our checker, simplified (optional peer)")
 def plan_bitstar(problem, goals, rng, deadline, budget, **options):
+    """``ompl_bitstar``: :func:`plan_ompl` with OMPL's BIT* (anytime: it keeps optimizing path length
+    for ``optimize_time`` after its first solution)."""
     return plan_ompl(problem, goals, rng, deadline, budget, "bitstar", **options)

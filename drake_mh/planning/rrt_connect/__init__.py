@@ -92,12 +92,8 @@ from __future__ import annotations
 
 from drake_mh.planning.rrt_connect.planner import (DEFAULT_MAX_NODES, RRTConnectConfig, certify_motions, plan,
                                                    plan_smooth, prepare)
-from drake_mh.planning.solve import register
 
 __all__ = ["RRTConnectConfig", "plan", "plan_smooth", "prepare", "certify_motions", "DEFAULT_MAX_NODES"]
 
 plan.prepare = prepare  # for a runner that loads methods before starting its clock
 plan_smooth.prepare = prepare
-register("rrt_connect", "RRT-Connect (Kuffner & LaValle 2000) with a dynamic domain, compiled, batched state "
-                        "checks with early exit, every edge certified, 32 random shortcut draws")(plan)
-register("rrt_connect_smooth", "rrt_connect with 192 random shortcut draws (shorter paths)")(plan_smooth)

@@ -25,26 +25,18 @@ from __future__ import annotations
 
 import functools
 
-from drake_mh.planning.solve import register
 from drake_mh.planning.viapoint_mh.objective import ViaPointMotion, ViaPointMotionConfig, rest_to_rest_time
 from drake_mh.planning.viapoint_mh.planner import DEFAULT_BUDGET, plan, prepare, resample_via
 
-__all__ = ["ViaPointMotion", "ViaPointMotionConfig", "plan", "prepare", "resample_via", "rest_to_rest_time",
-           "DEFAULT_BUDGET", "METHOD_PREFIX"]
-
-METHOD_PREFIX = "mh_"
+__all__ = ["ViaPointMotion", "ViaPointMotionConfig", "plan", "prepare", "method", "resample_via", "rest_to_rest_time",
+           "DEFAULT_BUDGET"]
 
 
-def _register_all() -> None:
-    from drake_mh.optim import available_methods
-
-    for name in available_methods():
-        function = functools.partial(plan, optimizer=name)
-        functools.update_wrapper(function, plan)
-        # solve_motion compiles the kernels (and starts the optimizer) before its clock starts
-        function.prepare = functools.partial(prepare, optimizer=name)
-        register(f"{METHOD_PREFIX}{name}",
-                 f"via-point trajectory optimization (ABC paper's fitness, K via configurations) with {name}")(function)
-
-
-_register_all()
+def method(optimizer: str):
+    """The planner ``mh_<optimizer>`` (:data:`drake_mh.planning.methods.METHODS`): :func:`plan` with
+    that optimizer, and its ``prepare`` (``solve_motion`` compiles the kernels and starts the
+    optimizer before its clock starts)."""
+    function = functools.partial(plan, optimizer=optimizer)
+    functools.update_wrapper(function, plan)
+    function.prepare = functools.partial(prepare, optimizer=optimizer)
+    return function
