@@ -38,7 +38,7 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
                    help="robot(s) (bundled names or model files) the 'Next robot' button cycles through; "
                         "the first is loaded "
                         "(default seed000_6dof, panda)")
-    from drake_mh.cli import add_robot_options
+    from drake_mh.cli.options import add_robot_options
 
     add_robot_options(p)
     p.add_argument("--method", default="e3gsa", help="IK / planner algorithm (default e3gsa, the paper's)")
@@ -85,7 +85,7 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
 
 def cmd_app(args: argparse.Namespace) -> int:
     """``drake-mh app``: returns 0 when the app ends (``--max-seconds`` or Ctrl-C: "app stopped")."""
-    from drake_mh.cli import register_robot_options
+    from drake_mh.cli.options import register_robot_options
     from drake_mh.errors import InvalidArgument
     from drake_mh.viz.app import AppConfig
 

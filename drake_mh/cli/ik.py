@@ -31,7 +31,7 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--robot", default="panda",
                    help="bundled robot name or model file: .urdf, .xacro, .sdf, MJCF .xml (default panda)")
-    from drake_mh.cli import add_robot_options
+    from drake_mh.cli.options import add_robot_options
 
     add_robot_options(p)
     p.add_argument("--position", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"),
@@ -59,7 +59,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
     methods = available_ik_methods()
     if args.method.lower() not in methods:  # before loading the robot: fail fast
         raise UnknownMethod(args.method, methods, what="IK method")
-    from drake_mh.cli import load_robot_from_args
+    from drake_mh.cli.options import load_robot_from_args
 
     robot = load_robot_from_args(args)
     pose = args.rpy is not None

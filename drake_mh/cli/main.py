@@ -1,10 +1,11 @@
-"""The ``drake-mh`` command line.
+"""The ``drake-mh`` command line: its parser, :func:`main` with the exit codes, and
+:func:`run_script` for a study script run by itself.
 
-Each subcommand lives in a module with a ``register(subparsers, common)`` function that adds
-its parser (``subparsers.add_parser(NAME, parents=[common], ...)``) and sets
-``func=handler`` where ``handler(args) -> int`` returns the exit code. To add a subcommand,
-create the module and list it in :data:`COMMAND_MODULES`; a listed module that does not
-exist yet is skipped, so ``ik`` and ``app`` appear as soon as their modules are written.
+One module per command in this package (:data:`COMMANDS`, in help order), each with a
+``register(subparsers, common)`` function that adds its parser
+(``subparsers.add_parser(NAME, parents=[common], ...)``) and sets ``func=handler``, where
+``handler(args) -> int`` returns the exit code. To add a command, write its module and list it
+in :data:`COMMANDS`.
 
 Exit codes: 0 success, 1 internal error, 2 bad usage or input (one line on stderr naming
 the valid choices; ``--verbose`` adds the traceback), 130 interrupted.
@@ -13,28 +14,23 @@ the valid choices; ``--verbose`` adds the traceback), 130 interrupted.
 from __future__ import annotations
 
 import argparse
-import importlib
 import logging
-import os
 import sys
 import traceback
 from collections.abc import Sequence
+from typing import NoReturn
 
+from drake_mh.cli import app, demo, ik, plan, robots, study
 from drake_mh.errors import DrakeMhError
 
 logger = logging.getLogger(__name__)
 
 PROG = "drake-mh"
 
-#: subcommand modules in help order; each defines ``register(subparsers, common)``
-COMMAND_MODULES: tuple[str, ...] = (
-    "drake_mh.cli.main",  # robots
-    "drake_mh.cli.ik",  # ik (from the IK issue)
-    "drake_mh.cli.study",  # study, report
-    "drake_mh.study.demo",  # demo
-    "drake_mh.cli.app",  # app (from the visualisation issue)
-    "drake_mh.cli.plan",  # plan (one motion: issue #18)
-)
+COMMANDS = (robots, ik, study, demo, app, plan)
+"""The command modules, in help order (``study`` adds ``study`` and ``report``)."""
+COMMAND_MODULES: tuple[str, ...] = tuple(module.__name__ for module in COMMANDS)
+"""Their names."""
 
 
 class UsageError(DrakeMhError, ValueError):
@@ -55,17 +51,6 @@ def _common_options() -> argparse.ArgumentParser:
     return common
 
 
-def _load_command_module(name: str):
-    try:
-        return importlib.import_module(name)
-    except ModuleNotFoundError as exc:
-        parts = name.split(".")
-        missing = {".".join(parts[: i + 1]) for i in range(len(parts))}
-        if exc.name in missing:
-            return None  # not written yet: the subcommand is simply absent
-        raise
-
-
 def build_parser() -> argparse.ArgumentParser:
     """Builds the ``drake-mh`` parser with every available subcommand."""
     parser = _Parser(
@@ -81,118 +66,15 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     common = _common_options()
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for name in COMMAND_MODULES:
-        module = sys.modules[__name__] if name == __name__ else _load_command_module(name)
-        if module is not None:
-            module.register(subparsers, common)
+    for module in COMMANDS:
+        module.register(subparsers, common)
     return parser
-
-
-# --- robots -------------------------------------------------------------------------------
-
-
-def add_robot_options(p: argparse.ArgumentParser, robot_help: str | None = None) -> None:
-    """``--ee-frame NAME`` and ``--package NAME=DIR`` (repeatable), for robot-taking commands."""
-    p.add_argument("--ee-frame", default=None, metavar="NAME",
-                   help="end-effector frame of the robot (needed when the model has several tip "
-                        "links, e.g. an arm with a hand); joints not on the way to it are locked")
-    p.add_argument("--package", action="append", default=None, metavar="NAME=DIR",
-                   help="folder of the package that package://NAME/... mesh references name "
-                        "(repeatable; default: package.xml up the tree, ROS_PACKAGE_PATH, "
-                        "AMENT_PREFIX_PATH, the model's folder and its parents)")
-
-
-def load_robot_from_args(args: argparse.Namespace, name: str | None = None):
-    """``load_robot(args.robot or name, ee_frame=args.ee_frame, packages=--package ...)``."""
-    import drake_mh
-    from drake_mh.robot.packages import parse_package_option
-
-    return drake_mh.load_robot(name if name is not None else args.robot,
-                               ee_frame=getattr(args, "ee_frame", None),
-                               packages=parse_package_option(getattr(args, "package", None)) or None)
-
-
-def register_robot_options(names, args: argparse.Namespace) -> None:
-    """Check robot names/paths of a command and attach ``--ee-frame``/``--package`` to the paths.
-
-    Commands that load robots later by name (the app's robot cycling) then get the options:
-    each model path is registered under its own text with :func:`drake_mh.robot.register_robot`.
-
-    Raises:
-        UnknownRobot: a name is neither bundled nor an existing file.
-    """
-    from pathlib import Path
-
-    import drake_mh
-    from drake_mh.errors import UnknownRobot
-    from drake_mh.robot.packages import parse_package_option
-    from drake_mh.robot import register_robot
-
-    packages = parse_package_option(getattr(args, "package", None)) or None
-    for name in names:
-        if name in drake_mh.available_robots():
-            continue
-        if not Path(name).expanduser().is_file():
-            raise UnknownRobot(name, drake_mh.available_robots())
-        register_robot(str(name), name, ee_frame=getattr(args, "ee_frame", None), packages=packages)
-
-
-def register(subparsers, common: argparse.ArgumentParser) -> None:
-    """Adds the ``robots`` subcommand."""
-    p = subparsers.add_parser(
-        "robots",
-        parents=[common],
-        help="the robot catalogue and smoke test, or one robot's entry (bundled name or model file)",
-        description="Without NAME: the catalogue of the bundled robots and the smoke test (batched "
-        "kernel vs Drake FK/Jacobian, sphere model vs exact distances). With NAME (a bundled name or "
-        "the path of a .urdf, .xacro, .sdf or MJCF .xml file): that robot's entry: DOF, joints and "
-        "limits, end effector, locked joints, collision geometry per link, sphere model and bound.",
-    )
-    p.add_argument("name", nargs="?", metavar="PATH_OR_NAME", help="bundled robot name or model file")
-    add_robot_options(p)
-    p.add_argument("--check", action="store_true",
-                   help="also run the smoke test (FK, Jacobian, distances) on that robot")
-    p.set_defaults(func=cmd_robots)
-
-
-def cmd_robots(args: argparse.Namespace) -> int:
-    """``drake-mh robots [PATH_OR_NAME] [--ee-frame NAME] [--package NAME=DIR] [--check]``."""
-    from drake_mh.errors import InvalidArgument
-    from drake_mh.cli.robots import _short, catalogue_entry, kernel_errors, run_smoke, sphere_check
-
-    if args.name is None:
-        if args.ee_frame or args.package:
-            raise InvalidArgument("--ee-frame and --package describe one robot: give its PATH_OR_NAME "
-                                  "(drake-mh robots path/to/robot.urdf --ee-frame tool0)")
-        run_smoke(out=print)
-        return 0
-    robot = load_robot_from_args(args, args.name)
-    for line in catalogue_entry(robot):
-        print(line)
-    if args.check:
-        fk_err, jac_err = kernel_errors(robot)
-        print(f"  smoke test, batched kernel vs Drake on 200 random configurations: max|ΔFK| "
-              f"{fk_err:.1e}, max|ΔJ| {jac_err:.1e}")
-        try:
-            s = sphere_check(robot)
-            print(f"  sphere model vs exact distance to a sphere obstacle (50 configurations): worst "
-                  f"gap {s['worst_gap']:.4f} m, {s['collisions']} collisions, {s['missed']} missed")
-        except DrakeMhError as exc:
-            print(f"  sphere model vs exact distance: not available ({_short(exc)})")
-    return 0
-
-
-def _smoke():
-    module = _load_command_module("drake_mh.cli.robots")
-    return getattr(module, "run_smoke", None) if module is not None else None
 
 
 def _no_command(parser: argparse.ArgumentParser) -> int:
     """Without a subcommand: the robot catalogue and smoke test, then one line on the commands."""
-    smoke = _smoke()
     try:
-        if smoke is not None:
-            smoke(out=print)
+        robots.run_smoke(out=print)
     except DrakeMhError as exc:
         print(f"{PROG}: {exc}", file=sys.stderr)
         return 2
@@ -232,15 +114,6 @@ def _configure_logging(verbose: bool, quiet: bool) -> None:
         root.addHandler(handler)
     root.setLevel(level if verbose else logging.WARNING)
     logging.getLogger("drake_mh").setLevel(level)
-
-
-def wants_progress(args: argparse.Namespace) -> bool:
-    """Progress bars only on an interactive terminal, not under ``--quiet`` or in CI logs."""
-    if getattr(args, "quiet", False):
-        return False
-    if os.environ.get("CI") or os.environ.get("DRAKE_MH_NO_PROGRESS"):
-        return False
-    return sys.stderr.isatty()
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -285,5 +158,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
 
 
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+def run_script(study, argv: Sequence[str] | None = None) -> NoReturn:
+    """``python studies/NAME.py [--quick] ...``: the same as ``drake-mh study <that file> ...``;
+    exits the process with the command's exit code. A study script ends with::
+
+        if __name__ == "__main__":
+            from drake_mh.cli import run_script
+
+            run_script(study)
+
+    Args:
+        study: the script's :class:`~drake_mh.study.Study` (the file defining its ``run``
+            function is the one run) or a study name or path.
+        argv: the options (default ``sys.argv[1:]``).
+    """
+    target = getattr(study, "source_file", None) or getattr(study, "name", study)
+    raise SystemExit(main(["study", str(target), *(sys.argv[1:] if argv is None else argv)]))

@@ -43,7 +43,7 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
         "verified motion; 2: bad input.",
     )
     p.add_argument("--robot", default="panda", help="bundled robot name or model file (default panda)")
-    from drake_mh.cli import add_robot_options
+    from drake_mh.cli.options import add_robot_options
 
     add_robot_options(p)
     goal = p.add_mutually_exclusive_group()
@@ -94,7 +94,7 @@ def _problem(args):
         raise InvalidArgument("give the goal: --goal-q Q1 ... Qn, --position X Y Z [--rpy R P Y], or --set NAME")
     if args.rpy is not None and args.position is None:
         raise InvalidArgument("--rpy needs --position")
-    from drake_mh.cli import load_robot_from_args
+    from drake_mh.cli.options import load_robot_from_args
 
     robot = load_robot_from_args(args)
     scene = drake_mh.Scene(robot, self_collision=args.self_collision)

@@ -1,17 +1,25 @@
-"""Robot catalogue and a forward-kinematics / Jacobian / distance smoke test on every robot.
+"""``drake-mh robots``: the robot catalogue and a forward-kinematics / Jacobian / distance smoke
+test on every robot, or one robot's entry.
 
-``python -m drake_mh`` (and ``drake-mh robots``) print it: for each bundled model, its joints,
-end effector and limits, then on random configurations within limits the largest difference
-between the batched kernel and Drake (FK and Jacobian), and the exact (Drake) vs sphere-model
-clearance to a sphere obstacle placed near the arm. :func:`catalogue_entry` describes one
-robot in full (``drake-mh robots PATH_OR_NAME``).
+``drake-mh robots`` (also ``python -m drake_mh`` and ``python -m drake_mh.smoke``) prints, for each
+bundled model, its joints, end effector and limits, then on random configurations within limits
+the largest difference between the batched kernel and Drake (FK and Jacobian), and the exact
+(Drake) vs sphere-model clearance to a sphere obstacle placed near the arm.
+``drake-mh robots PATH_OR_NAME`` describes one robot in full (:func:`catalogue_entry`).
 """
 
 from __future__ import annotations
 
+import argparse
 from collections.abc import Callable
 
 import numpy as np
+
+from drake_mh.cli.options import add_robot_options, load_robot_from_args
+from drake_mh.errors import DrakeMhError
+
+__all__ = ["register", "cmd_robots", "run_smoke", "catalogue_entry", "robot_catalogue", "smoke_row", "kernel_errors",
+           "sphere_check"]
 
 
 def robot_catalogue() -> list[dict]:
@@ -33,8 +41,6 @@ def robot_catalogue() -> list[dict]:
 def catalogue_entry(robot) -> list[str]:
     """The catalogue entry of one robot: DOF, joints and limits, end effector, locked joints,
     collision geometry per link by shape, meshes, and the sphere model (count and bound)."""
-    from drake_mh.errors import DrakeMhError
-
     lines = [f"{robot.name}: {robot.model_format.upper()} from {robot.source}",
              f"  DOF {robot.nq}, end effector {robot.ee_frame_name!r}, |p_WE| at mid-range "
              f"{float(np.linalg.norm(robot.fk(robot.home)[:3, 3])):.3f} m"]
@@ -149,5 +155,45 @@ def run_smoke(out: Callable[[str], object] = print) -> list[dict]:
     return rows
 
 
-if __name__ == "__main__":
-    run_smoke()
+def register(subparsers, common: argparse.ArgumentParser) -> None:
+    """Adds the ``robots`` subcommand."""
+    p = subparsers.add_parser(
+        "robots",
+        parents=[common],
+        help="the robot catalogue and smoke test, or one robot's entry (bundled name or model file)",
+        description="Without NAME: the catalogue of the bundled robots and the smoke test (batched "
+        "kernel vs Drake FK/Jacobian, sphere model vs exact distances). With NAME (a bundled name or "
+        "the path of a .urdf, .xacro, .sdf or MJCF .xml file): that robot's entry: DOF, joints and "
+        "limits, end effector, locked joints, collision geometry per link, sphere model and bound.",
+    )
+    p.add_argument("name", nargs="?", metavar="PATH_OR_NAME", help="bundled robot name or model file")
+    add_robot_options(p)
+    p.add_argument("--check", action="store_true",
+                   help="also run the smoke test (FK, Jacobian, distances) on that robot")
+    p.set_defaults(func=cmd_robots)
+
+
+def cmd_robots(args: argparse.Namespace) -> int:
+    """``drake-mh robots [PATH_OR_NAME] [--ee-frame NAME] [--package NAME=DIR] [--check]``."""
+    from drake_mh.errors import InvalidArgument
+
+    if args.name is None:
+        if args.ee_frame or args.package:
+            raise InvalidArgument("--ee-frame and --package describe one robot: give its PATH_OR_NAME "
+                                  "(drake-mh robots path/to/robot.urdf --ee-frame tool0)")
+        run_smoke(out=print)
+        return 0
+    robot = load_robot_from_args(args, args.name)
+    for line in catalogue_entry(robot):
+        print(line)
+    if args.check:
+        fk_err, jac_err = kernel_errors(robot)
+        print(f"  smoke test, batched kernel vs Drake on 200 random configurations: max|ΔFK| "
+              f"{fk_err:.1e}, max|ΔJ| {jac_err:.1e}")
+        try:
+            s = sphere_check(robot)
+            print(f"  sphere model vs exact distance to a sphere obstacle (50 configurations): worst "
+                  f"gap {s['worst_gap']:.4f} m, {s['collisions']} collisions, {s['missed']} missed")
+        except DrakeMhError as exc:
+            print(f"  sphere model vs exact distance: not available ({_short(exc)})")
+    return 0

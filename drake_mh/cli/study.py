@@ -79,7 +79,7 @@ def run_and_print(name: str, args: argparse.Namespace, out=None, quick=None, reu
         reuse_hint: printed after the count of finished cases that were reused (not run
             again); ``None`` prints no such line (the demo says it once for all studies).
     """
-    from drake_mh.cli import wants_progress
+    from drake_mh.cli.options import wants_progress
     from drake_mh.study import available_studies, run_study
 
     if name == "list":

@@ -1,6 +1,8 @@
-"""``drake-mh demo``: a short end-to-end comparison on built-in defaults, with a report.
+"""The demo (``drake-mh demo``, :mod:`drake_mh.cli.demo`): a short end-to-end comparison on
+built-in defaults, with a report; what it runs and the page it writes.
 
-Runs the quick form of the demo studies one after the other, then writes ``<out>/index.html``:
+The command runs the quick form of the demo studies one after the other, then writes
+``<out>/index.html`` (:func:`write_page`):
 one 3-D animation (a time-optimal Panda motion from ``retime_benchmark``), each study's summary
 and key figures, and links to every study report. The studies are found like ``drake-mh study``
 finds them (``studies/`` of the repository).
@@ -12,16 +14,13 @@ on the terminal and on the page; ``--fresh`` first moves the earlier results asi
 
 from __future__ import annotations
 
-import argparse
 import datetime
 import json
 import logging
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.study import warmup
 
 logger = logging.getLogger(__name__)
 
@@ -49,26 +48,6 @@ DEMO_ANIMATION = (
 )
 #: marker file written into the demo folder (tells --fresh the folder is the demo's)
 MARKER = "demo.json"
-
-
-def register(subparsers, common: argparse.ArgumentParser) -> None:
-    """Adds ``demo``."""
-    p = subparsers.add_parser(
-        "demo",
-        parents=[common],
-        help="short end-to-end comparison with a report (a few minutes at most)",
-        description="Run the quick form of the demo studies ("
-        + ", ".join(DEMO_STUDIES + OPTIONAL_DEMO_STUDIES)
-        + ") and write a report with their figures, a 3-D animation and links to each study "
-        "report. Re-running reuses the finished cases (and says how many); --fresh runs "
-        "everything again after moving the earlier results aside.",
-    )
-    p.add_argument("--out", default="results/demo", metavar="DIR", help="results folder (default results/demo)")
-    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: CPU count)")
-    p.add_argument("--fresh", action="store_true",
-                   help="run every case again: the earlier results in DIR are first moved to "
-                        "DIR-<date>-<time> (kept, not deleted)")
-    p.set_defaults(func=cmd_demo, executor=None, seed=None, quick=True, no_report=False)
 
 
 def demo_studies() -> list[str]:
@@ -213,54 +192,47 @@ def demo_animation(out: Path) -> object | None:
     return None
 
 
-def cmd_demo(args: argparse.Namespace) -> int:
-    """``drake-mh demo``."""
-    from drake_mh.cli import _smoke
-    from drake_mh.cli.study import run_and_print
-    from drake_mh.study.report.document import Document, Heading, Link, Markdown, Paragraph, to_html, to_markdown
+def mark_folder(out: Path, studies: list[str]) -> None:
+    """Creates the demo folder ``out`` and its :data:`MARKER` (what tells ``--fresh`` the folder is the demo's)."""
     from drake_mh.study.store import write_atomic
 
-    if args.workers is not None and args.workers < 0:
-        raise InvalidArgument(f"--workers must be >= 0, got {args.workers}")
-    start = time.perf_counter()
-    out = Path(args.out)
-    quiet = getattr(args, "quiet", False)
-    studies = demo_studies()
-    if args.fresh:
-        moved = move_aside(out, studies)
-        if moved is not None:
-            print(f"--fresh: earlier results moved to {moved} (kept); running every case again")
-    earlier = earlier_results(out, studies)
-    if earlier.total:
-        print(reuse_message(out, earlier))
-    smoke = _smoke()
-    if smoke is not None and not quiet:
-        smoke(out=print)
-        print()
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / MARKER, json.dumps({"studies": studies}).encode("utf-8"))
-    # motion_benchmark's kernels compile on the second core while the other studies run
-    compiling = warmup.start() if BACKGROUND_COMPILE in studies and not earlier.cases.get(BACKGROUND_COMPILE) else []
-    sections, results = [], []
-    for name in studies:
-        if name == BACKGROUND_COMPILE:
-            warmup.wait(compiling)
-        if not quiet:
-            print(f"== {name} (quick) ==")
-        result = run_and_print(name, args, out=out / name, quick=True, reuse_hint=None)
-        results.append(result)
-        section = [Heading(name)]
-        if result.summary.strip():
-            section.append(Markdown(result.summary))
-        section += key_figures(out / name, name)
-        line = f"{len(result.records)}/{result.n_cases} cases"
-        line += f" ({result.n_new} run now, {len(result.records) - result.n_new} reused from the earlier run)" \
-            if len(result.records) > result.n_new else ""
-        line += f", {result.n_errors} raised" if result.n_errors else ""
-        section += [Paragraph(line + "."), Link(f"{name}/index.html", f"{name}: full report (tables, statistics, figures)")]
-        sections.append(section)
-        if not quiet:
-            print()
+
+
+def study_section(out: Path, name: str, result) -> list:
+    """The demo page's section of one study: its summary, key figures (:func:`key_figures`), the
+    count of its cases (run now, reused, raised) and a link to its own report.
+
+    Args:
+        out: the demo folder (the study's results are in ``out / name``).
+        name: the study.
+        result: its :class:`~drake_mh.study.runner.StudyResult`.
+    """
+    from drake_mh.study.report.document import Heading, Link, Markdown, Paragraph
+
+    section = [Heading(name)]
+    if result.summary.strip():
+        section.append(Markdown(result.summary))
+    section += key_figures(out / name, name)
+    line = f"{len(result.records)}/{result.n_cases} cases"
+    line += f" ({result.n_new} run now, {len(result.records) - result.n_new} reused from the earlier run)" \
+        if len(result.records) > result.n_new else ""
+    line += f", {result.n_errors} raised" if result.n_errors else ""
+    return section + [Paragraph(line + "."), Link(f"{name}/index.html", f"{name}: full report (tables, statistics, figures)")]
+
+
+def write_page(out: Path, sections: list[list], results: list, elapsed: float) -> Path:
+    """Writes the demo page: ``out/index.html``, ``out/report.md`` and ``out/figures/``: an
+    introduction, the count of reused cases, the 3-D animation (:func:`demo_animation`), then
+    the studies' ``sections`` (:func:`study_section`) and the wall time ``elapsed`` [s].
+
+    Returns:
+        The path of ``index.html``.
+    """
+    from drake_mh.study.report.document import Document, Heading, Paragraph, to_html, to_markdown
+    from drake_mh.study.store import write_atomic
+
     doc = Document(title="drake_mh demo")
     doc.add(Paragraph(
         "Quick forms of the demo studies, run end to end on the bundled robots: batched kinematics "
@@ -278,15 +250,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
     for section in sections:
         for block in section:
             doc.add(block)
-    elapsed = time.perf_counter() - start
     doc.add(Paragraph(f"Demo wall time {elapsed:.1f} s."))
     for block in doc.blocks:
         if hasattr(block, "png"):
             write_atomic(out / "figures" / f"{block.name}.png", block.png)
     write_atomic(out / "report.md", to_markdown(doc).encode("utf-8"))
     write_atomic(out / "index.html", to_html(doc).encode("utf-8"))
-    errors = sum(r.n_errors for r in results)
-    print(f"demo finished in {elapsed:.1f} s" + (f" ({errors} case(s) raised)" if errors else "")
-          + (f"; {reused} cases reused from the earlier run (--fresh recomputes them)" if reused else ""))
-    print(f"demo report: {(out / 'index.html').resolve()}")
-    return 0
+    return out / "index.html"

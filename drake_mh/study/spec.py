@@ -167,19 +167,6 @@ class Study:
         except TypeError:
             return None
 
-    def main(self, argv: Sequence[str] | None = None) -> int:
-        """Command-line entry of a study script: ``python studies/NAME.py [--quick] ...``.
-
-        Equivalent to ``drake-mh study <this file> ...``. Exits the process with the CLI's
-        exit code.
-        """
-        from drake_mh.cli import main as cli_main
-
-        source = self.source_file
-        target = source if source else self.name
-        argv = list(argv) if argv is not None else __import__("sys").argv[1:]
-        raise SystemExit(cli_main(["study", target, *argv]))
-
 
 def expand_grid(grid: Grid, where: str = "grid") -> list[dict[str, Any]]:
     """Expands a grid declaration into case parameter dicts.

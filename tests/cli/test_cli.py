@@ -47,7 +47,7 @@ def test_help_lists_subcommands(capsys):
 
 def test_subcommand_modules_plug_in():
     assert "drake_mh.cli.ik" in COMMAND_MODULES and "drake_mh.cli.app" in COMMAND_MODULES
-    parser = build_parser()  # modules that do not exist yet are skipped
+    parser = build_parser()
     assert parser.prog == "drake-mh"
 
 
@@ -117,7 +117,7 @@ def test_study_quick_seed_and_mismatch(toy, tmp_path, capsys):
 
 
 def test_study_script_runs_like_the_cli(toy, tmp_path):
-    script = toy.read_text() + "\nif __name__ == '__main__':\n    study.main()\n"
+    script = toy.read_text() + "\nif __name__ == '__main__':\n    from drake_mh.cli import run_script\n    run_script(study)\n"
     toy.write_text(script)
     result = subprocess.run(
         [sys.executable, str(toy), "--quick", "--workers", "0", "--out", str(tmp_path / "s")],
