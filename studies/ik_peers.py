@@ -48,52 +48,30 @@ Run: ``drake-mh study ik_peers [--quick]`` or ``python studies/ik_peers.py [--qu
 from __future__ import annotations
 
 import os
-import tempfile
 import time
-import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import numpy as np
 
 import drake_mh
-from drake_mh.ik import IKProblem, solve_ik, verify
+from drake_mh.errors import DrakeMhError
+from drake_mh.ik import IKProblem, peers, solve_ik, verify
+from drake_mh.ik.peers import PEER_MODULE, PEERS, peer_available
 from drake_mh.robot.examples import example_robot_data_root, load_example_arm
 from drake_mh.study import Case, Fields, Study
-from drake_mh.errors import DrakeMhError, UnsupportedModel
 from drake_mh.study.machine import cpu_model, load_average
 
 TARGET_SEED = 20240605
 TOL = 1e-5  # [m] and [rad]
 TIMEOUT = 0.005  # [s]
-RTB_TOL = 0.5 * TOL**2  # E = ½(|Δp|² + θ²) < RTB_TOL  =>  |Δp|, θ <= TOL
 OURS = ("hybrid", "pinv", "dls")
-TRACIK_EPS = TOL / np.sqrt(3)  # TRAC-IK bounds each of the 6 components; |3 components| <= TOL
-PEERS = ("rtb_ik_LM", "rtb_ik_GN", "trac_ik", "ikpy")
-#: the module each peer needs (optional extra ``peers``)
-PEER_MODULE = {"rtb_ik_LM": "roboticstoolbox", "rtb_ik_GN": "roboticstoolbox", "trac_ik": "pytracik", "ikpy": "ikpy"}
 REFERENCE = "rtb_ik_LM"
 BUNDLED = ("panda", "seed000_6dof")
 #: arms of example-robot-data (drake_mh.robot.examples) beside the bundled ones
 ERD_ARMS = ("ur5", "xarm7", "kinova")
 
 _ROBOTS: dict = {}
-_RTB: dict = {}
-_TRACIK: dict = {}
-_IKPY: dict = {}
 _PROBLEMS: dict = {}
 _WARM: set = set()
-
-
-def peer_available(label: str) -> bool:
-    """Whether the library of peer ``label`` is installed (optional extra ``peers``; not imported here)."""
-    import importlib.util
-
-    return importlib.util.find_spec(PEER_MODULE[label]) is not None
-
-
-def rtb_available() -> bool:
-    """Whether robotics-toolbox-python is installed (the optional extra ``peers``; not imported here)."""
-    return peer_available("rtb_ik_LM")
 
 
 def robots() -> list[str]:
@@ -110,164 +88,11 @@ def _robot(name: str):
     return _ROBOTS[name]
 
 
-def _stripped_urdf(robot) -> ET.Element:
-    """``robot``'s URDF as an element tree, collision/visual removed and every parent link declared.
-
-    rtb's and KDL's parsers reject ``<capsule>``, and KDL needs ``<link name="world"/>`` declared
-    when a joint refers to it; neither needs the geometry for kinematics.
-    """
-    root = ET.fromstring(robot.model_text)
-    for link in root.findall("link"):
-        for tag in ("collision", "visual"):
-            for element in link.findall(tag):
-                link.remove(element)
-    declared = {link.get("name") for link in root.findall("link")}
-    referred = {j.find("parent").get("link") for j in root.findall("joint")}
-    for name in sorted(referred - declared):  # e.g. <joint><parent link="world"/> with no <link name="world"/>
-        root.insert(0, ET.Element("link", {"name": name}))
-    return root
-
-
-def _chain_joints(root: ET.Element, tip: str) -> list[ET.Element]:
-    """The joints from the URDF's root link to link ``tip``, root first."""
-    by_child = {j.find("child").get("link"): j for j in root.findall("joint")}
-    joints, link = [], tip
-    while link in by_child:
-        joints.append(by_child[link])
-        link = by_child[link].find("parent").get("link")
-    return joints[::-1]
-
-
-def _check_fk(robot, label: str, fk) -> None:
-    """Raises UnsupportedModel when the peer's FK differs from Drake's by > 1e-9 at a random configuration."""
-    q = robot.random_configurations(1, 0)[0]
-    gap = float(np.abs(np.asarray(fk(q)) - robot.fk(q)).max())
-    if not gap <= 1e-9:
-        raise UnsupportedModel(f"{label}'s FK of {robot.name} differs from Drake's by {gap:.2e}")
-
-
-def rtb_robot(robot):
-    """robotics-toolbox-python's model of ``robot`` (same URDF text, collision/visual stripped).
-
-    Raises:
-        UnsupportedModel: its FK differs from Drake's by more than 1e-9 at a random configuration.
-    """
-    if robot.name in _RTB:
-        return _RTB[robot.name]
-    import roboticstoolbox as rtb
-    from roboticstoolbox.models.URDF.URDFRobot import URDF_read
-
-    with tempfile.TemporaryDirectory() as folder:
-        path = os.path.join(folder, "robot.urdf")
-        Path(path).write_text(ET.tostring(_stripped_urdf(robot), encoding="unicode"))
-        links, name = URDF_read(path)[:2]
-    model = rtb.Robot(links, name=name)
-    _check_fk(robot, "robotics-toolbox", lambda q: model.fkine(q, end=robot.ee_frame_name).A)
-    _RTB[robot.name] = model
-    return model
-
-
-def _peer_chain(robot, peer: str):
-    """The stripped URDF of ``robot`` and its joints from the root to the end effector.
-
-    Raises:
-        UnsupportedModel: no joint leads to the end effector.
-    """
-    root = _stripped_urdf(robot)
-    joints = _chain_joints(root, robot.ee_frame_name)
-    if not joints:
-        raise UnsupportedModel(f"{peer}: no joint leads to {robot.ee_frame_name!r} in {robot.name}'s URDF")
-    return root, joints
-
-
-def tracik_solver(robot):
-    """A ``pytracik.TRAC_IK`` solver (Speed mode, 5 ms, eps ``TOL/sqrt(3)``) for ``robot``.
-
-    Its joint limits are set from Drake's (the wheel reads the URDF's as 32-bit floats, which can
-    lie outside Drake's by ~1e-8 rad and fail our check at a limit).
-
-    Raises:
-        UnsupportedModel: KDL did not find the chain, or its FK differs from Drake's.
-    """
-    if robot.name in _TRACIK:
-        return _TRACIK[robot.name]
-    import pytracik
-
-    root, joints = _peer_chain(robot, "TRAC-IK")
-    base = joints[0].find("parent").get("link")
-    if any(link.get("name") == base and link.find("inertial") is not None for link in root.findall("link")):
-        # KDL ignores a root link's inertia with a warning on stdout: give it a massless parent
-        root.insert(0, ET.Element("link", {"name": "ik_peers_root"}))
-        joint = ET.SubElement(root, "joint", {"name": "ik_peers_root_weld", "type": "fixed"})
-        ET.SubElement(joint, "parent", {"link": "ik_peers_root"})
-        ET.SubElement(joint, "child", {"link": base})
-        base = "ik_peers_root"
-    solver = pytracik.TRAC_IK(base, robot.ee_frame_name, ET.tostring(root, encoding="unicode"), TIMEOUT,
-                              TRACIK_EPS, pytracik.SolveType.Speed)
-    if pytracik.get_num_joints(solver) != robot.nq:
-        raise UnsupportedModel(f"TRAC-IK's chain of {robot.name} has {pytracik.get_num_joints(solver)} joints, "
-                               f"Drake's {robot.nq}")
-    pytracik.set_joint_limits(solver, [float(x) for x in robot.lower], [float(x) for x in robot.upper])
-    _check_fk(robot, "TRAC-IK", lambda q: pytracik.fk(solver, q))
-    _TRACIK[robot.name] = solver
-    return solver
-
-
-def ikpy_chain(robot):
-    """ikpy's chain of ``robot``: the URDF's joints from its root to the end effector only.
-
-    Fixed joints are inactive; the active joints' bounds are Drake's limits (ikpy leaves a
-    continuous joint unbounded).
-
-    Raises:
-        UnsupportedModel: its active joints are not Drake's, or its FK differs from Drake's.
-    """
-    if robot.name in _IKPY:
-        return _IKPY[robot.name]
-    import warnings
-
-    import ikpy.chain
-
-    root, joints = _peer_chain(robot, "ikpy")
-    keep = {joints[0].find("parent").get("link")} | {j.find("child").get("link") for j in joints}
-    for element in list(root):
-        if (element.tag == "link" and element.get("name") not in keep) or (element.tag == "joint"
-                                                                           and element not in joints):
-            root.remove(element)
-    with tempfile.TemporaryDirectory() as folder, warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # "fixed link set as active" before the mask below is given
-        path = os.path.join(folder, "robot.urdf")
-        Path(path).write_text(ET.tostring(root, encoding="unicode"))
-        chain = ikpy.chain.Chain.from_urdf_file(path, base_elements=[joints[0].find("parent").get("link")],
-                                                symbolic=False)
-        mask = [False] + [link.joint_type != "fixed" for link in chain.links[1:]]
-        chain = ikpy.chain.Chain(chain.links, active_links_mask=mask, name=robot.name)
-    if sum(mask) != robot.nq:
-        raise UnsupportedModel(f"ikpy's chain of {robot.name} has {sum(mask)} active joints, Drake's {robot.nq}")
-    active = [link for link, on in zip(chain.links, mask) if on]
-    for link, lo, hi in zip(active, robot.lower, robot.upper):
-        link.bounds = (float(lo), float(hi))
-    _check_fk(robot, "ikpy", lambda q: chain.forward_kinematics(chain.active_to_full(q, np.zeros(len(mask)))))
-    _IKPY[robot.name] = chain
-    return chain
-
-
 def peer_problem(robot_name: str, label: str) -> str | None:
-    """Why peer ``label`` cannot run on robot ``robot_name`` (not installed, model rejected); ``None`` if it can.
-
-    TRAC-IK's and ikpy's models are built here (milliseconds; grid time) so that a peer that
-    cannot model a robot is left out of the grid and named in the summary; rtb's model is built
-    on its first case (importing it takes seconds).
-    """
-    if not peer_available(label):
-        return f"{PEER_MODULE[label]} is not installed"
-    if label not in ("trac_ik", "ikpy"):
-        return None
-    try:
-        (tracik_solver if label == "trac_ik" else ikpy_chain)(_robot(robot_name))
-    except Exception as exc:  # noqa: BLE001 - any failure of the peer's parser means: left out, said so
-        return f"{type(exc).__name__}: {str(exc)[:200]}"
-    return None
+    """Why peer ``label`` cannot run on robot ``robot_name`` (:func:`drake_mh.ik.peers.peer_problem`),
+    checked at grid time so that a peer that cannot model a robot is left out of the grid and named
+    in the summary."""
+    return peers.peer_problem(_robot(robot_name), label)
 
 
 def _target(robot_name: str, target: int) -> np.ndarray:
@@ -277,38 +102,14 @@ def _target(robot_name: str, target: int) -> np.ndarray:
     return robot.fk(robot.random_configurations(1, rng)[0])
 
 
-def _quaternion(R: np.ndarray) -> np.ndarray:
-    """``(w, x, y, z)`` of the rotation matrix ``R`` (Drake's conversion)."""
-    from pydrake.common.eigen_geometry import Quaternion
-    from pydrake.math import RotationMatrix
-
-    quat: Quaternion = RotationMatrix(R).ToQuaternion()
-    return np.array([quat.w(), quat.x(), quat.y(), quat.z()])
-
-
 def _solve(robot, label: str, X_WT: np.ndarray, seed: int):
     """One timed solve: ``(q, our IKResult or None, the method's own success flag or None)``."""
     if label in OURS:
         problem = IKProblem(robot, X_WT, position_tolerance=TOL, orientation_tolerance=TOL)
         result = solve_ik(problem, label, seed=seed, timeout=TIMEOUT)
         return result.q, result, result.success
-    if label == "trac_ik":
-        import pytracik
-
-        w, x, y, z = _quaternion(X_WT[:3, :3])
-        p = X_WT[:3, 3]
-        out = pytracik.ik(tracik_solver(robot), robot.home, p[0], p[1], p[2], x, y, z, w)
-        return (out[1:] if out[0] >= 0 else robot.home.copy()), None, bool(out[0] >= 0)  # else out[1:] unset
-    if label == "ikpy":
-        chain = ikpy_chain(robot)
-        start = chain.active_to_full(robot.home, np.zeros(len(chain.links)))
-        full = chain.inverse_kinematics_frame(X_WT, initial_position=start, orientation_mode="all")
-        return np.asarray(chain.active_from_full(full), dtype=float), None, None  # ikpy has no flag
-    model = rtb_robot(robot)
-    np.random.seed(seed % 2**32)  # rtb's restarts
-    solver = model.ik_LM if label == "rtb_ik_LM" else model.ik_GN
-    solution = solver(X_WT, end=robot.ee_frame_name, tol=RTB_TOL, joint_limits=True)
-    return np.asarray(solution.q, dtype=float), None, bool(solution.success)
+    q, reported = peers.solve_peer(robot, label, X_WT, seed, TOL, TIMEOUT)
+    return q, None, reported
 
 
 def run(case: Case) -> dict:
@@ -422,4 +223,6 @@ study = Study(
 )
 
 if __name__ == "__main__":
-    study.main()
+    from drake_mh.cli import run_script
+
+    run_script(study)

@@ -17,7 +17,8 @@ Example:
 Files: ``problem.py`` (the problem and its vectorized objective), ``result.py`` (IKResult and
 Drake verification), ``metaheuristic.py``, ``lm.py`` (batched least-squares kernel),
 ``hybrid.py``, ``jacobian.py`` (pinv / DLS), ``drake.py`` (SNOPT / IPOPT), ``solve.py``
-(the entry point), ``cli.py`` (``drake-mh ik``).
+(the entry point and its table of methods), ``peers.py`` (robotics-toolbox, TRAC-IK and ikpy as
+optional peers); ``drake-mh ik`` is :mod:`drake_mh.cli.ik`.
 """
 
 from drake_mh.ik.problem import IKProblem, ReachBound, reach_bound
