@@ -1,5 +1,5 @@
 """Your own robot: model files with meshes load as shipped (drake_mh.robot.loading, packages,
-meshes, robot_chain); real robots of example-robot-data checked against Pinocchio."""
+meshes, chain); real robots of example-robot-data checked against Pinocchio."""
 
 from __future__ import annotations
 

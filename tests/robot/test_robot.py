@@ -131,6 +131,25 @@ def test_pickles_by_urdf(panda):
     np.testing.assert_array_equal(clone.fk(q), panda.fk(q))
 
 
+@pytest.mark.parametrize("name, rebuild", [("robot_by_name_main.pkl", "_reload_robot"),
+                                           ("robot_by_text_main.pkl", "_rebuild_robot")])
+def test_robots_pickled_by_the_older_layout_still_load(name, rebuild):
+    """Pickles made when ``drake_mh.robot`` was one module (tests/data: a bundled robot by name, a
+    DH robot by its text) name ``drake_mh.robot.<rebuild>``; they load, and give the FK of the
+    same robot built now."""
+    import pickle
+    from pathlib import Path
+
+    data = (Path(__file__).resolve().parents[1] / "data" / name).read_bytes()
+    assert b"drake_mh.robot\x94" in data and rebuild.encode() in data  # the old class path, as stored
+    robot = pickle.loads(data)
+    fresh = drake_mh.load_robot("planar2r") if "name" in name else \
+        Robot.from_dh([0.4, 0.3], [0.0, 0.0], [0.0, 0.0], name="two_dh")
+    q = np.array([0.3, -0.2])
+    assert robot.name == fresh.name and robot.nq == 2
+    np.testing.assert_allclose(robot.fk(q), fresh.fk(q), rtol=0, atol=1e-15)
+
+
 def test_user_urdf_path(tmp_path):
     path = tmp_path / "chain.urdf"
     path.write_text(random_chain_urdf(3, seed=1))
