@@ -193,7 +193,7 @@ class ThreeLinkProblem:
 
         Same numbers as :meth:`evaluate` (tested), about 5x faster: the optimizers' path.
         """
-        from drake_mh.cyclic._kernel import evaluate_population
+        from drake_mh.cyclic.evaluation import evaluate_population
 
         k = np.ascontiguousarray(np.atleast_1d(np.asarray(k, dtype=float)).reshape(-1))
         P = len(k)

@@ -39,7 +39,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from drake_mh.errors import AskTellError, InvalidArgument, InvalidObjective
-from drake_mh.optim._population_kernels import distinct_indices
+from drake_mh.optim.population import distinct_indices
 
 logger = logging.getLogger(__name__)
 
@@ -496,7 +496,7 @@ class Optimizer(abc.ABC):
     def donors(self, n: int, pool: int, k: int = 3, exclude_self: bool = True) -> np.ndarray:
         """``(n, k)`` indices into ``range(pool)``, distinct within each row; with
         ``exclude_self`` row ``i`` never contains ``i`` (sequential sampling without
-        replacement, :func:`~drake_mh.optim._population_kernels.distinct_indices`)."""
+        replacement, :func:`~drake_mh.optim.population.distinct_indices`)."""
         return distinct_indices(self.rng.random((n, k)), pool, exclude_self)
 
     def randint(self, high: int, size) -> np.ndarray:

@@ -29,7 +29,7 @@ import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.optim._population_kernels import distinct_indices, greedy_replace
+from drake_mh.optim.population import distinct_indices, greedy_replace
 from drake_mh.optim.base import Optimizer
 
 

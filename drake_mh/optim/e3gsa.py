@@ -37,7 +37,7 @@ import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.optim._population_kernels import distinct_indices
+from drake_mh.optim.population import distinct_indices
 from drake_mh.optim.gsa import _EPS, GSA, _acceleration_kernel
 
 

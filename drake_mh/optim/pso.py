@@ -24,7 +24,7 @@ import numba
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.optim._population_kernels import greedy_replace
+from drake_mh.optim.population import greedy_replace
 from drake_mh.optim.base import Optimizer
 
 

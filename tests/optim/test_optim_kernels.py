@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from drake_mh.optim import abc, ao, aro, bat, de, e3gsa, ga, gsa, pso, woa
-from drake_mh.optim._population_kernels import distinct_indices, greedy_replace
+from drake_mh.optim.population import distinct_indices, greedy_replace
 
 P, D = 13, 5
 LOWER = np.array([-2.0, -1.0, 0.0, -5.0, 1.0])

@@ -271,7 +271,7 @@ def test_a_pickled_config_builds_its_own_kernel_options():
     import pickle
 
     from drake_mh.planning.rrt_connect import RRTConnectConfig
-    from drake_mh.planning.rrt_connect._kernels import OPTION_NAMES
+    from drake_mh.planning.rrt_connect.search import OPTION_NAMES
     from drake_mh.planning.rrt_connect.planner import _CLOCK
 
     config = RRTConnectConfig(step=0.5, probes=2)

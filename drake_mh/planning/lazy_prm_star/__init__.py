@@ -12,7 +12,7 @@ Method of :func:`drake_mh.planning.solve_motion`:
   deadline. Each new shortest path of the graph is shortcut (64 draws at a gain of 0.5 %, as
   ``rrt_connect``'s shortcut) and replaces the best path when shorter.
 
-Design: the search (:func:`._kernels.prm_kernel`) is one numba call, like ``rrt_connect``'s
+Design: the search (:func:`.search.prm_kernel`) is one numba call, like ``rrt_connect``'s
 plan, with the same motion check (:func:`drake_mh.planning.motion.check.certified_motion`);
 samples are checked free by the scene's batched state check. Nodes that cannot lie on a
 shorter path than the best are dropped at each batch (their straight-line distance through them

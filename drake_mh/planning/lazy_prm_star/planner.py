@@ -1,7 +1,7 @@
-"""``lazy_prm_star``: the Python side of the compiled informed lazy PRM* (:mod:`._kernels`).
+"""``lazy_prm_star``: the Python side of the compiled informed lazy PRM* (:mod:`.search`).
 
 :func:`plan` starts from ``rrt_connect``'s certified path (``warm_start``), then calls
-:func:`._kernels.prm_kernel`, which improves it batch by batch until the sample budget or the
+:func:`.search.prm_kernel`, which improves it batch by batch until the sample budget or the
 deadline. :func:`prepare` compiles (or loads) both planners' kernels before any clock starts.
 """
 
@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
-from drake_mh.planning.lazy_prm_star import _kernels as K
+from drake_mh.planning.lazy_prm_star import search as K
 from drake_mh.planning.motion import clock_address, scene_arguments
 from drake_mh.planning.motion import stats as S
 from drake_mh.planning.rrt_connect import planner as rrt
@@ -75,7 +75,7 @@ class LazyPRMStarConfig:
             raise InvalidArgument(str(error).replace("rrt_connect:", "lazy_prm_star:", 1)) from None
 
     def vector(self) -> np.ndarray:
-        """The kernel's ``options`` (:data:`._kernels.OPTION_NAMES`)."""
+        """The kernel's ``options`` (:data:`.search.OPTION_NAMES`)."""
         values = {**dataclasses.asdict(self), "clock": _CLOCK}
         return np.array([float(values[name]) for name in K.OPTION_NAMES])
 

@@ -17,7 +17,7 @@ Methods of :func:`drake_mh.planning.solve_motion`:
 Design (the one that makes VAMP fast: Thomason, Kingston, Kavraki, "Motions in Microseconds
 via Vectorized Sampling-Based Planning", ICRA 2024):
 
-* **one compiled call** (:func:`._kernels.plan_kernel`): sampling, nearest neighbours
+* **one compiled call** (:func:`.search.plan_kernel`): sampling, nearest neighbours
   (linear scan: trees stay small), motion checks, path extraction and shortcutting run in
   numba without Python in the loop; the deadline is read inside the kernel from the
   monotonic clock (:mod:`drake_mh.planning.motion.clock`), the budget counts tree nodes; randomness is splitmix64

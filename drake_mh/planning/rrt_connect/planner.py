@@ -1,7 +1,7 @@
 """``rrt_connect`` and ``rrt_connect_smooth``: the Python side of the compiled planner.
 
 :func:`plan` reads the problem, binds the scene's compiled arrays (once per obstacle set),
-and makes one call into :func:`._kernels.plan_kernel`, which plans, certifies and shortcuts.
+and makes one call into :func:`.search.plan_kernel`, which plans, certifies and shortcuts.
 :func:`prepare` compiles (or loads from numba's cache) that kernel once per process, so that
 no planning clock counts it.
 """
@@ -18,7 +18,7 @@ import numpy as np
 from drake_mh.errors import InvalidArgument
 from drake_mh.planning.motion import PROBES, clock_address, scene_arguments
 from drake_mh.planning.motion import stats as S
-from drake_mh.planning.rrt_connect import _kernels as K
+from drake_mh.planning.rrt_connect import search as K
 
 _CLOCK = clock_address()
 
@@ -43,7 +43,7 @@ class RRTConnectConfig:
             sets for the Panda and the Panda with its hand, 1.03x (kernel time; mean 0.84x) on 210
             UR5 plans; median path lengths within 2 % on the Panda's sets, 4 % shorter on the UR5.
             Without the domain, 0.7 and 2.0 were 1.5x and 1.2x slower than 1.0.
-        domain_radius: [rad] dynamic domain (0: off; :func:`._kernels.plan_kernel`): a node whose
+        domain_radius: [rad] dynamic domain (0: off; :func:`.search.plan_kernel`): a node whose
             extension failed takes this radius, and a sample beyond its nearest node's radius is
             drawn again without a check. VAMP's value for the Panda. 3 and 6 measured 0.99x and
             1.00x the plan time of no domain on the sets above with a step of 1.0, 4 0.94x; it
@@ -145,7 +145,7 @@ class RRTConnectConfig:
                     or (most is not None and value > most):
                 bounds = f">= {least}" if most is None else f"in [{least}, {most}]"
                 raise InvalidArgument(f"rrt_connect: {name} must be an integer {bounds}, got {value!r}")
-        # the kernel's options vector (._kernels.OPTION_NAMES), built once per config
+        # the kernel's options vector (.search.OPTION_NAMES), built once per config
         values = {**dataclasses.asdict(self), "clock": _CLOCK, "profile": int(self.profile),
                   "balance": int(self.balance)}
         object.__setattr__(self, "_vector", np.array([float(values[name]) for name in K.OPTION_NAMES]))
@@ -219,7 +219,7 @@ def _bind(scene) -> tuple:
 
 
 def _call(binding: tuple, arguments: tuple):
-    """:func:`._kernels.plan_kernel` on ``arguments`` (which hold the ``binding``'s arrays) through
+    """:func:`.search.plan_kernel` on ``arguments`` (which hold the ``binding``'s arrays) through
     the compiled entry point of their types, kept in the binding per ``by_values`` (compiled or
     loaded from numba's cache on first use). The entry point skips numba's type dispatch (about
     10 µs of a plan called after other work, its code and data out of the CPU's caches) and
@@ -236,7 +236,7 @@ def _call(binding: tuple, arguments: tuple):
 
 
 def _arguments_of(problem, goals, binding: tuple, seed, max_nodes: int, time_limit: float, config) -> tuple:
-    """:func:`._kernels.plan_kernel`'s arguments, each of the one type :func:`_call` expects."""
+    """:func:`.search.plan_kernel`'s arguments, each of the one type :func:`_call` expects."""
     q = np.ascontiguousarray(problem.q_start, dtype=float)
     goals = np.ascontiguousarray(goals, dtype=float)
     if q.ndim != 1 or goals.ndim != 2 or goals.shape[1] != q.shape[0]:

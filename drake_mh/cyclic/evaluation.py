@@ -4,7 +4,7 @@ Same computation as :meth:`drake_mh.cyclic.problem.ThreeLinkProblem.evaluate` (w
 joint angles for inspection; this kernel keeps none): for every k, over the N samples, the
 closed-form IK (eqs. (7)-(12), (19)-(20)), continuous joint angles (unwrapping, then the 2π
 window ``[lower, lower + 2π)`` set by the first sample), limit excess, link-obstacle clearance,
-closure and the MATLAB-style eq. (1). ``tests/cyclic/test_kernel.py`` checks it against the
+closure and the MATLAB-style eq. (1). ``tests/cyclic/test_evaluation.py`` checks it against the
 numpy path. Measured (2 shared cores, loaded): 7.3 ms vs 35.5 ms for the numpy path at
 P = 20, N = 1000 (4.8x).
 """
