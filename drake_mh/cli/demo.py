@@ -1,10 +1,7 @@
 """``drake-mh demo``: the quick form of the demo studies one after the other, then a report
-page with their figures, a 3-D animation and links to each study's report
-(:mod:`drake_mh.study.demo`).
-
-A second run into the same folder reuses the finished cases (the runner resumes) and says so,
-on the terminal and on the page; ``--fresh`` first moves the earlier results aside (to
-``<out>-<date>-<time>``, never deleted) and runs everything again.
+page with their figures, a 3-D animation and links to each study's report. What it runs and the
+page it writes are the library's (:mod:`drake_mh.study.demo`); ``--fresh`` first moves earlier
+results aside, else finished cases are reused (and said so).
 """
 
 from __future__ import annotations
