@@ -329,12 +329,14 @@ class LimitAttribute:
         return robot.limits._values[self.quantity]
 
     def __set__(self, robot, value) -> None:
+        table = robot.limits.copy()  # copy on write: a copy.copy(robot) keeps its own limits
         if self.quantity in ("lower", "upper"):
-            lower = value if self.quantity == "lower" else robot.limits.lower
-            upper = value if self.quantity == "upper" else robot.limits.upper
-            robot.limits.set_range(lower, upper, "user", "set in code")
+            lower = value if self.quantity == "lower" else table.lower
+            upper = value if self.quantity == "upper" else table.upper
+            table.set_range(lower, upper, "user", "set in code")
         else:
-            robot.limits.set(self.quantity, value, "user", "set in code")
+            table.set(self.quantity, value, "user", "set in code")
+        robot.limits = table
 
 
 # --- limits files --------------------------------------------------------------------------------

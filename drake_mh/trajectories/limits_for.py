@@ -106,7 +106,7 @@ def mass_matrices(robot, Q: np.ndarray) -> np.ndarray:
 
 
 def derived_accelerations(robot, Q: np.ndarray, effort: np.ndarray, joints: np.ndarray,
-                          M=None, G=None) -> np.ndarray:
+                          method: str = "ruckig") -> np.ndarray:
     """Acceleration bounds [rad/s²] for ``joints`` that keep the torque within the effort limits.
 
     Rule (for rest-to-rest motions whose velocity terms are small; torque is certified anyway,
@@ -125,6 +125,7 @@ def derived_accelerations(robot, Q: np.ndarray, effort: np.ndarray, joints: np.n
         Q: ``(N, nq)`` sampled configurations of the path.
         effort: ``(nq,)`` effort limits [N·m] (``inf`` rows are not constraints).
         joints: ``(nq,)`` bool, the joints to derive a bound for (effort-limited, with inertia).
+        method: the retimer, for messages.
 
     Returns:
         ``(nq,)`` bounds, ``inf`` outside ``joints``.
@@ -139,9 +140,9 @@ def derived_accelerations(robot, Q: np.ndarray, effort: np.ndarray, joints: np.n
     rows = np.isfinite(effort)
     if np.any(head[:, rows] <= 0.0):
         n, j = np.argwhere((head <= 0.0) & rows[None, :])[0]
-        raise InfeasibleTrajectory("retime", f"holding the arm against gravity needs {abs(G[n, j]):.4g} N·m on joint "
-                                   f"{robot.joint_names[j]!r}, at or above its effort limit {effort[j]:.4g} N·m, "
-                                   "on the path: no speed helps; change the path or the payload")
+        raise InfeasibleTrajectory(method, f"holding the arm against gravity on the path needs {abs(G[n, j]):.4g} N·m "
+                                   f"on joint {robot.joint_names[j]!r}, at or above its effort limit {effort[j]:.4g} "
+                                   "N·m: no speed helps; change the path or the payload")
     out = np.full(len(effort), np.inf)
     if not np.any(joints):
         return out
@@ -199,7 +200,7 @@ def enforced_limits(robot, method: str, W: np.ndarray, quantities=None, velocity
             asked = tuple(q for q in asked if q != "acceleration")  # torque bounds every joint
         else:
             if np.any(derive):
-                values = derived_accelerations(robot, path_samples(W), effort, derive)
+                values = derived_accelerations(robot, path_samples(W), effort, derive, method)
                 table.set("acceleration", values[derive], "derived",
                           f"effort, gravity and mass matrix on the path, x {DERIVED_MARGIN}", joints=_names(table, derive))
             _default(table, "acceleration", default, DEFAULT_ACCELERATION, "rad/s²")

@@ -26,13 +26,14 @@ robot's position limits and the requested limits within ``1 + tol``, or raises.
   acceleration and jerk), and ``q(t) = q_a + s(t) (q_b - q_a)`` (:mod:`~drake_mh.trajectories.ruckig_time`): every
   configuration lies on the segment (to rounding), ``s`` is monotone (rest to rest), the
   segment stays in the convex position box, and under the joints' box limits no rest-to-rest
-  motion along the segment is faster.
+  motion along the segment is faster (ruckig does not plan torque: where the certificate finds
+  an excess, the motion is slowed down uniformly, below).
 
 Limits are enforced at the check points by toppra; between them the chain-rule values can
 exceed a limit slightly. Every candidate is certified. A velocity, acceleration or torque excess
-of a toppra method is repaired by uniform time scalings (:func:`_slow_down`: the torque moves
-towards gravity's; where gravity alone exceeds the limit, :class:`InfeasibleTrajectory` says so);
-any other violation scales the
+is repaired by uniform time scalings (:func:`_slow_down`: the torque moves towards gravity's; the
+path, and ruckig's rests at the waypoints, stay; jerk only shrinks; where gravity alone exceeds
+the limit, :class:`InfeasibleTrajectory` says so); any other violation scales the
 offending quantity's limit by ``1 / ratio`` (times ``1 - 1e-3``; for ruckig a torque excess
 scales its velocity and acceleration limits) and solves again, at most ``max_attempts`` times,
 then :class:`~drake_mh.errors.LimitViolation` is raised.
@@ -171,7 +172,7 @@ def retime(path, robot, method: str = "toppra", *, limits=None, velocity_scaling
             traj = toppra_like(W, robot, arrays, method, factors, gridpoints, bc_type, check_points)
         solve_time = time.perf_counter() - start
         cert = certify(traj, robot, quantities=_REPORTED, scale=scale, enforced=quantities, limits=table)
-        if not cert.ok(quantities, tol) and method != "ruckig":
+        if not cert.ok(quantities, tol):
             traj, cert = _slow_down(traj, robot, cert, quantities, tol)
         traj.info.update(certificate=cert, attempts=attempts, solve_time=solve_time, limits=limits,
                          factors=dict(factors), enforced_limits=table)
@@ -187,7 +188,7 @@ def retime(path, robot, method: str = "toppra", *, limits=None, velocity_scaling
                 raise InfeasibleTrajectory(
                     method, f"holding the arm against gravity at t = {t:.4g} s needs "
                     f"{r_g[j]:.4g} x the effort limit of joint {joint!r} (after scaling), between the "
-                    "gridpoints; the path cannot be followed at any speed: change the path or the payload")
+                    "gridpoints: no speed helps; change the path or the payload")
         if quantity == "position" or attempts >= max_attempts:
             raise LimitViolation(joint, quantity, t, ratio, tol,
                                  hint=f"{method} after {attempts} attempt(s): use more gridpoints, "
@@ -290,8 +291,8 @@ def _check_gravity_on_segments(W, robot, effort: np.ndarray, samples: int = 64) 
     if np.max(ratio) > 1.0:
         i, j = np.unravel_index(np.argmax(ratio), ratio.shape)
         raise InfeasibleTrajectory(
-            "ruckig", f"holding the arm against gravity on segment {i // samples} needs {g[i, j]:.4g} N·m "
+            "ruckig", f"holding the arm against gravity on segment {i // samples} needs {abs(g[i, j]):.4g} N·m "
             f"on joint {robot.joint_names[j]!r}, above its effort limit {effort[j]:.4g} "
-            "N·m (after scaling); the path cannot be followed at any speed: change the path or the payload")
+            "N·m (after scaling): no speed helps; change the path or the payload")
 
 

@@ -204,9 +204,9 @@ def _diagnose(robot, method, spline, gp, factors, effort) -> InfeasibleTrajector
             i, j = np.unravel_index(np.argmax(ratio), ratio.shape)
             return InfeasibleTrajectory(
                 method, f"holding the arm against gravity at s = {gp[i]:.4g} needs "
-                f"{g[i, j]:.4g} N·m on joint {robot.joint_names[j]!r}, above its effort limit "
-                f"{effort[j] * factors['torque']:.4g} N·m (after scaling); the path "
-                "cannot be followed at any speed: change the path or the payload")
+                f"{abs(g[i, j]):.4g} N·m on joint {robot.joint_names[j]!r}, above its effort limit "
+                f"{effort[j] * factors['torque']:.4g} N·m (after scaling): no speed helps; change the path or "
+                "the payload")
     return InfeasibleTrajectory(method, "no feasible path parameterization (empty controllable set); "
                                 "check the limits and the path")
 

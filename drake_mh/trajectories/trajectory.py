@@ -177,6 +177,8 @@ class Trajectory:
         scaled = PPoly(pp.c * powers.reshape(shape), pp.x / factor)
         info = dict(self.info)
         info.pop("certificate", None)
+        if "waypoint_times" in info:  # ruckig's rests at the waypoints come 1 / factor later
+            info["waypoint_times"] = np.asarray(info["waypoint_times"], dtype=float) / factor
         if self.timing is None:
             return Trajectory(scaled, None, self.joint_names, self.method, info)
         return Trajectory(self.path, scaled, self.joint_names, self.method, info)
