@@ -57,10 +57,10 @@ class Certificate:
         samples: number of time samples used.
         duration: trajectory duration [s].
         scale: the ratios of velocity, acceleration, jerk and torque are relative to
-            ``scale x`` the robot's limits (positions always to the full range).
+            ``scale x`` the limits (:attr:`limits`; positions always to the full range).
         enforced: the quantities the trajectory's maker enforced (``None``: unknown, every
             certified quantity counts); the others are reported only.
-        limited: quantity -> ``(nq,)`` whether the robot declares a finite limit there.
+        limited: quantity -> ``(nq,)`` whether a finite limit applies there.
         limits: the :class:`~drake_mh.robot_limits.JointLimits` the ratios refer to (values
             and sources; ``None`` for certificates made before it existed).
         bounds: quantity -> ``(nq,)`` largest absolute value [rad/s, rad/s², rad/s³, N·m] of
@@ -162,8 +162,11 @@ def maker_limits(trajectory, robot):
     table, cert = trajectory.info.get("enforced_limits"), trajectory.info.get("certificate")
     if table is None or tuple(table.joint_names) != tuple(robot.joint_names):
         return None
-    enforced = cert.enforced if cert is not None else None
-    return table, enforced, cert.scale if cert is not None else 1.0
+    if cert is not None:
+        return table, cert.enforced, cert.scale
+    enforced = None if table.enforced is None else ("position",) + tuple(
+        "torque" if q == "effort" else q for q in table.enforced)
+    return table, enforced, 1.0
 
 
 def sample_times(trajectory, samples_per_piece: int = 8, min_samples: int = 1000):
