@@ -211,7 +211,7 @@ class Robot:
         continuous: ``(nq,)`` bool, joints without position limits in the URDF.
         velocity_limits, acceleration_limits, jerk_limits, effort_limits: ``(nq,)`` symmetric
             magnitudes [rad/s, rad/s², rad/s³, N·m]; ``inf`` where the model declares none.
-            Read-only views of :attr:`limits`; assigning one marks its joints ``"user"``.
+            The arrays of :attr:`limits`; assigning one marks its joints ``"user"``.
         limits: :class:`~drake_mh.robot_limits.JointLimits`, every limit with its source
             (declared by the model, user, default); ``print(robot.limits.table())``.
         ee_frame_name: name of the end-effector frame.

@@ -273,16 +273,11 @@ def load_trajectory(path) -> TrajectorySamples:
         raise InvalidTrajectory(f"cannot read {path}: {exc}", "path") from exc
     if fmt == "csv":
         return _from_csv(text, path)
-    try:
-        if fmt == "json":
-            data = json.loads(text)
-        else:
-            import yaml
+    import yaml
 
-            data = yaml.safe_load(text)
-    except ValueError as exc:  # json.JSONDecodeError and yaml.YAMLError are ValueErrors / subclasses
-        raise InvalidTrajectory(f"{path}: not valid {fmt.upper()} ({' '.join(str(exc).split())[:200]})", "path") from exc
-    except Exception as exc:  # yaml.YAMLError is not a ValueError
+    try:
+        data = json.loads(text) if fmt == "json" else yaml.safe_load(text)
+    except (ValueError, yaml.YAMLError) as exc:  # json.JSONDecodeError is a ValueError
         raise InvalidTrajectory(f"{path}: not valid {fmt.upper()} ({' '.join(str(exc).split())[:200]})", "path") from exc
     return _from_message(data, path)
 
