@@ -48,7 +48,7 @@ import numpy as np
 
 from drake_mh.errors import InvalidLimits
 
-__all__ = ["JointLimits", "LimitAttribute", "declared_limits", "read_limits_file", "apply_limits", "LIMITED", "UNITS", "SOURCES"]
+__all__ = ["JointLimits", "LimitAttribute", "declared_limits", "limits_of", "read_limits_file", "apply_limits", "LIMITED", "UNITS", "SOURCES"]
 
 _log = logging.getLogger(__name__)
 
@@ -288,6 +288,13 @@ def _finite_array(values, n: int, what: str, joints) -> np.ndarray:
     if arr.shape != (n,) or not np.all(np.isfinite(arr)):
         raise InvalidLimits(f"{what} must be {n} finite numbers (joints {list(joints)}), got {values!r}")
     return arr.copy()
+
+
+def limits_of(robot) -> JointLimits:
+    """``robot.limits``, or a table read from the arrays of an object that has none (a stand-in
+    robot with ``joint_names``, ``lower``, ``upper`` and ``*_limits``, sources ``"declared"``)."""
+    table = getattr(robot, "limits", None)
+    return table if isinstance(table, JointLimits) else JointLimits.from_arrays(robot)
 
 
 def declared_limits(joint_names, lower, upper, values: dict, model: str) -> JointLimits:

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drake_mh.errors import InvalidArgument, LimitViolation
+from drake_mh.robot_limits import limits_of
 from drake_mh.trajectories.bound import kinematic_bound
 
 __all__ = ["Certificate", "certify", "QUANTITIES"]
@@ -148,14 +149,6 @@ class Certificate:
         return out
 
 
-def _table(robot):
-    """The robot's :class:`~drake_mh.robot_limits.JointLimits` (read from its arrays if it has none)."""
-    from drake_mh.robot_limits import JointLimits
-
-    table = getattr(robot, "limits", None)
-    return table if isinstance(table, JointLimits) else JointLimits.from_arrays(robot)
-
-
 def maker_limits(trajectory, robot):
     """``(limits, enforced, scale)`` of the retiming that made ``trajectory`` (its
     ``info["enforced_limits"]`` and certificate), or ``None`` when it carries none for these joints."""
@@ -212,7 +205,7 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
         limits = maker[0]
         enforced = maker[1] if enforced is None else enforced
         scale = maker[2] if scale is None else scale
-    limits = _table(robot) if limits is None else limits
+    limits = limits_of(robot) if limits is None else limits
     scale = 1.0 if scale is None else scale
     unknown = [q for q in quantities if q not in QUANTITIES]
     if unknown:

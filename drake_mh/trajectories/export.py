@@ -135,8 +135,8 @@ def sample_trajectory(trajectory, rate_hz: float = DEFAULT_RATE_HZ, robot=None) 
 
 def check_samples(samples: TrajectorySamples, limits, enforced=None, scale: float = 1.0,
                   tol: float = EXPORT_TOLERANCE) -> None:
-    """Check samples against limits: position range, and ``|q̇|``, ``|q̈|``, ``|τ|`` within
-    ``scale x`` the velocity, acceleration and effort limits (``1 + tol``).
+    """Check samples against limits: position range (but on continuous joints), and ``|q̇|``,
+    ``|q̈|``, ``|τ|`` within ``scale x`` the velocity, acceleration and effort limits (``1 + tol``).
 
     Args:
         samples: the samples.
@@ -151,8 +151,9 @@ def check_samples(samples: TrajectorySamples, limits, enforced=None, scale: floa
     """
     enforced = ("position", "velocity", "acceleration", "torque") if enforced is None else tuple(enforced)
     lo, hi = np.asarray(limits.lower), np.asarray(limits.upper)
-    if "position" in enforced:
-        half = np.maximum(0.5 * (hi - lo), 1e-12)
+    if "position" in enforced:  # not on continuous joints (their range is a default, they may turn on)
+        ranged = np.array([s != "default" for s in limits.sources("position")])
+        half = np.where(ranged, np.maximum(0.5 * (hi - lo), 1e-12), np.inf)
         r = np.abs(samples.q - 0.5 * (hi + lo)) / half
         _raise_over(samples, r, "position", tol)
     for quantity, values in (("velocity", samples.qd), ("acceleration", samples.qdd), ("torque", samples.tau)):
@@ -191,7 +192,9 @@ def save_trajectory(trajectory, path, robot=None, rate_hz: float = DEFAULT_RATE_
     samples = sample_trajectory(trajectory, rate_hz, robot)
     table, cert = trajectory.info.get("enforced_limits"), trajectory.info.get("certificate")
     if table is None and robot is not None:
-        table = robot.limits
+        from drake_mh.robot_limits import limits_of
+
+        table = limits_of(robot)
     if table is not None:
         enforced = None if cert is None or cert.enforced is None else cert.enforced
         check_samples(samples, table, enforced, cert.scale if cert is not None else 1.0)

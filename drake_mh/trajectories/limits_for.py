@@ -11,7 +11,7 @@ value came from (``trajectory.info["enforced_limits"]``):
   declare an effort limit.
 * **acceleration**, toppra methods: the robot's where declared. A joint without one is left to
   the torque rows when torque bounds it — its effort limit is declared and its inertia
-  ``M_jj(q)`` is not negligible (``> 1e-9`` kg·m² at every path sample): ``M(q) q̈ = τ - C q̇ - g``
+  ``M_jj(q)`` is not negligible (``> 1e-9`` kg·m² at every waypoint): ``M(q) q̈ = τ - C q̇ - g``
   with every ``|τ_j|`` bounded bounds ``q̈`` — else it gets :data:`DEFAULT_ACCELERATION`
   (``"default"``, a warning). With ``acceleration_scaling < 1``, the joints left to torque get
   a derived bound (below) so that there is something to scale.
@@ -39,10 +39,10 @@ import numbers
 import numpy as np
 
 from drake_mh.errors import InfeasibleTrajectory, InvalidArgument, MissingLimits
-from drake_mh.robot_limits import JointLimits
+from drake_mh.robot_limits import JointLimits, limits_of
 
-__all__ = ["enforced_limits", "derived_accelerations", "check_scaling_factor", "DEFAULT_VELOCITY", "DEFAULT_ACCELERATION", "DEFAULT_JERK",
-           "DERIVED_MARGIN"]
+__all__ = ["enforced_limits", "derived_accelerations", "check_scaling_factor", "DEFAULT_VELOCITY",
+           "DEFAULT_ACCELERATION", "DEFAULT_JERK", "DERIVED_MARGIN"]
 
 DEFAULT_VELOCITY = 5.0
 """[rad/s] velocity limit of a joint that declares none (MoveIt 2 ruckig smoothing's default)."""
@@ -56,8 +56,8 @@ DERIVED_MARGIN = 0.9
 """Fraction of the acceleration bound found by :func:`derived_accelerations` that is used: the
 rest of the torque head-room is left for the velocity terms ``C(q, q̇) q̇`` the rule ignores."""
 MIN_INERTIA = 1e-9
-"""[kg·m²] a joint whose ``M_jj(q)`` falls below this somewhere on the path is not bounded by
-its torque (a massless model)."""
+"""[kg·m²] a joint whose ``M_jj(q)`` falls below this at a waypoint is not bounded by its torque
+(a massless model)."""
 PATH_SAMPLES = 32
 """configurations per straight segment between consecutive waypoints where the mass matrix and
 gravity are evaluated (both ends included)."""
@@ -65,11 +65,6 @@ gravity are evaluated (both ends included)."""
 METHOD_QUANTITIES = {"toppra": ("velocity", "acceleration", "torque"),
                      "drake-toppra": ("velocity", "acceleration", "torque"),
                      "ruckig": ("velocity", "acceleration", "jerk", "torque")}
-
-
-def _robot_limits(robot) -> JointLimits:
-    table = getattr(robot, "limits", None)
-    return table.copy() if isinstance(table, JointLimits) else JointLimits.from_arrays(robot)
 
 
 def check_scaling_factor(value, what: str) -> None:
@@ -177,7 +172,7 @@ def enforced_limits(robot, method: str, W: np.ndarray, quantities=None, velocity
         MissingLimits: torque asked for on a robot that declares no effort limit.
         InfeasibleTrajectory: gravity alone exceeds an effort limit where a bound is derived.
     """
-    table = _robot_limits(robot)
+    table = limits_of(robot).copy()
     v_scale = _scaling(velocity_scaling, table.scaling["velocity"], "velocity_scaling")
     a_scale = _scaling(acceleration_scaling, table.scaling["acceleration"], "acceleration_scaling")
     asked = tuple(METHOD_QUANTITIES[method] if quantities is None else quantities)
