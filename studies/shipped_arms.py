@@ -169,13 +169,23 @@ def run(case: Case) -> dict:
     return record
 
 
+def _merged_sources(wins: list[dict]) -> str:
+    """Per quantity, every distinct source seen over the records' ``limits`` fields."""
+    seen: dict = {}
+    for r in wins:
+        for part in filter(None, (r.get("limits") or "").split("; ")):
+            quantity, text = part.split(": ", 1)
+            seen.setdefault(quantity, set()).add(text)
+    return "; ".join(f"{q}: {' or '.join(sorted(texts))}" for q, texts in seen.items()) or "-"
+
+
 def summarize(records: list[dict]) -> str:
     ok = [r for r in records if r.get("status") == "ok"]
     lines = [f"CPU: {ok[0]['cpu_model'] if ok else '?'}; 1-min load average: "
              + (f"{min(r['load_average'] for r in ok):.1f}-{max(r['load_average'] for r in ok):.1f}" if ok else "?"),
              "", "| arm | problems | verified | re-checked clear and within limits | straight line blocked | "
-             "duration median [s] | worst velocity / torque ratio (re-check) | limits enforced |",
-             "|---|---|---|---|---|---|---|---|"]
+             "retimed toppra / ruckig | duration median [s] | worst velocity / torque ratio (re-check) | "
+             "limit sources |", "|---|---|---|---|---|---|---|---|---|"]
     for arm in ARMS:
         group = [r for r in ok if r["arm"] == arm]
         if not group:
@@ -185,10 +195,11 @@ def summarize(records: list[dict]) -> str:
         durations = [r["duration"] for r in wins]
         ratios = (f"{max(r['velocity_ratio'] for r in wins):.3f} / {max(r['torque_ratio'] for r in wins):.3f}"
                   if wins else "-")
-        sources = sorted({r["limits"] for r in wins if r.get("limits")})
+        retimers = [r["message"].rsplit(" ", 1)[-1] for r in wins]
         lines.append(f"| {arm} | {len(group)} | {len(wins)} | {len(clear)} | "
-                     f"{sum(not r['straight_free'] for r in group)} | "
-                     f"{np.median(durations) if durations else float('nan'):.2f} | {ratios} | {'; '.join(sources) or '-'} |")
+                     f"{sum(not r['straight_free'] for r in group)} | {retimers.count('toppra')} / "
+                     f"{retimers.count('ruckig')} | {np.median(durations) if durations else float('nan'):.2f} | "
+                     f"{ratios} | {_merged_sources(wins)} |")
     failures = sorted({r["message"][:160] for r in ok if not r["success"]})
     if failures:
         lines += ["", "Messages of the failures (distinct, cut to 160 characters):", ""]
