@@ -118,7 +118,7 @@ def run(case: Case) -> dict:
         "history_best": res.history[:, 1],
     }
     if case["rep"] == 0:
-        t, q = traj.sample(200)
+        t, q = traj.sample_uniform(200)
         out["traj_t"], out["traj_q"] = t, q
         if case["method"] == "abc":
             case.attach(f"abc_{case['workspace']}.png",

@@ -91,7 +91,7 @@ def run(case: Case) -> dict:
         **{f"{k}": v for k, v in cert.as_dict().items() if k != "max_ratio"},
     }
     if case["rep"] == 0:
-        t, q = traj.sample(300)
+        t, q = traj.sample_uniform(300)
         out["traj_t"], out["traj_q"] = t, q
     return out
 

@@ -36,3 +36,17 @@ def test_readme_ik_example_succeeds_on_its_first_call():
     assert first.startswith("True "), out.stdout
     prepare = float(re.search(r"after ([0-9.]+) s of loading", second).group(1))
     assert prepare > 0.0, second                                  # the loading was reported apart
+
+
+@pytest.mark.slow
+def test_readme_trajectory_example_runs_and_recertifies(tmp_path):
+    """The trajectory snippet as printed (with W and panda defined first): the toppra trajectory's
+    own certificate and a fresh ``certify(...).check()`` agree (jerk, not enforced by toppra, is
+    reported, not failed), and the export writes a file."""
+    code = _python_block("## Trajectories under limits")
+    preamble = ("import numpy as np\nimport drake_mh\npanda = drake_mh.load_robot('panda')\n"
+                "W = np.array([panda.home, panda.home + 0.4, panda.home - 0.3])\n")
+    out = subprocess.run([sys.executable, "-c", preamble + code], capture_output=True, text=True, timeout=600,
+                         cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "jerk (not enforced)" in out.stdout and (tmp_path / "motion.json").stat().st_size > 0

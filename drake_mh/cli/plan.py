@@ -6,6 +6,7 @@ Example::
     drake-mh plan --robot panda --position 0.4 0.3 0.4 --box 0.5 0 0.2 0.2 0.6 0.02 --json
     drake-mh plan --set cage --index 2 --method rrt_connect --html motion.html
     drake-mh plan --robot seed000_6dof --goal-q 1.6 0.3 0 0 0 0 --show --max-seconds 30
+    drake-mh plan --robot arm.urdf --goal-q ... --limits joint_limits.yaml --out motion.json
 
 The problem is a :class:`drake_mh.planning.MotionProblem`: the robot (``--robot`` and its model
 options), obstacles (``--sphere`` / ``--box``, repeatable), the start (``--start-q``, default
@@ -14,7 +15,11 @@ with ``--rpy`` or else the start's orientation, goal configurations from collisi
 or one problem of a generated set (``--set NAME --index K``, :mod:`drake_mh.planning.problems`).
 :func:`drake_mh.planning.solve_motion` plans and verifies it. ``--html`` writes the animation
 with its certified clearance (:func:`drake_mh.viz.motion_html`), ``--show`` plays it in Meshcat
-until Ctrl-C (or ``--max-seconds``).
+until Ctrl-C (or ``--max-seconds``). ``--out FILE`` writes the retimed trajectory sampled at
+``--rate`` (``.json`` / ``.yaml``: ROS 2 ``JointTrajectory`` shape, ``.csv``;
+:mod:`drake_mh.trajectories.export`); ``--limits`` reads a MoveIt ``joint_limits.yaml``,
+``--velocity-scaling`` / ``--acceleration-scaling`` are MoveIt's factors. Output paths are
+checked before planning. The printed result says where every enforced limit came from.
 
 Exit code 0 when the motion is verified, 1 when it is not (no path, not certified), 2 for bad
 input (unknown robot, method or set; a start or goal in collision: one line saying why).
@@ -69,8 +74,14 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
     p.add_argument("--retime", choices=("auto", "toppra", "ruckig"), default="auto",
                    help="time law: auto (toppra, else ruckig), toppra (fastest; jerk not limited), ruckig "
                         "(jerk-limited, on the straight segments, at rest at each waypoint)")
+    from drake_mh.cli.options import add_retime_options
+
+    add_retime_options(p)
     p.add_argument("--json", action="store_true", help="print the result as one JSON object")
     p.add_argument("--html", default=None, metavar="PATH", help="write the animation page (opens offline)")
+    p.add_argument("--out", default=None, metavar="FILE",
+                   help="write the retimed trajectory, sampled at --rate: .json / .yaml (ROS 2 JointTrajectory "
+                        "shape: positions, velocities, accelerations, effort, time_from_start) or .csv")
     p.add_argument("--show", action="store_true", help="play it in Meshcat (localhost) until Ctrl-C")
     p.add_argument("--max-seconds", type=float, default=None, metavar="S", help="with --show: stop after S seconds")
     p.set_defaults(func=cmd_plan)
@@ -89,7 +100,14 @@ def _problem(args):
 
         if args.index < 0:
             raise InvalidArgument(f"--index must be >= 0, got {args.index}")
-        return problem_set(args.set, args.robot, count=1, first=args.index, clearance=args.clearance)[0]
+        robot = args.robot
+        if args.limits is not None:
+            from drake_mh.planning.problems import load_problem_robot
+            from drake_mh.robot.limits import apply_limits
+
+            robot = load_problem_robot(args.robot)
+            apply_limits(robot, args.limits)
+        return problem_set(args.set, robot, count=1, first=args.index, clearance=args.clearance)[0]
     if args.goal_q is None and args.position is None:
         raise InvalidArgument("give the goal: --goal-q Q1 ... Qn, --position X Y Z [--rpy R P Y], or --set NAME")
     if args.rpy is not None and args.position is None:
@@ -128,25 +146,37 @@ def cmd_plan(args: argparse.Namespace) -> int:
         raise InvalidArgument(f"--timeout must be > 0 s, got {args.timeout}")
     if args.max_seconds is not None and not args.max_seconds > 0:
         raise InvalidArgument(f"--max-seconds must be > 0, got {args.max_seconds}")
+    from drake_mh.cli.options import check_output_path
+    from drake_mh.planning.verify import check_scaling
+    from drake_mh.trajectories.export import FORMATS, sample_times
+
+    html = None if args.html is None else check_output_path(args.html, "--html")  # before planning
+    out = None if args.out is None else check_output_path(args.out, "--out", FORMATS)
+    sample_times(1.0, args.rate)  # the rate's check
+    check_scaling(args.velocity_scaling, args.acceleration_scaling)
     problem = _problem(args)
     result = solve_motion(problem, method, seed=args.seed, timeout=args.timeout,
-                          retime=True if args.retime == "auto" else args.retime)
-    _print(problem, result, args.json)
-    if result.success and args.html:
-        from pathlib import Path
-
+                          retime=True if args.retime == "auto" else args.retime,
+                          velocity_scaling=args.velocity_scaling, acceleration_scaling=args.acceleration_scaling)
+    note = sys.stderr if args.json else sys.stdout
+    samples = None
+    if result.success and out is not None:
+        samples = result.trajectory.save(out, problem.robot, args.rate)
+    _print(problem, result, args.json, out if samples is not None else None)
+    if samples is not None:
+        print(f"trajectory written to {out} ({len(samples)} samples at {args.rate:g} Hz)", file=note)
+    if result.success and html is not None:
         from drake_mh.viz import motion_html
 
-        path = Path(args.html)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(motion_html(problem, result), encoding="utf-8")
-        print(f"animation written to {path}", file=sys.stderr if args.json else sys.stdout)
+        html.parent.mkdir(parents=True, exist_ok=True)
+        html.write_text(motion_html(problem, result), encoding="utf-8")
+        print(f"animation written to {html}", file=note)
     if result.success and args.show:
         _show(problem, result, args.max_seconds, sys.stderr if args.json else sys.stdout)
     return 0 if result.success else 1
 
 
-def _print(problem, result, as_json: bool) -> None:
+def _print(problem, result, as_json: bool, out=None) -> None:
     import numpy as np
 
     from drake_mh.viz import motion_caption
@@ -157,7 +187,8 @@ def _print(problem, result, as_json: bool) -> None:
         data.update(robot=robot.name, joint_names=list(robot.joint_names), q_start=problem.q_start.tolist(),
                     path=None if result.path is None else np.asarray(result.path).tolist(),
                     goal_time=result.goal_time, seed=result.seed, obstacles=list(problem.scene.obstacles),
-                    caption=motion_caption(result))
+                    caption=motion_caption(result), limits=None if result.limits is None else result.limits.as_dict(),
+                    trajectory_file=None if out is None else str(out))
         print(json.dumps(data))
         return
     state = "verified" if result.success else "FAILED"
@@ -168,6 +199,10 @@ def _print(problem, result, as_json: bool) -> None:
         print(f"  path {result.path_length:.3f} rad, {jerk}, goal IK "
               f"{result.goal_time:.2f} s, verification {result.verify_time * 1e3:.1f} ms")
         print(f"  goal q = [{', '.join(f'{v:.4f}' for v in result.path[-1])}]")
+        if result.limits is not None:
+            print("  limits enforced (value per joint | where it came from):")
+            for line in result.limits.summary():
+                print(f"    {line}")
 
 
 def _show(problem, result, max_seconds, out) -> None:

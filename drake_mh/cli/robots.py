@@ -51,6 +51,8 @@ def catalogue_entry(robot) -> list[str]:
         lines.append(f"  {name:<24}{lo:>10}{hi:>10}{robot.velocity_limits[i]:>10.3f}"
                      f"{robot.effort_limits[i]:>12.1f}")
     lines.append("  (limits in rad or m, rad/s or m/s, N m or N; inf: not declared)")
+    lines.append("  where the limits come from:")
+    lines += [f"    {line.split(': ', 1)[0]}: {line.rsplit(' | ', 1)[1]}" for line in robot.limits.summary()]
     locked = ", ".join(f"{k} = {v:g}" for k, v in robot.locked_joints.items())
     lines.append(f"  locked joints: {locked or 'none'}")
     summary = robot.collision_summary()

@@ -35,6 +35,10 @@ class MotionResult:
         jerk_limited: whether the trajectory is certified within the robot's declared jerk
             limits (``None``: no trajectory, or the robot declares none). toppra's are not;
             ``retime="ruckig"`` gives jerk-limited ones.
+        limits: the limits the trajectory enforces, each with its source (declared by the
+            model, set by the user or a limits file, derived, default):
+            :class:`~drake_mh.robot.limits.JointLimits` (``print(result.limits.table())``;
+            ``None`` without a trajectory).
         goal_index: which goal configuration the path reaches (pose goals: of the IK answers).
         goal_time: seconds spent on the goal configurations of a pose goal (0 when cached
             from an earlier method on the same problem, or for configuration goals).
@@ -55,6 +59,7 @@ class MotionResult:
     duration: float = float("nan")
     max_jerk: float = float("nan")
     jerk_limited: bool | None = None
+    limits: object = None
     goal_index: int | None = None
     goal_time: float = 0.0
     seed: object = None
@@ -70,7 +75,8 @@ class MotionResult:
 
     def __repr__(self) -> str:
         if not self.success:
-            return f"MotionResult({self.method}: failed after {self.planning_time * 1e3:.2f} ms: {self.message})"
+            return (f"MotionResult({self.method}: not verified (planning took {self.planning_time * 1e3:.2f} ms): "
+                    f"{self.message})")
         return (f"MotionResult({self.method}: {len(self.path)} waypoints, planned in {self.planning_time * 1e3:.2f} ms, "
                 f"path {self.path_length:.3f} rad, {self.duration:.2f} s retimed, certified clearance "
                 f"{self.min_clearance * 1e3:.1f} mm)")

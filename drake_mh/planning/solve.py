@@ -27,7 +27,7 @@ from drake_mh.errors import InvalidArgument, InvalidMotionProblem
 from drake_mh.planning.methods import METHODS
 from drake_mh.planning.problem import MotionProblem
 from drake_mh.planning.result import MotionResult
-from drake_mh.planning.verify import check_retime, verify_motion
+from drake_mh.planning.verify import check_retime, check_scaling, verify_motion
 
 
 def register(name: str, description: str):
@@ -119,7 +119,8 @@ def goal_configurations(problem: MotionProblem, count: int = 4, timeout: float |
 
 
 def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, timeout: float | None = 10.0,
-                 budget: int | None = None, retime: bool | str = True, **options) -> MotionResult:
+                 budget: int | None = None, retime: bool | str = True, velocity_scaling: float | None = None,
+                 acceleration_scaling: float | None = None, **options) -> MotionResult:
     """Plan a motion with any registered method; the answer is verified the same way for all.
 
     Args:
@@ -131,7 +132,13 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
         budget: the method's own unit (tree nodes, evaluations, solver iterations).
         retime: also retime and certify a trajectory: ``True`` toppra, else ruckig; ``"toppra"``;
             ``"ruckig"`` (jerk-limited, on the straight segments, at rest at each waypoint);
-            ``False`` none (:func:`~drake_mh.planning.verify_motion`).
+            ``False`` none (:func:`~drake_mh.planning.verify_motion`). The limits are the
+            robot's (``robot.limits``; a vendor URDF without acceleration limits is retimed
+            under its velocity and torque limits), stated with their sources in
+            :attr:`MotionResult.limits`.
+        velocity_scaling, acceleration_scaling: MoveIt's scaling factors in (0, 1]: the
+            fraction of the velocity / acceleration limits the trajectory may use (``None``: the
+            robot's defaults, 1 unless a limits file sets them).
         **options: the method's options.
 
     Returns:
@@ -149,6 +156,7 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
     if budget is not None and (isinstance(budget, bool) or not isinstance(budget, numbers.Integral) or budget < 1):
         raise InvalidArgument(f"budget must be an integer >= 1 or None, got {budget!r}")
     check_retime(retime)
+    check_scaling(velocity_scaling, acceleration_scaling)
     rng = np.random.default_rng(seed)
     goal_start = time.perf_counter()
     goals = goal_configurations(problem)
@@ -165,4 +173,5 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
     if path is None:
         result.message = result.info.pop("message", "no path found")
         return result
-    return verify_motion(problem, path, method, result, retime=retime)
+    return verify_motion(problem, path, method, result, retime=retime, velocity_scaling=velocity_scaling,
+                         acceleration_scaling=acceleration_scaling)

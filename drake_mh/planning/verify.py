@@ -14,7 +14,8 @@ A path ``(M, nq)`` succeeds when
    every ``Δt``, the straight segments between the
    samples are certified, and between two samples a joint deviates from that segment by at most
    ``δ_j = Δt² a_j / 8`` (the linear-interpolation error bound), ``a_j`` the certified bound of
-   its acceleration (the trajectory's certificate). A sphere then moves at most
+   its acceleration (the trajectory's certificate: a Bernstein bound of ``|q̈_j|``, whether or
+   not the robot declares an acceleration limit). A sphere then moves at most
    ``max_c Σ_j reach[c, j] δ_j`` (:attr:`~drake_mh.scene.batch.CollisionModel.reach`) from the
    certified segments; ``Δt`` is chosen so that this is :data:`TRAJECTORY_SHIFTS` (1 mm, finer if needed), and the
    trajectory's certified clearance is the segments' minus it. ruckig's trajectories move
@@ -99,19 +100,23 @@ def _max_jerk(trajectory) -> float:
 
 
 def verify_motion(problem, path, method: str, result: MotionResult | None = None,
-                  retime: bool | str = True) -> MotionResult:
+                  retime: bool | str = True, velocity_scaling: float | None = None,
+                  acceleration_scaling: float | None = None) -> MotionResult:
     """Verify ``path`` for ``problem`` and fill a :class:`MotionResult` (see module docstring).
 
     Args:
         retime: ``True`` (toppra, else ruckig), ``"toppra"``, ``"ruckig"`` (jerk-limited), or
             ``False`` (the path only, no trajectory).
+        velocity_scaling, acceleration_scaling: MoveIt's scaling factors in (0, 1] for the
+            retiming (:func:`drake_mh.trajectories.retime`; ``None``: the robot's defaults).
 
     Raises:
-        InvalidArgument: another ``retime``.
+        InvalidArgument: another ``retime``, or a scaling factor outside (0, 1].
     """
     import time
 
     check_retime(retime)
+    check_scaling(velocity_scaling, acceleration_scaling)
 
     start = time.perf_counter()
     result = result or MotionResult(method)
@@ -151,11 +156,13 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
     result.min_clearance = cert.min_clearance
     result.success, result.message = True, "certified"
     if retime:
-        trajectory, message = _retime(problem, P, RETIME_CHOICES[retime], cert)
+        trajectory, message = _retime(problem, P, RETIME_CHOICES[retime], cert, velocity_scaling,
+                                      acceleration_scaling)
         if trajectory is None:
             result.success, result.message = False, message
         else:
             result.trajectory, result.duration = trajectory, float(trajectory.end_time - trajectory.start_time)
+            result.limits = trajectory.info.get("enforced_limits")
             result.max_jerk = _max_jerk(trajectory)
             result.jerk_limited = _jerk_limited(trajectory)
             result.min_clearance = trajectory.info.get("certified_clearance", result.min_clearance)
@@ -192,15 +199,15 @@ def trajectory_clearance(problem, trajectory, path_certificate=None, W=None) -> 
     :data:`TRAJECTORY_SHIFTS` are skipped once a sampled configuration itself is not free at the
     problem's clearances under the sphere model (no finer sampling can certify it then).
     """
-    robot, scene = problem.robot, problem.scene
+    scene = problem.scene
     if path_certificate is not None and W is not None and _on_certified_path(trajectory, W):
         return path_certificate.min_clearance - ON_PATH_ALLOWANCE, ""
     cert = trajectory.info.get("certificate")
-    if cert is None or "acceleration" not in cert.ratios:
+    if cert is None or "acceleration" not in getattr(cert, "bounds", {}):
         return float("nan"), "the trajectory has no certified acceleration bound"
-    a_bound = np.asarray(cert.ratios["acceleration"]) * robot.acceleration_limits * cert.scale
+    a_bound = np.asarray(cert.bounds["acceleration"], dtype=float)
     if not np.all(np.isfinite(a_bound)):
-        return float("nan"), "the robot declares no finite acceleration limit to bound the trajectory with"
+        return float("nan"), "the trajectory's acceleration bound is not finite"
     reach = scene.collision_model.reach  # (C, nq)
     per_dt2 = float(np.max(reach @ (a_bound / 8.0)))  # sphere shift per Δt²
     duration = float(trajectory.end_time - trajectory.start_time)
@@ -223,9 +230,30 @@ def trajectory_clearance(problem, trajectory, path_certificate=None, W=None) -> 
     return float("nan"), why
 
 
-def _retime(problem, P: np.ndarray, methods: tuple, path_certificate) -> tuple[object, str]:
+def check_scaling(velocity_scaling, acceleration_scaling) -> None:
+    """Raise :class:`~drake_mh.errors.InvalidArgument` unless both factors are ``None`` or a
+    number in (0, 1]."""
+    from drake_mh.trajectories.limits_for import check_scaling_factor
+
+    check_scaling_factor(velocity_scaling, "velocity_scaling")
+    check_scaling_factor(acceleration_scaling, "acceleration_scaling")
+
+
+REASON_CHARACTERS = 240
+"""Each retimer's reason in a failed verification's message is cut to this many characters."""
+
+
+def _reason(method: str, text: str) -> str:
+    text = " ".join(str(text).split())
+    text = text if text.startswith(method) else f"{method}: {text}"
+    return text if len(text) <= REASON_CHARACTERS else text[:REASON_CHARACTERS - 1] + "…"
+
+
+def _retime(problem, P: np.ndarray, methods: tuple, path_certificate, velocity_scaling=None,
+            acceleration_scaling=None) -> tuple[object, str]:
     """The first of ``methods`` that retimes ``P``; the executed motion certified
-    (:func:`trajectory_clearance`)."""
+    (:func:`trajectory_clearance`). On failure: one short reason per retimer and how to get the
+    certified path alone."""
     from drake_mh.errors import DrakeMhError
     from drake_mh.trajectories import retime
 
@@ -237,13 +265,15 @@ def _retime(problem, P: np.ndarray, methods: tuple, path_certificate) -> tuple[o
     reasons = []
     for method in methods:
         try:
-            trajectory = retime(W, robot, method)
+            trajectory = retime(W, robot, method, velocity_scaling=velocity_scaling,
+                                acceleration_scaling=acceleration_scaling)
         except DrakeMhError as exc:
-            reasons.append(f"{method}: {exc}")
+            reasons.append(_reason(method, exc))
             continue
         clearance, why = trajectory_clearance(problem, trajectory, path_certificate, W)
         if not np.isnan(clearance):  # +inf: a scene without obstacles or checked self pairs
             trajectory.info["certified_clearance"] = clearance
             return trajectory, ""
-        reasons.append(why)
-    return None, "certified path, but no certified trajectory: " + "; ".join(reasons)
+        reasons.append(_reason(method, why))
+    return None, (f"certified path ({len(W)} waypoints), but no certified trajectory: " + "; ".join(reasons)
+                  + ". solve_motion(..., retime=False) returns the certified path without one")

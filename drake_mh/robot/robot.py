@@ -43,6 +43,7 @@ from drake_mh.errors import (
     UnsupportedModel,
 )
 from drake_mh.robot.checks import check_urdf
+from drake_mh.robot.limits import LimitAttribute, apply_limits, declared_limits
 
 logger = logging.getLogger(__name__)
 
@@ -85,7 +86,7 @@ def available_robots() -> list[str]:
 
 def load_robot(name_or_path: str | Path, ee_frame: str | None = None, packages=None,
                locked: dict[str, float] | None = None,
-               xacro_args: dict[str, str] | None = None) -> Robot:
+               xacro_args: dict[str, str] | None = None, limits=None) -> Robot:
     """Load a bundled robot by name, or a robot model file (with its meshes) by path.
 
     Args:
@@ -101,6 +102,9 @@ def load_robot(name_or_path: str | Path, ee_frame: str | None = None, packages=N
             from the root to ``ee_frame`` are always locked (at 0 clipped into their limits
             unless given here); :attr:`Robot.locked_joints` says which.
         xacro_args: ``name:=value`` arguments of a ``.xacro`` file.
+        limits: a MoveIt-style ``joint_limits.yaml`` path (or the same structure as a dict):
+            velocity, acceleration, jerk and effort limits and default scaling factors, set with
+            source ``"user"`` (:mod:`drake_mh.robot.limits`; ``robot.limits`` shows them).
 
     Returns:
         The loaded :class:`Robot` (it pickles by these arguments, so process pools reload it).
@@ -113,17 +117,18 @@ def load_robot(name_or_path: str | Path, ee_frame: str | None = None, packages=N
         MeshConversionError: a collision mesh cannot be turned into a convex hull.
         FrameNotFound: ``ee_frame`` (or a ``locked`` joint) is not in the model.
         InvalidArgument: no ``ee_frame`` and several tip links (listed in the message).
+        InvalidLimits: a bad limits file (the message names the file, the joint and the key).
     """
     text = str(name_or_path)
     if text in _REGISTERED:
         options = dict(_REGISTERED[text])
-        given = dict(ee_frame=ee_frame, packages=packages, locked=locked, xacro_args=xacro_args)
+        given = dict(ee_frame=ee_frame, packages=packages, locked=locked, xacro_args=xacro_args, limits=limits)
         options.update({k: v for k, v in given.items() if v is not None})
         return _load_file(**options)
-    return _load_file(text, ee_frame, packages, locked, xacro_args)
+    return _load_file(text, ee_frame, packages, locked, xacro_args, limits)
 
 
-def _load_file(name_or_path, ee_frame=None, packages=None, locked=None, xacro_args=None) -> Robot:
+def _load_file(name_or_path, ee_frame=None, packages=None, locked=None, xacro_args=None, limits=None) -> Robot:
     """:func:`load_robot` without the registry look-up."""
     from drake_mh.robot.packages import UriResolver
     from drake_mh.robot.loading import read_model
@@ -145,19 +150,29 @@ def _load_file(name_or_path, ee_frame=None, packages=None, locked=None, xacro_ar
                   packages=dict(packages) if packages else None,
                   locked=dict(locked) if locked else None,
                   xacro_args=dict(xacro_args) if xacro_args else None)
-    return Robot(model.text, ee_frame=ee_frame, source=str(path), name=model.name,
-                 packages=packages, locked=locked, model_format=model.format,
-                 model_dir=model.model_dir, _resolver=resolver, _reload=reload)
+    robot = Robot(model.text, ee_frame=ee_frame, source=str(path), name=model.name,
+                  packages=packages, locked=locked, model_format=model.format,
+                  model_dir=model.model_dir, _resolver=resolver, _reload=reload)
+    if limits is not None:
+        apply_limits(robot, limits)
+    return robot
 
 
-def _reload_robot(spec: dict) -> Robot:
-    """Unpickle a file-based :class:`Robot` by loading it again (see ``Robot.__reduce__``)."""
-    return _load_file(**spec)
+def _reload_robot(spec: dict, limits=None) -> Robot:
+    """Unpickle a file-based :class:`Robot` by loading it again (see ``Robot.__reduce__``);
+    ``limits``: its limits table, user settings and sources included."""
+    robot = _load_file(**spec)
+    if limits is not None:
+        robot.limits = limits
+    return robot
 
 
-def _rebuild_robot(spec: dict) -> Robot:
+def _rebuild_robot(spec: dict, limits=None) -> Robot:
     """Unpickle a text-based :class:`Robot`."""
-    return Robot(**spec)
+    robot = Robot(**spec)
+    if limits is not None:
+        robot.limits = limits
+    return robot
 
 
 class Robot:
@@ -193,9 +208,19 @@ class Robot:
         continuous: ``(nq,)`` bool, joints without position limits in the URDF.
         velocity_limits, acceleration_limits, jerk_limits, effort_limits: ``(nq,)`` symmetric
             magnitudes [rad/s, rad/s², rad/s³, N·m]; ``inf`` where the model declares none.
+            The arrays of :attr:`limits`; assigning one marks its joints ``"user"``.
+        limits: :class:`~drake_mh.robot.limits.JointLimits`, every limit with its source
+            (declared by the model, user, default); ``print(robot.limits.table())``.
         ee_frame_name: name of the end-effector frame.
         mesh_files: ``{"collision": [(uri, file used)], "visual": [...]}`` of the model's meshes.
     """
+
+    lower = LimitAttribute("lower")
+    upper = LimitAttribute("upper")
+    velocity_limits = LimitAttribute("velocity")
+    acceleration_limits = LimitAttribute("acceleration")
+    jerk_limits = LimitAttribute("jerk")
+    effort_limits = LimitAttribute("effort")
 
     def __init__(self, urdf: str, ee_frame: str | None = None, source: str = "<string>",
                  name: str | None = None, *, packages=None, locked: dict[str, float] | None = None,
@@ -270,17 +295,15 @@ class Robot:
         lower = np.array(plant.GetPositionLowerLimits(), dtype=float)
         upper = np.array(plant.GetPositionUpperLimits(), dtype=float)
         self.continuous = ~(np.isfinite(lower) & np.isfinite(upper))
-        self.lower = np.where(np.isfinite(lower), lower, -np.pi)
-        self.upper = np.where(np.isfinite(upper), upper, np.pi)
-        self.velocity_limits = np.array(plant.GetVelocityUpperLimits(), dtype=float)
-        self.acceleration_limits = np.array(plant.GetAccelerationUpperLimits(), dtype=float)
-        self.jerk_limits = np.array([extra["jerk"].get(n, np.inf) for n in self.joint_names])
-        self.effort_limits = self._effort_limits(extra["effort"])
-        for what, arr in (("velocity", self.velocity_limits), ("acceleration", self.acceleration_limits),
-                          ("jerk", self.jerk_limits), ("effort", self.effort_limits)):
+        values = {"velocity": np.array(plant.GetVelocityUpperLimits(), dtype=float),
+                  "acceleration": np.array(plant.GetAccelerationUpperLimits(), dtype=float),
+                  "jerk": np.array([extra["jerk"].get(n, np.inf) for n in self.joint_names]),
+                  "effort": self._effort_limits(extra["effort"])}
+        for what, arr in values.items():
             if np.any(arr <= 0):
                 bad = [n for n, v in zip(self.joint_names, arr) if v <= 0]
                 raise InvalidLimits(f"{source}: {what} limits must be positive; joints {bad}")
+        self.limits = declared_limits(self.joint_names, lower, upper, values, Path(source).name)
 
         self._frames = {f.name(): f for f in _all_frames(plant)}
         if self.ee_frame_name not in self._frames:
@@ -316,8 +339,8 @@ class Robot:
 
     def __reduce__(self):
         if self._reload is not None:
-            return (_reload_robot, ({**self._reload, "ee_frame": self.ee_frame_name},))
-        return (_rebuild_robot, ({**self._init_args, "ee_frame": self.ee_frame_name},))
+            return (_reload_robot, ({**self._reload, "ee_frame": self.ee_frame_name}, self.limits))
+        return (_rebuild_robot, ({**self._init_args, "ee_frame": self.ee_frame_name}, self.limits))
 
     def __repr__(self) -> str:
         locked = f", locked={sorted(self.locked_joints)}" if self.locked_joints else ""

@@ -19,6 +19,16 @@ Limits that the model does not declare (``inf``) give ratio 0; :meth:`Certificat
 "no limit" there. A quantity certified but not enforced by whoever made the trajectory (toppra's
 jerk: :func:`~drake_mh.trajectories.retime.retime` passes ``enforced``) is labelled "not
 enforced" in the table: its ``inf`` is reported, not a failed check.
+
+Which limits: a trajectory made by :func:`~drake_mh.trajectories.retime.retime` carries the
+limits it enforced (``info["enforced_limits"]``: declared, derived, default, scaled) and its
+certificate; certifying it again (``certify(traj, robot)``) checks those same limits, the same
+quantities and the same ``scale`` unless ``limits=`` / ``enforced=`` / ``scale=`` say otherwise
+(``limits=robot.limits`` checks the robot's own table).
+
+Besides the ratios, :attr:`Certificate.bounds` holds absolute maxima per joint of ``|q̇|``,
+``|q̈|``, ``|q⃛|`` (Bernstein bounds: no point of the trajectory exceeds them, whether or not a
+limit is declared) and of ``|τ|`` (a refined sample: torque is not a polynomial).
 """
 
 from __future__ import annotations
@@ -28,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drake_mh.errors import InvalidArgument, LimitViolation
+from drake_mh.robot.limits import limits_of
 from drake_mh.trajectories.bound import kinematic_bound
 
 __all__ = ["Certificate", "certify", "QUANTITIES"]
@@ -47,10 +58,15 @@ class Certificate:
         samples: number of time samples used.
         duration: trajectory duration [s].
         scale: the ratios of velocity, acceleration, jerk and torque are relative to
-            ``scale x`` the robot's limits (positions always to the full range).
+            ``scale x`` the limits (:attr:`limits`; positions always to the full range).
         enforced: the quantities the trajectory's maker enforced (``None``: unknown, every
             certified quantity counts); the others are reported only.
-        limited: quantity -> ``(nq,)`` whether the robot declares a finite limit there.
+        limited: quantity -> ``(nq,)`` whether a finite limit applies there.
+        limits: the :class:`~drake_mh.robot.limits.JointLimits` the ratios refer to (values
+            and sources; ``None`` for certificates made before it existed).
+        bounds: quantity -> ``(nq,)`` largest absolute value [rad/s, rad/s², rad/s³, N·m] of
+            ``velocity``, ``acceleration``, ``jerk`` (bounds) and ``torque`` (refined sample),
+            for the quantities certified; jerk is ``inf`` at acceleration steps.
     """
 
     joint_names: tuple[str, ...]
@@ -62,6 +78,8 @@ class Certificate:
     scale: float = 1.0
     enforced: tuple | None = None
     limited: dict = field(default_factory=dict)
+    limits: object = None
+    bounds: dict = field(default_factory=dict)
 
     def max_ratio(self, quantities=None) -> float:
         """Largest ratio over joints and the given quantities (default all certified ones)."""
@@ -131,9 +149,17 @@ class Certificate:
         return out
 
 
-def _limits(robot, quantity: str) -> np.ndarray:
-    return {"velocity": robot.velocity_limits, "acceleration": robot.acceleration_limits,
-            "jerk": robot.jerk_limits, "torque": robot.effort_limits}[quantity]
+def maker_limits(trajectory, robot):
+    """``(limits, enforced, scale)`` of the retiming that made ``trajectory`` (its
+    ``info["enforced_limits"]`` and certificate), or ``None`` when it carries none for these joints."""
+    table, cert = trajectory.info.get("enforced_limits"), trajectory.info.get("certificate")
+    if table is None or tuple(table.joint_names) != tuple(robot.joint_names):
+        return None
+    if cert is not None:
+        return table, cert.enforced, cert.scale
+    enforced = None if table.enforced is None else ("position",) + tuple(
+        "torque" if q == "effort" else q for q in table.enforced)
+    return table, enforced, 1.0
 
 
 def sample_times(trajectory, samples_per_piece: int = 8, min_samples: int = 1000):
@@ -145,8 +171,8 @@ def sample_times(trajectory, samples_per_piece: int = 8, min_samples: int = 1000
 
 
 def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8,
-            min_samples: int = 1000, torque_backend: str = "rnea", scale: float = 1.0,
-            enforced=None) -> Certificate:
+            min_samples: int = 1000, torque_backend: str = "rnea", scale: float | None = None,
+            enforced=None, limits=None) -> Certificate:
     """Certify ``trajectory`` against ``robot``'s limits by dense sampling.
 
     Args:
@@ -159,9 +185,13 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
         torque_backend: ``"rnea"`` (batched, compiled from the plant) or ``"drake"``
             (``robot.inverse_dynamics`` per sample, slower; the reference).
         scale: certify against ``scale x`` the velocity, acceleration, jerk and torque limits
-            (a safety margin; ``retime(..., scale=...)`` passes its own).
-        enforced: quantities the trajectory's maker enforced, for :meth:`Certificate.table`
-            (``None``, the default: all of ``quantities``); ``retime`` passes its own.
+            (a safety margin); ``None``: the maker's (module docstring), else 1.
+        enforced: quantities the trajectory's maker enforced, checked by
+            :meth:`Certificate.check` and labelled in :meth:`Certificate.table`; ``None``: the
+            maker's when the trajectory carries them, else all of ``quantities``.
+        limits: the :class:`~drake_mh.robot.limits.JointLimits` to certify against; ``None``:
+            the maker's (``trajectory.info["enforced_limits"]``) when the trajectory carries
+            them, else ``robot.limits``.
 
     Returns:
         A :class:`Certificate` (never raises for a violation; call ``.check()`` for that).
@@ -170,11 +200,21 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
         InvalidArgument: unknown quantity, joint count mismatch or backend.
     """
     quantities = tuple(quantities)
+    maker = maker_limits(trajectory, robot) if limits is None else None
+    if maker is not None:
+        limits = maker[0]
+        enforced = maker[1] if enforced is None else enforced
+        scale = maker[2] if scale is None else scale
+    limits = limits_of(robot) if limits is None else limits
+    scale = 1.0 if scale is None else scale
     unknown = [q for q in quantities if q not in QUANTITIES]
     if unknown:
         raise InvalidArgument(f"unknown quantities {unknown}; choose from {QUANTITIES}")
     if trajectory.nq != robot.nq:
         raise InvalidArgument(f"trajectory has {trajectory.nq} joints, robot {robot.name} has {robot.nq}")
+    if tuple(limits.joint_names) != tuple(robot.joint_names):
+        raise InvalidArgument(f"limits are for joints {list(limits.joint_names)}, robot {robot.name} has "
+                              f"{list(robot.joint_names)}")
     if not (0.0 < scale <= 1.0):
         raise InvalidArgument(f"scale must be in (0, 1], got {scale}")
     if enforced is not None:
@@ -190,75 +230,80 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
     T = np.clip(breaks[:-1, None] + tau[None, :] * h[:, None], lo[:, None], hi[:, None])  # (P, K)
     P, K = T.shape
     nq = robot.nq
-    ratios, times = {}, {}
+    ratios, times, bounds = {}, {}, {}
     excess = np.zeros(nq)
     order = max(_ORDER[q] for q in quantities)
     D = trajectory.derivatives(T.ravel(), order)  # once for every quantity
     for quantity in quantities:
-        r = _ratio_from(D, robot, quantity, scale, torque_backend).reshape(P, K, nq)
+        norm = _normal(robot, limits, quantity, scale)
+        r = _normalized(D, robot, quantity, norm, torque_backend).reshape(P, K, nq)
         flat = r.reshape(P * K, nq)
         idx = np.argmax(flat, axis=0)
-        ratios[quantity] = flat[idx, np.arange(nq)].copy()
+        worst = flat[idx, np.arange(nq)].copy()
         times[quantity] = T.ravel()[idx].copy()
-        _refine(trajectory, robot, quantity, T, r, lo, hi, scale, torque_backend, ratios[quantity],
-                times[quantity])
+        _refine(trajectory, robot, quantity, T, r, lo, hi, norm, torque_backend, worst, times[quantity])
         if quantity != "torque":  # polynomial between breaks: a bound, not a sample (bound.py)
-            ratios[quantity] = np.maximum(ratios[quantity], kinematic_bound(
-                trajectory, _ORDER[quantity], _range_ratio(robot, quantity, scale), breaks[:-1], breaks[1:],
-                ratios[quantity], samples=(tau, D[_ORDER[quantity]].reshape(P, K, nq))))
+            worst = np.maximum(worst, kinematic_bound(trajectory, _ORDER[quantity], norm, breaks[:-1], breaks[1:],
+                                                      worst, samples=(tau, D[_ORDER[quantity]].reshape(P, K, nq))))
         if quantity == "position":
+            ratios[quantity] = worst
             Q = trajectory.derivatives(np.r_[T.ravel(), times[quantity]], 0)[0]
             excess = np.max(np.maximum(np.maximum(Q - robot.upper, robot.lower - Q), 0.0), axis=0)
             excess = np.where(robot.continuous, 0.0, excess)
+            continue
+        limited = np.isfinite(limits[quantity])
+        ratios[quantity] = np.where(limited, worst, 0.0)  # where unlimited, `worst` is the value itself
+        bounds[quantity] = worst * norm[1]
         if quantity == "jerk":  # impulses at acceleration jumps
             tb, jumps = trajectory.acceleration_jumps()
-            big = jumps > 1e-6 * np.where(np.isfinite(robot.acceleration_limits), robot.acceleration_limits, 1.0)
+            a_lim = limits["acceleration"]
+            big = jumps > 1e-6 * np.where(np.isfinite(a_lim), a_lim, 1.0)
             for j in np.flatnonzero(big.any(axis=0)):
-                if np.isfinite(robot.jerk_limits[j]):
+                bounds[quantity][j] = np.inf
+                if limited[j]:
                     ratios[quantity][j] = np.inf
                     times[quantity][j] = tb[np.argmax(jumps[:, j])]
-    limited = {q: ~robot.continuous if q == "position" else np.isfinite(_limits(robot, q)) for q in quantities}
+    limited = {q: ~robot.continuous if q == "position" else np.isfinite(limits[q]) for q in quantities}
     return Certificate(tuple(robot.joint_names), ratios, times, excess, int(T.size), trajectory.duration,
-                       float(scale), enforced, limited)
+                       float(scale), enforced, limited, limits, bounds)
 
 
 _ORDER = {"position": 0, "velocity": 1, "acceleration": 2, "jerk": 3, "torque": 2}
 
 
-def _ratio(trajectory, robot, quantity: str, t: np.ndarray, scale: float, backend: str) -> np.ndarray:
-    """``(len(t), nq)`` ratios of ``quantity`` to its (scaled) limit at times ``t``."""
-    return _ratio_from(trajectory.derivatives(t, _ORDER[quantity]), robot, quantity, scale, backend)
+def _normalized_at(trajectory, robot, quantity: str, t: np.ndarray, norm, backend: str) -> np.ndarray:
+    """``(len(t), nq)`` normalized values of ``quantity`` at times ``t`` (:func:`_normal`)."""
+    return _normalized(trajectory.derivatives(t, _ORDER[quantity]), robot, quantity, norm, backend)
 
 
-def _ratio_from(D, robot, quantity: str, scale: float, backend: str) -> np.ndarray:
-    """Ratios from precomputed derivatives ``D = [q, q', ...]`` (each ``(M, nq)``)."""
-    order = _ORDER[quantity]
-    if quantity == "position":
-        centre, half = 0.5 * (robot.upper + robot.lower), 0.5 * (robot.upper - robot.lower)
-        return np.abs(D[0] - centre) / np.where(robot.continuous, np.inf, half)
+def _normalized(D, robot, quantity: str, norm, backend: str) -> np.ndarray:
+    """``|x - centre| / half`` from precomputed derivatives ``D = [q, q', ...]`` (each ``(M, nq)``)."""
+    centre, half = norm
     if quantity == "torque":
         if backend == "rnea":
             tq = _batch_dynamics(robot).inverse_dynamics(D[0], D[1], D[2])
         else:
             tq = np.array([robot.inverse_dynamics(q, v, a) for q, v, a in zip(D[0], D[1], D[2])])
-        return np.abs(tq) / (scale * _limits(robot, quantity))
-    return np.abs(D[order]) / (scale * _limits(robot, quantity))
+        return np.abs(tq) / half
+    return np.abs(D[_ORDER[quantity]] - centre) / half
 
 
-def _range_ratio(robot, quantity: str, scale: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(centre, half)`` per joint: a value ``x`` has the ratio ``|x - centre| / half``
+def _normal(robot, limits, quantity: str, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(centre, half)`` per joint: ``|x - centre| / half`` is the ratio of a value ``x`` to its
+    limit (position: to the range; ``scale x`` the limit otherwise) where one is declared, and
+    ``|x|`` itself where none is (``half = 1``: the certificate's absolute bounds)
     (:func:`~drake_mh.trajectories.bound.kinematic_bound`)."""
     if quantity == "position":
         centre, half = 0.5 * (robot.upper + robot.lower), 0.5 * (robot.upper - robot.lower)
         return centre, np.where(robot.continuous, np.inf, half)
-    limit = scale * _limits(robot, quantity)
-    return np.zeros_like(limit), limit
+    limit = scale * np.asarray(limits[quantity], dtype=float)
+    return np.zeros_like(limit), np.where(np.isfinite(limit), limit, 1.0)
 
 
 _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
 
 
-def _refine(trajectory, robot, quantity, T, r, lo, hi, scale, backend, best, best_t,
+def _refine(trajectory, robot, quantity, T, r, lo, hi, norm, backend, best, best_t,
             threshold: float = 0.9, per_joint: int = 8, iterations: int = 8) -> None:
     """Sharpen the ratios between samples (golden-section search around local maxima).
 
@@ -294,7 +339,7 @@ def _refine(trajectory, robot, quantity, T, r, lo, hi, scale, backend, best, bes
     rows = np.arange(len(J))
 
     def f(t):
-        return _ratio(trajectory, robot, quantity, t, scale, backend)[rows, J]
+        return _normalized_at(trajectory, robot, quantity, t, norm, backend)[rows, J]
 
     c, d = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
     fc, fd = f(c), f(d)

@@ -134,19 +134,20 @@ _BIG = {"velocity": 1e3, "acceleration": 1e4, "jerk": 1e6}
 """stand-ins for an undeclared (infinite) limit, as :func:`ruckig_state_to_state` uses them."""
 
 
-def _line_limits(robot, delta: np.ndarray, factors) -> tuple[float, float, float]:
+def _line_limits(limits: dict, delta: np.ndarray, factors) -> tuple[float, float, float]:
     """Limits of the segment parameter ``s`` for ``q = q_a + s·Δ``: ``|q̇_j| = |ṡ||Δ_j| <= v_j``
-    for every j  ⇔  ``|ṡ| <= min_j v_j / |Δ_j|`` (the same for ``s̈`` and the jerk)."""
+    for every j  ⇔  ``|ṡ| <= min_j v_j / |Δ_j|`` (the same for ``s̈`` and the jerk).
+    ``limits``: ``{"velocity", "acceleration", "jerk"}`` -> ``(nq,)``."""
     moving = np.abs(delta) > 0.0
     out = []
-    for q, arr in (("velocity", robot.velocity_limits), ("acceleration", robot.acceleration_limits),
-                   ("jerk", robot.jerk_limits)):
+    for q in ("velocity", "acceleration", "jerk"):
+        arr = np.asarray(limits[q], dtype=float)
         lim = np.where(np.isfinite(arr), arr, _BIG[q]) * factors.get(q, 1.0)
         out.append(float(np.min(lim[moving] / np.abs(delta[moving]))))
     return out[0], out[1], out[2]
 
 
-def _ruckig_line(robot, q_a: np.ndarray, q_b: np.ndarray, factors) -> PPoly:
+def _ruckig_line(limits: dict, q_a: np.ndarray, q_b: np.ndarray, factors) -> PPoly:
     """Rest-to-rest, jerk-limited, time-optimal motion along the straight segment ``q_a -> q_b``.
 
     A one-dimensional ruckig profile of ``s: 0 -> 1`` under :func:`_line_limits`, composed with
@@ -162,7 +163,7 @@ def _ruckig_line(robot, q_a: np.ndarray, q_b: np.ndarray, factors) -> PPoly:
     inp = InputParameter(1)
     inp.current_position, inp.target_position = [0.0], [1.0]
     inp.current_velocity = inp.current_acceleration = inp.target_velocity = inp.target_acceleration = [0.0]
-    vs, as_, js = _line_limits(robot, delta, factors)
+    vs, as_, js = _line_limits(limits, delta, factors)
     inp.max_velocity, inp.max_acceleration, inp.max_jerk = [vs], [as_], [js]
     out = RTrajectory(1)
     try:
@@ -177,13 +178,13 @@ def _ruckig_line(robot, q_a: np.ndarray, q_b: np.ndarray, factors) -> PPoly:
     return PPoly(c, s.x)
 
 
-def _ruckig_path(W, robot, factors) -> Trajectory:
-    """Rest-to-rest straight segments through every waypoint (:func:`_ruckig_line`),
-    concatenated in time."""
+def _ruckig_path(W, robot, factors, limits: dict) -> Trajectory:
+    """Rest-to-rest straight segments through every waypoint (:func:`_ruckig_line`) under
+    ``limits`` (``{"velocity", "acceleration", "jerk"}`` -> ``(nq,)``), concatenated in time."""
     pieces = []
     t = 0.0
     for k in range(len(W) - 1):
-        pp = _ruckig_line(robot, W[k], W[k + 1], factors)
+        pp = _ruckig_line(limits, W[k], W[k + 1], factors)
         pieces.append(PPoly(pp.c, pp.x + t))
         t += pp.x[-1] - pp.x[0]
     x = np.concatenate([pieces[0].x] + [p.x[1:] for p in pieces[1:]])

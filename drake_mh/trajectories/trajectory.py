@@ -177,6 +177,8 @@ class Trajectory:
         scaled = PPoly(pp.c * powers.reshape(shape), pp.x / factor)
         info = dict(self.info)
         info.pop("certificate", None)
+        if "waypoint_times" in info:  # ruckig's rests at the waypoints come 1 / factor later
+            info["waypoint_times"] = np.asarray(info["waypoint_times"], dtype=float) / factor
         if self.timing is None:
             return Trajectory(scaled, None, self.joint_names, self.method, info)
         return Trajectory(self.path, scaled, self.joint_names, self.method, info)
@@ -275,10 +277,44 @@ class Trajectory:
         t = np.clip(t0 + tau * h, t0 + eps, t1 - eps)
         return self.derivatives(t, order)
 
-    def sample(self, n: int = 200) -> tuple[np.ndarray, np.ndarray]:
-        """``(t (n,), q (n, nq))`` on a uniform time grid (for plots and studies)."""
+    def sample_uniform(self, n: int = 200) -> tuple[np.ndarray, np.ndarray]:
+        """``(t (n,), q (n, nq))`` at ``n`` evenly spaced times, both ends included (for plots
+        and studies; :meth:`sample` for a controller)."""
         t = np.linspace(self.start_time, self.end_time, int(n))
         return t, self.derivatives(t, 0)[0]
+
+    def sample(self, rate_hz: float = 100.0, robot=None):
+        """Samples at ``rate_hz`` [Hz] for a controller: a
+        :class:`~drake_mh.trajectories.export.TrajectorySamples` of ``t (N,)`` [s] from 0 (the
+        last exactly at the end), ``q, qd, qdd (N, nq)`` and, with the ``robot``, the torques
+        ``tau (N, nq)`` [N·m], gravity included (:func:`~drake_mh.trajectories.export.sample_trajectory`).
+
+        Raises:
+            InvalidArgument: a rate that is not a positive number.
+        """
+        from drake_mh.trajectories.export import sample_trajectory
+
+        return sample_trajectory(self, rate_hz, robot)
+
+    def save(self, path, robot=None, rate_hz: float = 100.0):
+        """Write the samples at ``rate_hz`` to ``path`` by its extension: ``.json`` / ``.yaml``
+        (ROS 2 ``JointTrajectory`` shape), ``.csv``; checked against the certified limits first
+        (:func:`~drake_mh.trajectories.export.save_trajectory`). Returns the samples.
+
+        Raises:
+            InvalidArgument: unknown extension or bad rate.
+            LimitViolation: a sample exceeds a certified limit.
+        """
+        from drake_mh.trajectories.export import save_trajectory
+
+        return save_trajectory(self, path, robot, rate_hz)
+
+    def to_drake(self):
+        """This trajectory as a pydrake ``PiecewisePolynomial`` made of its exact polynomial
+        pieces (:func:`~drake_mh.trajectories.export.to_drake`)."""
+        from drake_mh.trajectories.export import to_drake
+
+        return to_drake(self)
 
     def acceleration_jumps(self) -> tuple[np.ndarray, np.ndarray]:
         """Acceleration discontinuities: ``(times (B,), |Δq''| (B, nq))`` at the interior breaks.

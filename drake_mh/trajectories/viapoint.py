@@ -372,5 +372,5 @@ class ViaPointProblem:
         """Smallest exact (Drake) arm-obstacle distance [m] along the trajectory of ``x``."""
         if not self.obstacles:
             return np.inf
-        _, Q = self.trajectory(x).sample(samples)
+        _, Q = self.trajectory(x).sample_uniform(samples)
         return float(self._scene.exact_min_distance(Q).min())

@@ -72,3 +72,32 @@ def test_retime_ruckig_limits_the_jerk_toppra_says_it_does_not():
     assert ruckig.returncode == 0, ruckig.stderr
     data = json.loads(ruckig.stdout)
     assert data["jerk_limited"] is True and 0 < data["max_jerk"] <= 10000 * (1 + 1e-6)
+
+
+def test_out_writes_the_trajectory_and_the_limits_are_printed(tmp_path):
+    from drake_mh.trajectories.export import load_trajectory
+
+    out_file = tmp_path / "motion.json"
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--sphere", *_blocking_sphere(), "--method", "rrt_connect",
+                "--out", str(out_file), "--rate", "50", "--velocity-scaling", "0.5")
+    assert out.returncode == 0, out.stderr
+    assert "limits enforced" in out.stdout and "velocity [rad/s]:" in out.stdout and "(x 0.5 scaling)" in out.stdout
+    assert f"trajectory written to {out_file}" in out.stdout
+    samples = load_trajectory(out_file)
+    robot = drake_mh.load_robot("seed000_6dof")
+    assert samples.joint_names == tuple(robot.joint_names) and samples.metadata["rate_hz"] == 50
+    np.testing.assert_allclose(samples.q[-1], GOAL_Q, atol=1e-9)
+    assert np.all(np.abs(samples.qd) <= 0.5 * robot.velocity_limits * (1 + 1e-6))
+    assert np.all(np.abs(samples.tau) <= robot.effort_limits * (1 + 1e-6))
+
+
+def test_unwritable_outputs_exit_2_before_planning(tmp_path):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    for option, target in (("--html", blocker / "x.html"), ("--out", blocker / "x.json"),
+                           ("--out", tmp_path / "motion.txt"), ("--html", tmp_path)):
+        out = _plan("--goal-q", *map(str, GOAL_Q), option, str(target))
+        assert out.returncode == 2, (option, target, out.stdout, out.stderr)
+        assert out.stdout == "" and len(out.stderr.strip().splitlines()) == 1 and option in out.stderr, out.stderr
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--acceleration-scaling", "0")
+    assert out.returncode == 2 and "acceleration_scaling must be a number in (0, 1]" in out.stderr

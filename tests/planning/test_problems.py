@@ -122,34 +122,6 @@ def test_mesh_robot_problems(robot):
     assert result.success and result.trajectory is not None and result.duration > 0, result.message
 
 
-def test_missing_acceleration_limits_say_which_robot_joints_and_how():
-    """example-robot-data's UR5 declares no acceleration limits: its motions cannot be retimed.
-    The error names the robot, the joints and how to supply them (issue #18)."""
-    from drake_mh.errors import MissingLimits
-    from drake_mh.planning import MotionProblem, solve_motion
-    from drake_mh.scene import Scene
-    from drake_mh.trajectories import retime
-
-    arm = drake_mh.Robot.from_dh([0.3, 0.3], [0.0, 0.0], [0.0, 0.0])  # velocity, no acceleration limits
-    assert not np.any(np.isfinite(arm.acceleration_limits))
-    W = np.array([[0.0, 0.0], [0.5, 0.5]])
-    for method in ("toppra", "ruckig"):
-        with pytest.raises(MissingLimits) as err:
-            retime(W, arm, method)
-        text = str(err.value)
-        assert repr(arm.name) in text and "joint1" in text and "robot.acceleration_limits" in text
-        assert "drake:acceleration" in text
-    partial = drake_mh.Robot.from_dh([0.3, 0.3], [0.0, 0.0], [0.0, 0.0])
-    partial.acceleration_limits = np.array([5.0, np.inf])
-    with pytest.raises(MissingLimits, match=r"\['joint2'\]"):
-        retime(W, partial, "toppra")
-    arm.acceleration_limits = np.array([5.0, 5.0])  # supplied as the message says: it retimes
-    assert retime(W, arm, "toppra").duration > 0
-    bare = drake_mh.Robot.from_dh([0.3, 0.3], [0.0, 0.0], [0.0, 0.0])
-    result = solve_motion(MotionProblem(bare, Scene(bare), W[0], W[1]), "straight")
-    assert not result.success and "declares no acceleration limits" in result.message
-
-
 # --- MotionBenchMaker archives --------------------------------------------------------------------
 
 READY = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]

@@ -140,7 +140,7 @@ def test_optimized_motion_is_certified_at_every_instant(arm):
     motion = prob.certify_motion(res.x)
     assert motion["motion_certified"] and motion["motion_min_clearance"] >= 0
     assert 0 < motion["motion_margin"] <= 1e-3 and motion["motion_chords"] >= 2 * 16
-    _, Q = prob.trajectory(res.x).sample(50 * motion["motion_chords"] // 2)
+    _, Q = prob.trajectory(res.x).sample_uniform(50 * motion["motion_chords"] // 2)
     assert prob._scene.exact_min_distance(Q).min() >= motion["motion_min_clearance"]
     # through the obstacle: refused, with where and why
     through = prob.certify_motion(np.array([-np.pi / 4, 0.0, np.pi / 4, 0.0, 1.0, 1.0]))

@@ -127,7 +127,8 @@ URDF), wider than the real hand opens (4 cm per finger)."""
 
 
 #: Franka's published acceleration [rad/s²] and jerk [rad/s³] limits (as in the bundled Panda),
-#: which example-robot-data's URDF does not declare (without them nothing can be retimed)
+#: which example-robot-data's URDF does not declare (added so that the benchmark's motions are timed
+#: under the same limits as the bundled Panda's; as shipped, it is retimed under velocity and torque)
 FRANKA_ACCELERATION = (15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0)
 FRANKA_JERK = (7500.0, 3750.0, 5000.0, 6250.0, 7500.0, 10000.0, 10000.0)
 
@@ -182,7 +183,8 @@ def _example_copy(name: str, limits: dict, edit=None, tag: str = ""):
 
 def _ur5():
     """example-robot-data's UR5 from a copy of its URDF with :data:`UR5_ACCELERATION` on every
-    joint (without acceleration limits no motion can be retimed, hence none verified)."""
+    joint (the limits of UR's MoveIt configuration; as shipped, it is retimed under velocity and
+    torque)."""
     import drake_mh
 
     copy, ee, root = _example_copy("ur5", {j: f'drake:acceleration="{UR5_ACCELERATION}"' for j in UR5_JOINTS})
