@@ -366,14 +366,14 @@ def piece_coefficients(trajectory) -> np.ndarray:
     ascending powers of ``t - breaks[k]`` (exact composition ``path(s(t))``, :mod:`.bound`)."""
     from numpy.polynomial import polynomial as npoly
 
-    from drake_mh.trajectories.trajectory import _shift_coefficients
+    from drake_mh.trajectories.polynomials import shift_coefficients
 
     breaks = trajectory.breaks
     nq = trajectory.nq
     if trajectory.timing is None:
         path = trajectory.path
         idx = np.clip(np.searchsorted(path.x, 0.5 * (breaks[:-1] + breaks[1:]), side="right") - 1, 0, len(path.x) - 2)
-        c = np.stack([_shift_coefficients(path.c[:, i], b - path.x[i]) for i, b in zip(idx, breaks[:-1])])
+        c = np.stack([shift_coefficients(path.c[:, i], b - path.x[i]) for i, b in zip(idx, breaks[:-1])])
         return c[:, ::-1, :]
     path, timing = trajectory.path, trajectory.timing
     d_p, d_s = path.c.shape[0] - 1, timing.c.shape[0] - 1
@@ -382,7 +382,7 @@ def piece_coefficients(trajectory) -> np.ndarray:
     j_idx = np.clip(np.searchsorted(timing.x, mids, side="right") - 1, 0, len(timing.x) - 2)
     i_idx = np.clip(np.searchsorted(path.x, timing(mids), side="right") - 1, 0, len(path.x) - 2)
     for k, (j, i) in enumerate(zip(j_idx, i_idx)):
-        s = _shift_coefficients(timing.c[:, j], breaks[k] - timing.x[j])[::-1].copy()  # ascending in t - b_k
+        s = shift_coefficients(timing.c[:, j], breaks[k] - timing.x[j])[::-1].copy()  # ascending in t - b_k
         s[0] -= path.x[i]  # u = s(t) - x_i
         power = np.array([1.0])
         for m in range(d_p + 1):  # term u^m with coefficient path.c[d_p - m]

@@ -25,12 +25,12 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
-from math import comb
 
 import numpy as np
 from scipy.interpolate import PPoly
 
 from drake_mh.errors import InvalidArgument
+from drake_mh.trajectories.polynomials import shift_coefficients
 
 __all__ = ["Trajectory", "merge_ppolys"]
 
@@ -39,25 +39,6 @@ def _as_ppoly(poly, what: str) -> PPoly:
     if not isinstance(poly, PPoly):
         raise InvalidArgument(f"{what} must be a scipy.interpolate.PPoly (or CubicSpline), got {type(poly)!r}")
     return poly
-
-
-def _shift_coefficients(c: np.ndarray, shift: float) -> np.ndarray:
-    """Re-expand polynomial coefficients (highest power first, scipy layout) about ``x0 + shift``.
-
-    Args:
-        c: ``(k+1, ...)`` coefficients of ``Σ c[m] (x - x0)^(k-m)``.
-        shift: new expansion point minus ``x0``.
-
-    Returns:
-        ``(k+1, ...)`` coefficients of the same polynomial in powers of ``(x - x0 - shift)``.
-    """
-    k = c.shape[0] - 1
-    out = np.zeros_like(c)
-    for m in range(k + 1):  # power p = k - m of the original term
-        p = k - m
-        for j in range(p + 1):  # (y + shift)^p = Σ_j C(p, j) y^j shift^(p - j)
-            out[k - j] += c[m] * comb(p, j) * shift ** (p - j)
-    return out
 
 
 def merge_ppolys(polys: list[PPoly]) -> PPoly:
@@ -87,7 +68,7 @@ def merge_ppolys(polys: list[PPoly]) -> PPoly:
         ck[k + 1 - p.c.shape[0]:] = p.c[:, idx]
         shift = breaks[:-1] - p.x[idx]
         for i in range(len(idx)):
-            c[:, i, j] = _shift_coefficients(ck[:, i], shift[i])
+            c[:, i, j] = shift_coefficients(ck[:, i], shift[i])
     return PPoly(c, breaks)
 
 
