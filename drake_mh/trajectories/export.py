@@ -239,7 +239,7 @@ def _write(samples: TrajectorySamples, path: Path) -> Path:
         if fmt == "csv":
             names = list(samples.joint_names)
             header = _columns(names)
-            tau = samples.tau if samples.tau is not None else None
+            tau = samples.tau
             if tau is None:
                 header = header[:1 + 3 * len(names)]
             with path.open("w", newline="", encoding="utf-8") as handle:
