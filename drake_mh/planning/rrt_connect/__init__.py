@@ -42,50 +42,10 @@ via Vectorized Sampling-Based Planning", ICRA 2024):
   ``certify="bisection"``. The returned path therefore consists of certified segments, and
   :func:`drake_mh.planning.verify_motion` re-certifies it independently.
 
-:func:`prepare` loads the kernel once per process (numba's cache: about 0.2 s; after a change
-of the kernels, compiling takes 1-2 minutes); :func:`certify_motions` exposes the motion check.
-
-Measured (bundled Panda, 2 shared AMD EPYC cores at load 2.6-4, CPU time beside wall; the
-planning time is ``solve_motion``'s, which here includes certifying every edge):
-
-* ``python studies/rrt_connect_speed.py`` (20 problems × 3 seeds per scene, start at
-  MotionBenchMaker's ready configuration, goals with the flange inside the fixture), every run
-  verified:
-
-  ======================  =======  ====================  ==================  ======  =========
-  scene                   success  median ms wall (CPU)  p95 ms wall (CPU)   nodes   states
-  ======================  =======  ====================  ==================  ======  =========
-  table (75 % straight)   100 %    0.08 (0.08)           0.39 (0.39)         0       121
-  shelf                   100 %    0.61 (0.57)           5.0 (1.9)           5       522
-  slot (narrow passage)   100 %    1.16 (1.13)           8.4 (4.7)           8       1,618
-  table, self-collision   100 %    1.54 (1.30)           7.6 (6.5)           0       121
-  ======================  =======  ====================  ==================  ======  =========
-
-* the MotionBenchMaker-like sets of :mod:`drake_mh.planning.problems` (table pick, table under
-  pick, bookshelf small / tall / thin, box, cage; 15 problems each, 2 seeds): 100 % verified,
-  median 0.98 ms CPU (1.08 wall), p95 3.5 ms CPU, without self-collision (load 2.6-4);
-  re-measured with the scene's public state check
-  (:func:`drake_mh.scene._state_kernels.check_states`) and with the kernel before it, run after
-  run on the same 105 problems x 2 seeds (identical paths): at load 2.0, median 0.43-0.45 ms
-  CPU (before: 0.44-0.46), p95 3.0-3.1 ms (before: 3.4); at load 1.5 both 0.50-0.52 ms. With self-collision (load 2.6-4): 1.25 ms with the link pairs of MoveIt's Panda
-  SRDF ignored; 4.9 ms with every pair Drake's filter keeps (there link1-link3 and link5-link7
-  are 1-3 mm apart in every configuration under the sphere model, so every motion needs the
-  bisection). Median path 5.9 rad (7.1 unshortcut).
-* where the time goes (profiled, MotionBenchMaker-like, mean): batched checks 76 %,
-  certification of motions within their margins 13 %, shortcutting 11 % (its checks
-  included in those), nearest neighbours 1.4 %, sampling 0.4 %; 90 % of the motions checked
-  are rejected (a collision), at about 700 ns per state checked including the per-motion
-  costs. The target of the issue (median 0.5 ms) is met at load 2 (0.43-0.45 ms), at the edge
-  at load 1.5 (0.50-0.52 ms, machine state varies) and missed under heavier load: the batched check costs 300-400 ns per Panda state against these 7-12
-  obstacles (VAMP: 60-130 ns).
-* the original MotionBenchMaker problems with the Panda's meshed hand (778 spheres, 66 problems,
-  ``drake-mh study motion_benchmark``, docs/planning.md): 66/66 verified, median 0.52 ms CPU, of
-  which the shortcut step 0.08 ms (``info["t_found"]``: 0.43 ms to the first certified path).
-* cold compilation (empty numba cache): :func:`prepare` takes about 1 minute of CPU time
-  (``plan_kernel`` and its callees; ``check_states`` alone 5 s).
-* the independent verification (:func:`drake_mh.planning.verify_motion` without retiming)
-  takes 3-17 ms per path, 6.7 ms median, of which 0.24 ms is the certificate and the rest the
-  1 mm refinement of the reported clearance.
+:func:`prepare` loads the kernel once per process (from numba's on-disk cache; after a change of
+the kernels the first call compiles them, a minute or two); :func:`certify_motions` exposes the
+motion check. Options and the figures that chose their defaults: :class:`RRTConnectConfig` and
+docs/planning.md; measured results: docs/benchmarks.md.
 """
 
 from __future__ import annotations
