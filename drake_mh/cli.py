@@ -29,11 +29,11 @@ PROG = "drake-mh"
 #: subcommand modules in help order; each defines ``register(subparsers, common)``
 COMMAND_MODULES: tuple[str, ...] = (
     "drake_mh.cli",  # robots
-    "drake_mh.ik.cli",  # ik (from the IK issue)
+    "drake_mh.ik.cli",  # ik
     "drake_mh.study.commands",  # study, report
     "drake_mh.study.demo",  # demo
-    "drake_mh.viz.cli",  # app (from the visualisation issue)
-    "drake_mh.viz.plan_cli",  # plan (one motion: issue #18)
+    "drake_mh.viz.cli",  # app
+    "drake_mh.viz.plan_cli",  # plan (one motion)
 )
 
 
