@@ -10,7 +10,7 @@ into the shelf, then rounded to 1e-4 rad and written below). Every method plans 
 * ``straight`` — the baseline;
 * ``drake_kto`` — Drake's ``KinematicTrajectoryOptimization`` + SNOPT from the straight line
   (margin: the sphere model's bound); ``drake_kto margin 0`` asks Drake for the problem's
-  clearance only (the issue's setting); ``drake_kto_warm`` from the ``rrt_connect`` path;
+  clearance only; ``drake_kto_warm`` from the ``rrt_connect`` path;
 * ``ompl_rrtconnect`` / ``ompl_bitstar`` — OMPL 2.0.1 with our checker (when installed: the
   ``peers`` extra); ``rrt_connect`` — ours, for reference.
 

@@ -28,7 +28,7 @@ tables (:mod:`drake_mh.scene.pair_table`): the code before those tables, as the 
 baseline (same trees: the tables change the cost of each check, not its answer).
 The batched checks are the scene's :func:`drake_mh.scene._state_kernels.check_states` (early
 exit, two clearances per link and link pair); the MotionBenchMaker-like figures of
-:mod:`drake_mh.planning.rrt_connect` (issue #18's 0.5 ms target) come from the problem sets of
+:mod:`drake_mh.planning.rrt_connect` (its 0.5 ms median target) come from the problem sets of
 :mod:`drake_mh.planning.problems`, not from this study's scenes.
 The 1-minute load average and the CPU are recorded (shared machines: compare within a run).
 
