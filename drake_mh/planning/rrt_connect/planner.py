@@ -273,8 +273,8 @@ def _by_values(config: RRTConnectConfig):
 
 def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
     # few Python steps here: a plan is often called after other work, with this code and its data out
-    # of the CPU's caches, where each step costs microseconds (MotionBenchMaker, after a verification:
-    # 68 µs around a 0.55 ms kernel before, see docs/planning.md)
+    # of the CPU's caches, where each step costs microseconds (about 50 µs of Python around a 0.5 ms
+    # kernel on MotionBenchMaker's problems)
     prepare_time = prepare(problem) if not _PREPARED else 0.0
     binding = _binding(problem.scene)
     # the deadline measures planning, not loading (as solve_ik's timeout)
