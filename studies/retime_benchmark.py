@@ -117,11 +117,12 @@ def summarize(records: list[dict]) -> str:
                             "solve only [ms]", "duration / Drake", "time / Drake", "worst certified ratio",
                             "violations"], rows)
     top = list({r["rep"]: r for r in groups.get(("toppra", 100), [])}.values())
+    lines.append("")
     if top:
-        lines += ["", f"Target: toppra <= 10 ms at 100 gridpoints with torque limits: median "
-                      f"{median(values(top, 'time', 1e3)):.2f} ms, {sum(r['time'] <= 0.010 for r in top)}/{len(top)} "
-                      "cases within."]
-    lines += ["", f"Cases that raised: {len(records) - len(ok)}; violations (> 1 + {TOL:g}): "
+        lines.append(f"Target: toppra <= 10 ms at 100 gridpoints with torque limits: median "
+                     f"{median(values(top, 'time', 1e3)):.2f} ms, {sum(r['time'] <= 0.010 for r in top)}/{len(top)} "
+                     "cases within.")
+    lines += [f"Cases that raised: {len(records) - len(ok)}; violations (> 1 + {TOL:g}): "
               f"{sum(not r['success'] for r in ok)}.",
               "Time = best of repeated `retime` calls including the dense certification; "
               "'solve only' leaves the certification out. Duration / time ratios: medians over "
