@@ -39,7 +39,7 @@ import numpy as np
 
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
-from drake_mh.study.report.summary import cell, finished, machine_line, markdown_table
+from drake_mh.study.report.summary import cell, cpu_and_load, finished, markdown_table
 
 ROBOTS = ("panda (bundled, capsules)", "panda_hand")  # then drake_mh.example_arms
 SCENES = ("1 sphere", "10 mixed")  # drake_mh.scene.benchmark.BENCHMARK_SCENES
@@ -176,7 +176,7 @@ def summarize(records: list[dict]) -> str:
     ok = sorted(finished(records), key=lambda r: (ROBOTS.index(r["robot"]), SCENES.index(r["scene"])))
     if not ok:
         return "no finished case"
-    lines = [machine_line(ok), ""] + markdown_table(
+    lines = [cpu_and_load(ok), ""] + markdown_table(
         ["robot", "scene", "spheres", "collision_free [ns/config] (CPU)", "warm, 20 calls [ns/config]", "N=1 [µs/call]",
          "batch_min_distance [ns/config]", "N=1 [µs]", "previous numpy [ns/config]", "Drake HasCollisions [µs]",
          "Drake distance [µs]", "Scene.min_distance [µs]", "Drake bool / ours", "previous / ours", "violations"],

@@ -31,7 +31,7 @@ import numpy as np
 
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
-from drake_mh.study.report.summary import finished, machine_line, markdown_table
+from drake_mh.study.report.summary import cpu_and_load, finished, markdown_table
 
 ROBOTS = ("panda (bundled, capsules)", "panda_hand", "ur5")  # then drake_mh.example_arms (meshes)
 SCENES = ("1 sphere", "10 mixed")  # drake_mh.scene.benchmark.BENCHMARK_SCENES
@@ -129,7 +129,7 @@ def summarize(records: list[dict]) -> str:
                      f"{mw:.1f} / {mc:.1f}", f"{mc / dc:.2f}", f"{aw:.1f} / {ac:.1f}", f"{ac / dc:.2f}",
                      f"{r['colliding']:.0%}", f"{r['above_drake']:.1e}", f"{r['drake_optimism'] * 1e3:.2f}"])
     return "\n".join(
-        [f"{machine_line(ok, loads=('load_average', 'load_start'), digits=2)} (before and after the timed rounds); "
+        [f"{cpu_and_load(ok, loads=('load_average', 'load_start'), digits=2)} (before and after the timed rounds); "
          f"min_distance vs smallest of distances: {max(r['mismatch'] for r in ok):.1e} m at most", ""]
         + markdown_table(["robot", "scene", "pairs (Drake's)", "Drake query [µs] wall / CPU",
                           "min_distance [µs] wall / CPU", "ratio to Drake (CPU)", "distances [µs] wall / CPU",

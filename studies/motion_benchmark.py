@@ -42,7 +42,7 @@ import numpy as np
 
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
-from drake_mh.study.report.summary import (cell, finished, group_by, machine_line, markdown_table, median, p95,
+from drake_mh.study.report.summary import (cell, cpu_and_load, finished, group_by, markdown_table, median, p95,
                                            rank_lines, share, values)
 
 TIMEOUT = 10.0
@@ -269,7 +269,7 @@ def summarize(records: list[dict]) -> str:
         return "no finished case"
     methods = list(group_by(ok, "method"))
     timeouts = ", ".join(f"{t:g}" for t in sorted({r["timeout"] for r in ok}))
-    lines = [f"{machine_line(ok, cpu='cpu_model', digits=2)}; {timeouts} s per plan. Success = verified: the whole "
+    lines = [f"{cpu_and_load(ok, cpu='cpu_model', digits=2)}; {timeouts} s per plan. Success = verified: the whole "
              "motion certified collision-free (self-collision included) and retimed under the robot's limits; times "
              "are planning only (no goal IK, no verification), over the verified plans.", "", "### Problems", ""]
     lines += _problem_table(ok)

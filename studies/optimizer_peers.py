@@ -50,7 +50,7 @@ from drake_mh.optim import get_method, minimize
 from drake_mh.optim.testfunctions import cec2017
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import load_average
-from drake_mh.study.report.summary import cell, finished, group_by, machine_line, markdown_table, mean, median, values
+from drake_mh.study.report.summary import cell, cpu_and_load, finished, group_by, markdown_table, mean, median, values
 
 SUCCESS_ERROR = 1e-8          # CEC 2017: errors at or below 1e-8 are reported as 0 (as optimizer_benchmark)
 
@@ -357,7 +357,7 @@ def summarize(records: list[dict]) -> str:
     reps = len({r["rep"] for r in ok})
     lines = [f"### drake_mh vs mealpy / NiaPy: CEC 2017, shifted, D = {', '.join(map(str, dims))}, "
              f"{reps} replicate(s)", "",
-             f"{machine_line(ok, cpu='case_cpu_model', loads=('load',), digits=2)} (mean "
+             f"{cpu_and_load(ok, cpu='case_cpu_model', loads=('load',), digits=2)} (mean "
              f"{mean(values(ok, 'load')):.2f}). Budget {ok[0]['budget']} evaluations counted by our wrapper (a run "
              "stops at the budget or at error <= 1e-8, reported as 0). Cells: median error f - f* / median wall time "
              "per run. `wall vs ours`, `CPU vs ours` = median over the cases of (its wall / CPU time / that of our "

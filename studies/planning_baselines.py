@@ -31,7 +31,7 @@ import numpy as np
 
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
-from drake_mh.study.report.summary import finished, group_by, machine_line, markdown_table, median, p95, values
+from drake_mh.study.report.summary import cpu_and_load, finished, group_by, markdown_table, median, p95, values
 
 TIMEOUT = 10.0
 
@@ -160,7 +160,7 @@ def summarize(records: list[dict]) -> str:
     if not ok:
         return "no finished case"
     groups = group_by(ok, "method")
-    lines = [f"{machine_line(ok, cpu='cpu_model')}; {TIMEOUT:.0f} s per plan; {len(group_by(ok, 'problem'))} problems",
+    lines = [f"{cpu_and_load(ok, cpu='cpu_model')}; {TIMEOUT:.0f} s per plan; {len(group_by(ok, 'problem'))} problems",
              ""] + markdown_table(
         ["method", "verified", "median plan wall [ms]", "median plan CPU [ms]", "p95 wall [ms]",
          "median path length [rad] (verified)", "median duration [s]",

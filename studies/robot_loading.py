@@ -26,7 +26,7 @@ from drake_mh.cache import temporary_cache
 from drake_mh.example_arms import EXAMPLE_ARMS, example_robot_data_root, load_example_arm
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model
-from drake_mh.study.report.summary import finished, group_by, machine_line, markdown_table, median, values
+from drake_mh.study.report.summary import cpu_and_load, finished, group_by, markdown_table, median, values
 
 ROBOTS = EXAMPLE_ARMS  # name -> (path inside example-robot-data, end-effector frame)
 CACHED_LOADS, QUICK_CACHED_LOADS = 5, 2
@@ -78,7 +78,7 @@ def summarize(records: list[dict]) -> str:
         first, cached = median(values(group, "time_first")), median(values(group, "time"))
         rows.append([name, g["nq"], g["locked"], g["hulls"], g["visual_conversions"], f"{first:.3f}", f"{cached:.3f}",
                      f"{cached / first:.2f}"])
-    return "\n".join([machine_line(finished(records)), ""] + markdown_table(
+    return "\n".join([cpu_and_load(finished(records)), ""] + markdown_table(
         ["robot", "nq", "locked", "hulls", "visual .obj", "first load [s]", "cached load [s]", "cached / first"], rows))
 
 

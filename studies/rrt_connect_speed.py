@@ -42,7 +42,7 @@ import numpy as np
 
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
-from drake_mh.study.report.summary import finished, machine_line, markdown_table
+from drake_mh.study.report.summary import cpu_and_load, finished, markdown_table
 
 SCENES = ("table", "shelf", "slot", "table self")
 METHODS = ("rrt_connect", "rrt_connect_smooth")
@@ -202,7 +202,7 @@ def summarize(records: list[dict]) -> str:
                          f"{ms['wall p95']:.2f} ({ms['cpu p95']:.2f})", f"{ms['verify median']:.2f}",
                          f"{ms['plan+verify median']:.2f}", f"{r[f'{m} nodes']:.0f}", f"{r[f'{m} motions']:.0f}",
                          f"{r[f'{m} states']:.0f}", f"{r[f'{m} length [rad]']:.2f}"])
-    lines = [f"{machine_line(ok, loads=('load_average', 'load_max'))} (2 shared cores: wall time includes waiting for a "
+    lines = [f"{cpu_and_load(ok, loads=('load_average', 'load_max'))} (2 shared cores: wall time includes waiting for a "
              "core, CPU time does not)", ""] + markdown_table(
         ["scene", "method", "problems × seeds", "straight free", "success", "plan median [ms] wall (CPU)",
          "p95 wall (CPU)", "verify median [ms]", "plan + verify median [ms]", "nodes", "motions",

@@ -27,7 +27,7 @@ from drake_mh.cache import temporary_cache
 from drake_mh.example_arms import load_example_arm
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
-from drake_mh.study.report.summary import finished, machine_line, markdown_table
+from drake_mh.study.report.summary import cpu_and_load, finished, markdown_table
 
 ROBOTS = ("panda (bundled, capsules)", "panda_hand", "ur5", "xarm7", "kinova")  # then drake_mh.example_arms
 N_BATCH, N_EXACT = 1000, 20
@@ -101,7 +101,7 @@ def summarize(records: list[dict]) -> str:
     rows = [[r["robot"], f"{r['tolerance']:g}", r["spheres"], f"{r['per_link_min']}-{r['per_link_max']}",
              f"{r['bound'] * 1e3:.2f}", f"{r['time']:.3f}", f"{r['time_cached']:.4f}", f"{r['batch_us']:.1f}",
              f"{r['exact_us']:.0f}", f"{r['exact_us'] / r['batch_us']:.1f}x", f"{r['colliding']:.0%}"] for r in ok]
-    return "\n".join([machine_line(ok), ""] + markdown_table(
+    return "\n".join([cpu_and_load(ok), ""] + markdown_table(
         ["robot", "tolerance [m]", "spheres", "per link", "bound [mm]", "first build [s]", "cached [s]",
          "batch [µs/config]", "exact [µs/config]", "exact / batch", "in collision"], rows))
 

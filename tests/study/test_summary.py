@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from drake_mh.study.report.summary import (cell, finished, group_by, load_range, machine_line, markdown_table, mean,
+from drake_mh.study.report.summary import (cell, cpu_and_load, finished, group_by, load_range, markdown_table, mean,
                                            median, median_iqr, p95, quartiles, rank_lines, ratio, share, values)
 
 
@@ -50,7 +50,7 @@ def test_markdown_table_lines():
 def test_machine_line_names_cpu_and_load_range():
     records = [{"cpu": "CPU X", "load_average": 1.0, "load_max": 3.0}, {"load_average": 2.0}]
     assert load_range(records, "load_average", "load_max") == (1.0, 3.0)
-    line = machine_line(records, loads=("load_average", "load_max"))
+    line = cpu_and_load(records, loads=("load_average", "load_max"))
     assert line.startswith("CPU: CPU X (") and "1.0-3.0" in line
 
 

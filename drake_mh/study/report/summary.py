@@ -1,5 +1,5 @@
 """Building blocks of a study's own summary (``Study.summarize``): finished records, robust
-statistics that skip missing values, grouping, markdown tables, rank tables and the machine line.
+statistics that skip missing values, grouping, markdown tables, rank tables, the CPU and its load.
 
 A study script declares its grid and its ``run`` function and writes its summary from these
 helpers, so that every study computes a median, a p95, a ratio or a rank test the same way.
@@ -11,7 +11,7 @@ Example::
     ok = finished(records)
     rows = [[m, cell(median(values(g, "time", 1e3)), ".2f"), cell(p95(values(g, "time", 1e3)), ".2f")]
             for m, g in group_by(ok, "method").items()]
-    return "\\n".join([machine_line(ok), ""] + markdown_table(["method", "median [ms]", "p95 [ms]"], rows))
+    return "\\n".join([cpu_and_load(ok), ""] + markdown_table(["method", "median [ms]", "p95 [ms]"], rows))
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from drake_mh.study.report.data import as_float
 
 __all__ = [
     "finished", "values", "median", "p95", "percentile", "quartiles", "median_iqr", "mean", "ratio",
-    "share", "cell", "group_by", "markdown_table", "load_range", "machine_line", "rank_lines",
+    "share", "cell", "group_by", "markdown_table", "load_range", "cpu_and_load", "rank_lines",
 ]
 
 
@@ -138,11 +138,12 @@ def load_range(records: Iterable[dict[str, Any]], *keys: str) -> tuple[float, fl
     return (float(loads.min()), float(loads.max())) if loads.size else (math.nan, math.nan)
 
 
-def machine_line(records: Sequence[dict[str, Any]], cpu: str = "cpu", loads: Sequence[str] = ("load_average",),
+def cpu_and_load(records: Sequence[dict[str, Any]], cpu: str = "cpu", loads: Sequence[str] = ("load_average",),
                  digits: int = 1) -> str:
     """``"CPU: <model> (<n> logical CPUs); 1-minute load average <lo>-<hi> during the cases"``
-    from the records' ``cpu`` field and the range of their ``loads`` fields (the study measured
-    both beside its timings: :func:`drake_mh.study.machine.cpu_model`, ``load_average``)."""
+    from the records' ``cpu`` field and the range of their ``loads`` fields, which a study
+    measures beside its own timings (:func:`drake_mh.study.machine.cpu_model`, ``load_average``);
+    :func:`drake_mh.study.machine.machine_line` reads the runner's fields around whole cases."""
     model = next((r[cpu] for r in records if r.get(cpu)), "?")
     lo, hi = load_range(records, *loads)
     return (f"CPU: {model} ({os.cpu_count()} logical CPUs); 1-minute load average "
