@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 import drake_mh
-from drake_mh.example_arms import example_robot_data_root
+from drake_mh.robot.examples import example_robot_data_root
 from drake_mh.planning import MotionProblem, solve_motion
 
 CELL = (

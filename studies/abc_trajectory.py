@@ -38,6 +38,7 @@ import numpy as np
 import drake_mh
 from drake_mh.optim import available_methods
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.summary import cell, finished, group_by, markdown_table, median, median_iqr, values
 from drake_mh.trajectories import ViaPointProblem, certify
 
 START = (-np.pi / 2, 0.0)  # (0, -0.6096) m: the arm hanging down
@@ -126,66 +127,54 @@ def run(case: Case) -> dict:
     return out
 
 
-def _med_iqr(values) -> str:
-    v = np.asarray(values, dtype=float)
-    if v.size == 0:
-        return "-"
-    q1, q2, q3 = np.percentile(v, [25, 50, 75])
-    return f"{q2:.4f} [{q1:.4f}, {q3:.4f}]"
-
-
 def _clearances(rs: list[dict]) -> str:
     """Smallest certified clearance of the motion (NaN counts as not certified) / exact at samples."""
-    if all(r.get("exact_min_distance") is None for r in rs):
+    exact = values(rs, "exact_min_distance")
+    if not exact.size:
         return "no obstacle"
-    motion = [r.get("motion_min_clearance", float("nan")) for r in rs]
-    exact = min(r["exact_min_distance"] for r in rs if r.get("exact_min_distance") is not None)
+    motion = values(rs, "motion_min_clearance")
     bad = sum(not r.get("motion_certified", False) for r in rs)
-    left = f"{np.nanmin(motion):.4f}" if not all(np.isnan(motion)) else "-"
-    return f"{left}{f' ({bad} not certified)' if bad else ''} / {exact:.4f}"
+    return f"{cell(motion.min() if motion.size else None, '.4f')}{f' ({bad} not certified)' if bad else ''} / {exact.min():.4f}"
 
 
 def summarize(records: list[dict]) -> str:
     """Per-workspace table of every method, and the paper's Table 1 beside ABC's results."""
-    ok = [r for r in records if r.get("status") == "ok"]
+    ok = finished(records)
     lines = []
     for ws in ("free", "obstacle"):
         group = [r for r in ok if r["workspace"] == ws]
         if not group:
             continue
-        lines += [f"### {ws} workspace: fitness f (median [IQR]) over seeds, best run's terms", "",
-                  "| method | runs | f median [IQR] | best f | t_T [s] | f_q [rad] | f_c [ft] | "
-                  "motion certified collision-free & torque ok | min certified clearance of the motion / "
-                  "exact at 400 samples [m] | worst velocity / accel. ratio |",
-                  "|---|---|---|---|---|---|---|---|---|---|"]
-        methods = sorted({r["method"] for r in group},
-                         key=lambda m: np.median([r["fitness"] for r in group if r["method"] == m]))
-        for m in methods:
-            rs = [r for r in group if r["method"] == m]
+        methods = sorted(group_by(group, "method").items(), key=lambda kv: median(values(kv[1], "fitness")))
+        rows = []
+        for m, rs in methods:
             best = min(rs, key=lambda r: r["fitness"])
-            lines.append(
-                f"| {m} | {len(rs)} | {_med_iqr([r['fitness'] for r in rs])} | {best['fitness']:.4f} | "
-                f"{best['t_T']:.4f} | {best['f_q']:.4f} | {best['f_c']:.4f} | "
-                f"{sum(r['success'] for r in rs)}/{len(rs)} | {_clearances(rs)} | "
-                f"{max(r['velocity_ratio'] for r in rs):.2f} / {max(r['acceleration_ratio'] for r in rs):.2f} |")
-        lines.append("")
+            rows.append([m, len(rs), median_iqr(values(rs, "fitness"), ".4f"), f"{best['fitness']:.4f}",
+                         f"{best['t_T']:.4f}", f"{best['f_q']:.4f}", f"{best['f_c']:.4f}",
+                         f"{sum(r['success'] for r in rs)}/{len(rs)}", _clearances(rs),
+                         f"{max(r['velocity_ratio'] for r in rs):.2f} / {max(r['acceleration_ratio'] for r in rs):.2f}"])
+        lines += [f"### {ws} workspace: fitness f (median [IQR]) over seeds, best run's terms", ""]
+        lines += markdown_table(["method", "runs", "f median [IQR]", "best f", "t_T [s]", "f_q [rad]", "f_c [ft]",
+                                 "motion certified collision-free & torque ok",
+                                 "min certified clearance of the motion / exact at 400 samples [m]",
+                                 "worst velocity / accel. ratio"], rows) + [""]
     abc = [r for r in ok if r["method"] == "abc"]
     if abc:
-        lines += ["### Table 1 of the ABC paper beside ours (ABC: best run / median over seeds)", "",
-                  "| quantity | paper free | ours free | paper obstacle | ours obstacle |",
-                  "|---|---|---|---|---|"]
         names = {"t_T": "total travelling time [s]", "f_q": "total joint travel [rad]",
                  "f_c": "total Cartesian length [ft]", "fitness": "fitness"}
+        rows = []
         for key, label in names.items():
             cells = []
             for ws in ("free", "obstacle"):
                 rs = [r for r in abc if r["workspace"] == ws]
                 if rs:
                     best = min(rs, key=lambda r: r["fitness"])
-                    cells += [f"{PAPER[ws][key]:.4f}", f"{best[key]:.4f} / {np.median([r[key] for r in rs]):.4f}"]
+                    cells += [f"{PAPER[ws][key]:.4f}", f"{best[key]:.4f} / {median(values(rs, key)):.4f}"]
                 else:
                     cells += [f"{PAPER[ws][key]:.4f}", "-"]
-            lines.append(f"| {label} | " + " | ".join(cells) + " |")
+            rows.append([label] + cells)
+        lines += ["### Table 1 of the ABC paper beside ours (ABC: best run / median over seeds)", ""]
+        lines += markdown_table(["quantity", "paper free", "ours free", "paper obstacle", "ours obstacle"], rows)
         lines += ["", "Paper's own consistency: with β = [1, 2, 2, 1] and f_ot ≥ 0, its free-workspace "
                   "terms give f_f ≥ 2·1.5776 + 2·3.1403 + 2.0106 = 11.4464 > 11.2367 printed; its "
                   "obstacle fitness implies f_ob = 21.8658 / 16.4495 = 1.33 > 1 (a clearance reward), "

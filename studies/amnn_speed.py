@@ -16,7 +16,7 @@ machine than the wall clock). Both implementations draw the same random numbers,
 take identical steps (checked: ``identical``) and do identical work; the repetitions
 alternate their order.
 
-Target (ESM issue): >= 30 control steps per second at L = 1000 x P = 128 on one core.
+Target: >= 30 control steps per second at L = 1000 x P = 128 on one core.
 
 Run: ``drake-mh study amnn_speed [--quick]`` or ``python studies/amnn_speed.py [--quick]``.
 """
@@ -29,6 +29,7 @@ import time
 import numpy as np
 
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.summary import finished, markdown_table
 
 BUDGETS = {"200x32": (200, 32), "1000x128": (1000, 128), "50x16": (50, 16)}
 REPEATS, QUICK_REPEATS = 3, 1
@@ -83,18 +84,16 @@ def run_case(case: Case) -> dict:
 
 def summarize(records: list[dict]) -> str:
     """The printed table: steps/s of both implementations and their ratio, per budget."""
-    rows = sorted((r for r in records if r.get("status") == "ok"), key=lambda r: r["layers"] * r["agents"])
+    rows = sorted(finished(records), key=lambda r: r["layers"] * r["agents"])
     lines = ["AMNN on scenario 1, one core: control steps per second (query + rows + solve), compiled vs "
-             "Python ask/tell loop, same process; load = 1-min load average of the machine.", "",
-             "| L x P | steps | compiled steps/s | Python steps/s | ratio | compiled solve [ms] | Python solve [ms] "
-             "| compiled steps/CPU-s | Python steps/CPU-s | ratio (CPU) | identical | load |",
-             "|" + "---|" * 12]
-    for r in rows:
-        lines.append(f"| {r['layers']} x {r['agents']} | {r['steps']} | {r['compiled_steps_per_s']:.1f} | "
-                     f"{r['python_steps_per_s']:.1f} | {r['ratio']:.2f} | {r['compiled_solve_ms']:.2f} | "
-                     f"{r['python_solve_ms']:.2f} | {r['compiled_cpu_steps_per_s']:.1f} | "
-                     f"{r['python_cpu_steps_per_s']:.1f} | {r['ratio_cpu']:.2f} | {r['identical']} | "
-                     f"{r['load']:.1f} |")
+             "Python ask/tell loop, same process; load = 1-min load average of the machine.", ""]
+    lines += markdown_table(
+        ["L x P", "steps", "compiled steps/s", "Python steps/s", "ratio", "compiled solve [ms]", "Python solve [ms]",
+         "compiled steps/CPU-s", "Python steps/CPU-s", "ratio (CPU)", "identical", "load"],
+        [[f"{r['layers']} x {r['agents']}", r["steps"], f"{r['compiled_steps_per_s']:.1f}", f"{r['python_steps_per_s']:.1f}",
+          f"{r['ratio']:.2f}", f"{r['compiled_solve_ms']:.2f}", f"{r['python_solve_ms']:.2f}",
+          f"{r['compiled_cpu_steps_per_s']:.1f}", f"{r['python_cpu_steps_per_s']:.1f}", f"{r['ratio_cpu']:.2f}",
+          r["identical"], f"{r['load']:.1f}"] for r in rows])
     paper = [r for r in rows if (r["layers"], r["agents"]) == (1000, 128)]
     if paper:
         r = paper[0]

@@ -10,7 +10,7 @@ the same run on one core:
   to justify the choice of numba by measurement);
 * ``fk-only``: ``BatchKinematics.fk`` alone, for the FK-per-second target.
 
-Targets (Foundation issue): >= 30x Drake's loop at N = 128 and >= 1,000,000 FK per second at
+Targets: >= 30x Drake's loop at N = 128 and >= 1,000,000 FK per second at
 N = 10000. Ratios are computed against the Drake loop measured in the same run.
 
 Run: ``drake-mh study bench_kinematics [--quick]`` or ``python studies/bench_kinematics.py [--quick]``
@@ -26,6 +26,7 @@ import time
 import numpy as np
 
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.summary import finished, group_by, markdown_table
 
 SIZES = (1, 16, 128, 1024, 10000)
 
@@ -123,17 +124,6 @@ def run_case(case: Case) -> dict:
     return row
 
 
-def format_table(rows: list[dict]) -> str:
-    """Markdown table of :func:`run` rows."""
-    head = ("| N | Drake loop [µs/config] | numba FK+J [µs/config] | ratio | numpy FK+J [µs/config] "
-            "| ratio | numba FK only: FK/s |")
-    lines = [head, "|" + "---|" * 7]
-    for r in rows:
-        lines.append(f"| {r['N']} | {r['drake_us']:.2f} | {r['numba_us']:.3f} | {r['ratio_numba']:.0f}x "
-                     f"| {r['numpy_us']:.3f} | {r['ratio_numpy']:.1f}x | {r['fk_per_s']:,.0f} |")
-    return "\n".join(lines)
-
-
 def machine() -> str:
     """One line describing where the benchmark ran."""
     return (f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
@@ -141,17 +131,16 @@ def machine() -> str:
 
 
 def summarize(records: list[dict]) -> str:
-    """The benchmark's printed table and target lines, per robot."""
+    """The benchmark's table and target lines, per robot."""
     out = []
-    robots: dict[str, list[dict]] = {}
-    for record in records:
-        if record.get("status") == "ok":
-            robots.setdefault(record["robot"], []).append(record)
-    for robot, rows in robots.items():
-        rows = sorted(rows, key=lambda r: r["N"])
-        out.append(f"{robot}: batched FK + Jacobian vs Drake's per-configuration loop ({rows[0]['machine']})")
-        out.append(format_table(rows))
+    for robot, rows in group_by(finished(records), "robot").items():
         by_n = {r["N"]: r for r in rows}
+        out.append(f"{robot}: batched FK + Jacobian vs Drake's per-configuration loop ({rows[0]['machine']})")
+        out += markdown_table(
+            ["N", "Drake loop [µs/config]", "numba FK+J [µs/config]", "ratio", "numpy FK+J [µs/config]", "ratio",
+             "numba FK only: FK/s"],
+            [[n, f"{r['drake_us']:.2f}", f"{r['numba_us']:.3f}", f"{r['ratio_numba']:.0f}x", f"{r['numpy_us']:.3f}",
+              f"{r['ratio_numpy']:.1f}x", f"{r['fk_per_s']:,.0f}"] for n, r in sorted(by_n.items())])
         if 128 in by_n:
             out.append(f"target >= 30x at N = 128: {by_n[128]['ratio_numba']:.0f}x")
         if 10000 in by_n:

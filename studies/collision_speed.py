@@ -19,30 +19,27 @@ loaded and every kernel compiled before any clock starts):
 Batched figures are per configuration at ``N = 1024`` and, from Python, per call at ``N = 1``
 (one ``(nq,)`` array: the scalar one-configuration kernel, ``collision_free_one``, through its
 compiled entry point), averaged over 2,000 consecutive calls cycling through 200 different
-configurations, as a planner's validity callback calls it (one configuration repeated measured
-1.2-1.3 µs where the mean over 1024 was 0.96-1.16: the kernel's work depends on how near the arm
-is to the obstacles; 200 calls right after Drake's queries measured 0.1-0.25 µs more per call,
-cold caches). The batch figure times single calls interleaved with the other methods
-(cold caches: after Drake's queries a call took 15-70 ns per configuration more); ``warm`` times
-20 consecutive calls on the same configurations, as a planner calls it (docs/collision.md, "Speed
-against the targets of issue #16", which also holds the last run of this study beside the code
-before).
-Each figure is the median of rounds; CPU time beside wall time; the CPU model and the 1-minute
+configurations, as a planner's validity callback calls it (the kernel's work depends on how
+near the arm is to the obstacles, so one configuration repeated would not be representative).
+The batch figure times single calls interleaved with the other methods (cold caches); ``warm``
+times 20 consecutive calls on the same configurations, as a planner calls it. Each figure is the median of rounds; CPU time beside wall time; the CPU model and the 1-minute
 load average are recorded (shared machines: ratios hold better than absolute times).
 Correctness is checked in the same run: every configuration ``collision_free`` accepts is
-free by Drake's exact distance (``violations`` must be 0).
+free by Drake's exact distance (``violations`` must be 0). Results: docs/benchmarks.md.
 
 Run: ``drake-mh study collision_speed [--quick]`` or ``python studies/collision_speed.py [--quick]``.
 """
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
 
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
+from drake_mh.study.report.summary import cell, cpu_and_load, finished, markdown_table
 
 ROBOTS = ("panda (bundled, capsules)", "panda_hand")  # then drake_mh.robot.examples
 SCENES = ("1 sphere", "10 mixed")  # drake_mh.scene.benchmark.BENCHMARK_SCENES
@@ -174,40 +171,29 @@ def _us(r, name):
     return r[f"{name} [s]"] * 1e6
 
 
-def _warm(r) -> str:
-    """The warm batch figure [ns/config], "-" for records of the study before it had one."""
-    return f"{_us(r, 'collision_free warm') * 1e3:.0f}" if "collision_free warm [s]" in r else "-"
-
-
 def summarize(records: list[dict]) -> str:
     """Per robot and scene: ns per configuration, and ratios to Drake and to the previous code."""
-    ok = [r for r in records if r.get("status") == "ok"]
+    ok = sorted(finished(records), key=lambda r: (ROBOTS.index(r["robot"]), SCENES.index(r["scene"])))
     if not ok:
         return "no finished case"
-    loads = [r["load_average"] for r in ok]
-    lines = [f"CPU: {ok[0]['cpu']}; 1-min load average during the cases: {min(loads):.1f}-{max(loads):.1f}", "",
-             "| robot | scene | spheres | collision_free [ns/config] (CPU) | warm, 20 calls [ns/config] | N=1 [µs/call] | "
-             "batch_min_distance "
-             "[ns/config] | N=1 [µs] | previous numpy [ns/config] | Drake HasCollisions [µs] | Drake distance [µs] | "
-             "Scene.min_distance [µs] | Drake bool / ours | previous / ours | violations |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in sorted(ok, key=lambda r: (ROBOTS.index(r["robot"]), SCENES.index(r["scene"]))):
-        ours = _us(r, "collision_free")
-        lines.append(
-            f"| {r['robot']} | {r['scene']} | {r['spheres']} | {ours * 1e3:.0f} ({r['collision_free cpu [s]'] * 1e9:.0f}) | "
-            f"{_warm(r)} | "
-            f"{_us(r, 'collision_free N=1'):.2f} | {_us(r, 'batch_min_distance') * 1e3:.0f} | "
-            f"{_us(r, 'batch_min_distance N=1'):.2f} | {_us(r, 'previous (numpy)') * 1e3:.0f} | "
-            f"{_us(r, 'Drake HasCollisions'):.1f} | {_us(r, 'Drake distance'):.1f} | {_us(r, 'Scene.min_distance'):.1f} | "
-            f"{_us(r, 'Drake HasCollisions') / ours:.0f}x | {_us(r, 'previous (numpy)') / ours:.0f}x | {r['violations']} |")
-    lines += ["", "Certified segments between free configurations (σ = joint step):", "",
-              "| robot | scene | short σ=0.1: µs/segment | certified | configs evaluated (median) | "
-              "long σ=0.5: µs/segment | certified | configs evaluated (median) |", "|---|---|---|---|---|---|---|---|"]
-    for r in sorted(ok, key=lambda r: (ROBOTS.index(r["robot"]), SCENES.index(r["scene"]))):
-        lines.append(f"| {r['robot']} | {r['scene']} | {_us(r, 'certify_segments short'):.1f} | "
-                     f"{r['segments short certified']:.0%} | {r['segments short evaluations']:.0f} | "
-                     f"{_us(r, 'certify_segments long'):.1f} | {r['segments long certified']:.0%} | "
-                     f"{r['segments long evaluations']:.0f} |")
+    lines = [cpu_and_load(ok), ""] + markdown_table(
+        ["robot", "scene", "spheres", "collision_free [ns/config] (CPU)", "warm, 20 calls [ns/config]", "N=1 [µs/call]",
+         "batch_min_distance [ns/config]", "N=1 [µs]", "previous numpy [ns/config]", "Drake HasCollisions [µs]",
+         "Drake distance [µs]", "Scene.min_distance [µs]", "Drake bool / ours", "previous / ours", "violations"],
+        [[r["robot"], r["scene"], r["spheres"],
+          f"{_us(r, 'collision_free') * 1e3:.0f} ({r['collision_free cpu [s]'] * 1e9:.0f})",
+          cell(r.get("collision_free warm [s]", math.nan) * 1e9, ".0f"),  # "-": records from before the warm figure
+          f"{_us(r, 'collision_free N=1'):.2f}", f"{_us(r, 'batch_min_distance') * 1e3:.0f}",
+          f"{_us(r, 'batch_min_distance N=1'):.2f}", f"{_us(r, 'previous (numpy)') * 1e3:.0f}",
+          f"{_us(r, 'Drake HasCollisions'):.1f}", f"{_us(r, 'Drake distance'):.1f}", f"{_us(r, 'Scene.min_distance'):.1f}",
+          f"{_us(r, 'Drake HasCollisions') / _us(r, 'collision_free'):.0f}x",
+          f"{_us(r, 'previous (numpy)') / _us(r, 'collision_free'):.0f}x", r["violations"]] for r in ok])
+    lines += ["", "Certified segments between free configurations (σ = joint step):", ""] + markdown_table(
+        ["robot", "scene", "short σ=0.1: µs/segment", "certified", "configs evaluated (median)",
+         "long σ=0.5: µs/segment", "certified", "configs evaluated (median)"],
+        [[r["robot"], r["scene"], f"{_us(r, 'certify_segments short'):.1f}", f"{r['segments short certified']:.0%}",
+          f"{r['segments short evaluations']:.0f}", f"{_us(r, 'certify_segments long'):.1f}",
+          f"{r['segments long certified']:.0%}", f"{r['segments long evaluations']:.0f}"] for r in ok])
     return "\n".join(lines)
 
 

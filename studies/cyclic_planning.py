@@ -25,6 +25,7 @@ import time
 import numpy as np
 
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.summary import cell, finished, group_by, markdown_table, median, values
 
 METHODS = ["ga", "woa", "pso", "de", "abc", "gsa", "e3gsa", "ao", "aro", "bat", "random"]
 INSTANCES = ["leaf1", "leaf2", "leaf3", "leaf4", "leaf2_pi3", "circle+", "circle-"]
@@ -182,10 +183,6 @@ def _full_arm(case: Case, task, robot_name: str) -> dict:
 # --- summary ---------------------------------------------------------------------------------
 
 
-def _fmt(x, d=7):
-    return "-" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.{d}f}"
-
-
 def _best_scan(problem, intervals):
     """The component's optimum by a dense scan + bounded Brent (reference, not an optimizer run)."""
     from scipy.optimize import minimize_scalar
@@ -200,107 +197,136 @@ def _best_scan(problem, intervals):
     return float(r.x), float(r.fun)
 
 
-def summarize(records: list[dict]) -> str:
-    from drake_mh.cyclic import TABLE_II, TABLE_III_SEARCH, TABLE_IV, circle_task, component_problem
+def _table_iv() -> list[str]:
+    """Table IV at the paper's k beside ours (MATLAB-style and converged) and the scan optimum."""
+    from drake_mh.cyclic import TABLE_IV
 
-    ok = [r for r in records if r.get("status") == "ok" and r.get("success")]
-    lines = ["## Table IV (12-DOF maple leaf) beside ours", "",
-             "Paper: GA / WOA fitness at their k. Ours at the paper's k: eq. (1) MATLAB-style "
-             "(r = linspace(0, 1, 1000), forward differences, trapz over r[:-1]) and the converged "
-             "integral. Component 2 uses moving base II at phase π/3 (its target), component 3 at "
-             "π/6 (its base): the only combination that reproduces the table (see below).", "",
-             "| comp. | method | paper fitness | paper k | ours at paper k (MATLAB) | Δ | converged integral | scan optimum k | scan optimum F (MATLAB) |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    facts = []
+    rows = []
     for comp in (1, 2, 3, 4):
-        name = "leaf2_pi3" if comp == 2 else f"leaf{comp}"
-        _, _, problem, intervals, _ = _instance(name)
+        _, _, problem, intervals, _ = _instance("leaf2_pi3" if comp == 2 else f"leaf{comp}")
         k_opt, f_opt = _best_scan(problem, intervals)
         for method in ("ga", "woa"):
             pf, pk = TABLE_IV[comp][method]
             ours = float(problem.evaluate([pk]).fitness[0])
             exact, _ = problem.converged_fitness(pk, n=2048)
-            lines.append(f"| {comp} | {method.upper()} | {pf} | {pk} | {ours:.9f} | {ours - pf:+.1e} | "
-                         f"{exact:.7f} | {k_opt:.5f} | {f_opt:.9f} |")
-    lines += ["", "## Our optimizer runs (median [best] over seeds, MATLAB-style fitness; budget 2000, P = 20)", ""]
+            rows.append([comp, method.upper(), pf, pk, f"{ours:.9f}", f"{ours - pf:+.1e}", f"{exact:.7f}",
+                         f"{k_opt:.5f}", f"{f_opt:.9f}"])
+    return ["## Table IV (12-DOF maple leaf) beside ours", "",
+            "Paper: GA / WOA fitness at their k. Ours at the paper's k: eq. (1) MATLAB-style "
+            "(r = linspace(0, 1, 1000), forward differences, trapz over r[:-1]) and the converged "
+            "integral. Component 2 uses moving base II at phase π/3 (its target), component 3 at "
+            "π/6 (its base): the only combination that reproduces the table (see below).", ""] + markdown_table(
+        ["comp.", "method", "paper fitness", "paper k", "ours at paper k (MATLAB)", "Δ", "converged integral",
+         "scan optimum k", "scan optimum F (MATLAB)"], rows)
+
+
+def _runs(ok: list[dict], records: list[dict]) -> list[str]:
+    """Our optimizer runs per instance, and how many reached the reference optimum."""
     methods = [m for m in METHODS if any(r["method"] == m for r in ok)]
-    lines += ["| instance | " + " | ".join(methods) + " |", "|---" * (len(methods) + 1) + "|"]
+    rows = []
     for inst in INSTANCES:
-        cells = []
-        for m in methods:
-            f = [r["fitness"] for r in ok if r["instance"] == inst and r["method"] == m]
-            cells.append(f"{np.median(f):.7f} [{min(f):.7f}]" if f else "-")
+        cells = [f"{median(f):.7f} [{min(f):.7f}]" if (f := [r["fitness"] for r in ok if
+                                                          (r["instance"], r["method"]) == (inst, m)]) else "-"
+                 for m in methods]
         if any(c != "-" for c in cells):
-            lines.append(f"| {inst} | " + " | ".join(cells) + " |")
-    lines += ["", f"Runs that came within {REACH_TOL:g} (relative) of the reference optimum (dense scan + Brent; "
-              "where a run beats the scan, e.g. at an interval edge, it counts as reached), and the median "
-              "evaluations they needed:", "", "| method | reached | median nfe to reach |", "|---|---|---|"]
-    for m in methods:
-        got = [r for r in records if r.get("status") == "ok" and r["method"] == m and "gap" in r]
-        nfe = [r["nfe_to_reference"] for r in got if isinstance(r.get("nfe_to_reference"), (int, float))
-               and math.isfinite(r["nfe_to_reference"])]
-        if got:
-            lines.append(f"| {m} | {len(nfe)}/{len(got)} | {np.median(nfe) if nfe else float('nan'):.0f} |")
-    lines += ["", "## Feasible intervals of k (ours, phase π/6) vs Table III's search areas", "",
-              "| comp. | ours [rad] | Table III |", "|---|---|---|"]
-    for comp in (1, 2, 3, 4):
-        _, _, _, intervals, _ = _instance(f"leaf{comp}")
-        ours = ", ".join(f"[{a:.4f}, {b:.4f}]" for a, b in intervals)
-        lines.append(f"| {comp} | {ours} | {list(TABLE_III_SEARCH[comp])} |")
-    # REFERENCES.md facts
+            rows.append([inst] + cells)
+    reached = []
+    for m, got in group_by([r for r in finished(records) if "gap" in r], "method").items():
+        nfe = values(got, "nfe_to_reference")
+        reached.append([m, f"{nfe.size}/{len(got)}", f"{median(nfe):.0f}"])
+    return (["", "## Our optimizer runs (median [best] over seeds, MATLAB-style fitness; budget 2000, P = 20)", ""]
+            + markdown_table(["instance"] + methods, rows)
+            + ["", f"Runs that came within {REACH_TOL:g} (relative) of the reference optimum (dense scan + Brent; "
+               "where a run beats the scan, e.g. at an interval edge, it counts as reached), and the median "
+               "evaluations they needed:", ""]
+            + markdown_table(["method", "reached", "median nfe to reach"],
+                             sorted(reached, key=lambda row: METHODS.index(row[0]))))
+
+
+def _intervals() -> list[str]:
+    from drake_mh.cyclic import TABLE_III_SEARCH
+
+    rows = [[comp, ", ".join(f"[{a:.4f}, {b:.4f}]" for a, b in _instance(f"leaf{comp}")[3]),
+             list(TABLE_III_SEARCH[comp])] for comp in (1, 2, 3, 4)]
+    return (["", "## Feasible intervals of k (ours, phase π/6) vs Table III's search areas", ""]
+            + markdown_table(["comp.", "ours [rad]", "Table III"], rows))
+
+
+def _facts() -> list[str]:
+    """REFERENCES.md's facts about the paper, recomputed."""
+    from drake_mh.cyclic import TABLE_IV, circle_task, component_problem
+
     p2_pi6 = _instance("leaf2")[2].evaluate([TABLE_IV[2]["ga"][1]]).fitness[0]
-    from drake_mh.cyclic import moving_bases
     p3 = component_problem(_instance("leaf2_pi3")[0], 2, [TABLE_IV[1]["woa"][1], TABLE_IV[2]["woa"][1]])
     p3_pi3 = p3.evaluate([TABLE_IV[3]["ga"][1]]).fitness[0]
-    del moving_bases
-    _, _, p1, _, _ = _instance("leaf1")
+    p1 = _instance("leaf1")[2]
     m1 = float(p1.evaluate([TABLE_IV[1]["woa"][1]]).fitness[0])
     e1, _ = p1.converged_fitness(TABLE_IV[1]["woa"][1], n=4096)
     paper5 = component_problem(circle_task(knots="paper"), 1, [])
     d = np.linalg.norm(paper5.p_WT - paper5.p_WB, axis=1)
-    facts += [
-        "", "## REFERENCES.md facts, checked", "",
-        "| fact | our number | verdict |", "|---|---|---|",
-        f"| Table IV reproduces to 7-8 digits MATLAB-style | see Δ above: ≤ 8.2e-7 for 7 of 8 entries, 5.4e-6 for comp. 4 WOA | confirmed (comp. 4 WOA: 6 digits; GA and WOA print different fitness at the same k) |",
-        f"| MATLAB-style ≈ 0.1 % below the integral | comp. 1, k = -0.2959: {m1:.7f} vs {e1:.7f} ({(m1 - e1) / e1 * 100:+.3f} %) | confirmed |",
-        f"| moving base II phase π/3 for comp. 2 | π/6 gives {p2_pi6:.7f} (paper 10.7813247) | confirmed |",
-        f"| π/6 (printed) reproduces comp. 3 | π/3 gives {p3_pi3:.7f} (paper 5.1071097) | confirmed: Table IV mixes two moving bases II |",
-        "| θg = absolute orientation of the last link | comp. 2-4 reproduce only this way (a relative θg changes the IK) | confirmed |",
-        "| leaf scale 10 cm, centre (180, 50) cm | all four components reproduce | confirmed |",
-        f"| printed 5-DOF case infeasible | 2-link tip to circle {d.min():.4f} .. {d.max():.4f} m ({d[0]:.4f} m at t = 0) vs 3-link reach 0.48 m; no feasible k for either root (a6 = 0 or 10) | confirmed |",
+    rows = [
+        ["Table IV reproduces to 7-8 digits MATLAB-style", "see Δ above: ≤ 8.2e-7 for 7 of 8 entries, 5.4e-6 for comp. 4 WOA",
+         "confirmed (comp. 4 WOA: 6 digits; GA and WOA print different fitness at the same k)"],
+        ["MATLAB-style ≈ 0.1 % below the integral",
+         f"comp. 1, k = -0.2959: {m1:.7f} vs {e1:.7f} ({(m1 - e1) / e1 * 100:+.3f} %)", "confirmed"],
+        ["moving base II phase π/3 for comp. 2", f"π/6 gives {p2_pi6:.7f} (paper 10.7813247)", "confirmed"],
+        ["π/6 (printed) reproduces comp. 3", f"π/3 gives {p3_pi3:.7f} (paper 5.1071097)",
+         "confirmed: Table IV mixes two moving bases II"],
+        ["θg = absolute orientation of the last link", "comp. 2-4 reproduce only this way (a relative θg changes the IK)",
+         "confirmed"],
+        ["leaf scale 10 cm, centre (180, 50) cm", "all four components reproduce", "confirmed"],
+        ["printed 5-DOF case infeasible", f"2-link tip to circle {d.min():.4f} .. {d.max():.4f} m ({d[0]:.4f} m at t = 0) "
+         "vs 3-link reach 0.48 m; no feasible k for either root (a6 = 0 or 10)", "confirmed"],
     ]
-    lines += facts
-    # 5-DOF
-    lines += ["", "## Table II (5-DOF) beside ours", "",
-              f"Paper: GA {TABLE_II['ga'][0]} at k = {TABLE_II['ga'][1]}, WOA {TABLE_II['woa'][0]} at k = "
-              f"{TABLE_II['woa'][1]}. Not reproducible: the printed case has no feasible k. With our replacement "
-              "of Table I (`drake_mh.cyclic.TABLE_I_DRAKE_MH`), MATLAB-style fitness of the 3 joints of the 3-link "
-              "component (the 2-link part adds a constant):", "",
-              "| root | GA best | WOA best | scan optimum k | scan optimum F | 2-link part | feasible k |", "|---|---|---|---|---|---|---|"]
-    from drake_mh.cyclic import compose, matlab_path_length
+    return ["", "## REFERENCES.md facts, checked", ""] + markdown_table(["fact", "our number", "verdict"], rows)
+
+
+def _table_ii(ok: list[dict]) -> list[str]:
+    from drake_mh.cyclic import TABLE_II, compose, matlab_path_length
+
+    rows = []
     for inst in ("circle+", "circle-"):
         task, _, problem, intervals, _ = _instance(inst)
         k_opt, f_opt = _best_scan(problem, intervals)
         q2 = compose(task, [], problem.r * task.period, upto=1)[0]
-        f2 = float(matlab_path_length(q2, problem.r))
-        best = {m: min((r["fitness"] for r in ok if r["instance"] == inst and r["method"] == m), default=None)
-                for m in ("ga", "woa")}
-        ivs = ", ".join(f"[{a:.4f}, {b:.4f}]" for a, b in intervals)
-        lines.append(f"| {inst[-1]} | {_fmt(best['ga'])} | {_fmt(best['woa'])} | {k_opt:.5f} | {f_opt:.7f} | {f2:.7f} | {ivs} |")
-    full = [r for r in records if r.get("status") == "ok" and "pinv_tracking_max" in r]
+        best = [min((r["fitness"] for r in ok if (r["instance"], r["method"]) == (inst, m)), default=None)
+                for m in ("ga", "woa")]
+        rows.append([inst[-1], cell(best[0], ".7f"), cell(best[1], ".7f"), f"{k_opt:.5f}", f"{f_opt:.7f}",
+                     f"{float(matlab_path_length(q2, problem.r)):.7f}",
+                     ", ".join(f"[{a:.4f}, {b:.4f}]" for a, b in intervals)])
+    return (["", "## Table II (5-DOF) beside ours", "",
+             f"Paper: GA {TABLE_II['ga'][0]} at k = {TABLE_II['ga'][1]}, WOA {TABLE_II['woa'][0]} at k = "
+             f"{TABLE_II['woa'][1]}. Not reproducible: the printed case has no feasible k. With our replacement "
+             "of Table I (`drake_mh.cyclic.TABLE_I_DRAKE_MH`), MATLAB-style fitness of the 3 joints of the 3-link "
+             "component (the 2-link part adds a constant):", ""]
+            + markdown_table(["root", "GA best", "WOA best", "scan optimum k", "scan optimum F", "2-link part",
+                              "feasible k"], rows))
+
+
+def _cycles(r: dict) -> list[str]:
+    """The whole arm over many cycles against the pseudoinverse baseline (Figs. 12-13)."""
+    C = r["cycles"]
+    first = r["pinv_first_violation_cycle"]
+    drift = ", ".join(f"c = {c}: {r[f'pinv_drift_c{c}']:.3g}" for c in (1, 10, 100, 500) if f"pinv_drift_c{c}" in r)
+    rows = [["max drift max_j abs(q(cT) - q(0)) [rad]", f"{r['plan_drift_max']:.1e}", drift],
+            ["per-cycle closure max [rad]", f"{r['plan_closure_max']:.1e}", "see figure"],
+            ["joint-limit excess max [rad]", f"{r['plan_limit_excess']:.1e}",
+             f"{r['pinv_max_excess']:.3g} (joint {r['pinv_worst_joint']}; {r['pinv_joints_violating']} joints)"],
+            ["first cycle with a violation", "none",
+             f"{first if first >= 0 else 'none'} ({r['pinv_violating_cycles']} of {C} cycles)"],
+            ["end-effector error max [m]", f"{r['plan_ee_error']:.1e} (Drake)", f"{r['pinv_tracking_max']:.1e}"],
+            ["verified with Drake", f"{r['plan_verified']} (clearance {r['plan_clearance']:.4f} m)", "-"],
+            ["animation", r.get("animation"), ""]]
+    return (["", f"## {C} cycles: pseudoinverse Jacobian vs proposed (Figs. 12-13)", ""]
+            + markdown_table(["", "proposed (WOA k)", "pseudoinverse (K = 10/s, RK4 250 steps/period)"], rows))
+
+
+def summarize(records: list[dict]) -> str:
+    ok = [r for r in finished(records) if r.get("success")]
+    lines = _table_iv() + _runs(ok, records) + _intervals() + _facts() + _table_ii(ok)
+    full = [r for r in finished(records) if "pinv_tracking_max" in r]
     if full:
-        r = full[0]
-        C = r["cycles"]
-        lines += ["", f"## {C} cycles: pseudoinverse Jacobian vs proposed (Figs. 12-13)", "",
-                  "| | proposed (WOA k) | pseudoinverse (K = 10/s, RK4 250 steps/period) |", "|---|---|---|",
-                  f"| max drift max_j abs(q(cT) - q(0)) [rad] | {r['plan_drift_max']:.1e} | "
-                  + ", ".join(f"c = {c}: {r[f'pinv_drift_c{c}']:.3g}" for c in (1, 10, 100, 500) if f"pinv_drift_c{c}" in r) + " |",
-                  f"| per-cycle closure max [rad] | {r['plan_closure_max']:.1e} | see figure |",
-                  f"| joint-limit excess max [rad] | {r['plan_limit_excess']:.1e} | {r['pinv_max_excess']:.3g} (joint {r['pinv_worst_joint']}; {r['pinv_joints_violating']} joints) |",
-                  f"| first cycle with a violation | none | {r['pinv_first_violation_cycle'] if r['pinv_first_violation_cycle'] >= 0 else 'none'} ({r['pinv_violating_cycles']} of {C} cycles) |",
-                  f"| end-effector error max [m] | {r['plan_ee_error']:.1e} (Drake) | {r['pinv_tracking_max']:.1e} |",
-                  f"| verified with Drake | {r['plan_verified']} (clearance {r['plan_clearance']:.4f} m) | - |",
-                  f"| animation | {r.get('animation')} | |"]
+        lines += _cycles(full[0])
     return "\n".join(lines)
 
 

@@ -46,6 +46,7 @@ from __future__ import annotations
 import numpy as np
 
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.summary import cell, finished, group_by, markdown_table, median, values
 
 LAYERS, AGENTS = 1000, 128                   # the paper's AMNN budget per control step, every solver
 QUICK_LAYERS, QUICK_AGENTS = 100, 32
@@ -205,68 +206,72 @@ def _cases(quick: bool) -> list[dict]:
     return cases
 
 
-def _framework_table(records: list[dict]) -> str:
+def _lowest(rows: list[dict], key: str, spec: str = ".3f") -> str:
+    """The smallest finite value of ``key`` over the seeds ("-" when none)."""
+    found = values(rows, key)
+    return cell(found.min() if found.size else None, spec)
+
+
+def _framework_table(records: list[dict]) -> list[str]:
     """Medians per (scenario, method) of the framework follower runs."""
-    groups: dict[tuple, list[dict]] = {}
-    for r in records:
-        groups.setdefault((r["scenario"], r["method"]), []).append(r)
-    lines = ["Framework follower (part framework): medians over seeds, except success, the clearances "
-             "(minimum over seeds) and the detour counts (sums over seeds). Clearance at the points: Drake's "
-             "exact distance (refined capsule-box/cylinder pairs); of the motion: certified lower bound over "
-             "every configuration of the executed motion between the points, detours included (sphere model, "
-             "tolerance 1 mm), over the runs whose motion is certified (the others counted); sampled: Drake "
-             "at 4 interior samples per straight piece. Detours: motions between two points whose straight "
-             "joint-space line was not certified, found / not found (vias inserted, search time, extra "
-             "joint-space length summed over seeds).", "",
-             "| scenario | method | runs | success | points regenerated (+ spread) | regeneration time [s] | "
-             "largest joint step plan -> executed [rad] | min clearance at points / of the motion (certified) "
-             "/ sampled [m] | motion not certified | detours found / not found (vias, time [s], extra [rad]) | "
-             "halted | clearance of the configuration held when the move is seen, against the new position [m] "
-             "| min clearance after it [m] |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for (scenario, method), group in groups.items():
-        ok = [r for r in group if r.get("status") == "ok"]
+    rows = []
+    for (scenario, method), group in group_by(records, "scenario", "method").items():
+        ok = finished(group)
         if not ok:
-            lines.append(f"| {scenario} | {method} | {len(group)} | raised | | | | | | | | | |")
+            rows.append([scenario, method, len(group), "raised"] + [""] * 9)
             continue
 
         def med(key):
-            return float(np.median([r.get(key, np.nan) for r in ok]))
-
-        def low(key):
-            values = [r.get(key, np.nan) for r in ok]
-            return f"{np.nanmin(values):.3f}" if not np.all(np.isnan(values)) else "-"
+            return median(r.get(key, np.nan) for r in ok)
 
         def total(key):
             return sum(r.get(key, 0) for r in ok)
 
-        uncertified = sum(not r.get("motion_certified", False) for r in ok)
-        lines.append(f"| {scenario} | {method} | {len(ok)} | {sum(bool(r['success']) for r in ok)}/{len(ok)} | "
-                     f"{med('points_regenerated'):.0f} (+{med('points_spread'):.0f}) | {med('time'):.3f} | "
-                     f"{med('max_step_plan'):.2f} -> {med('max_step_executed'):.2f} | "
-                     f"{low('min_distance_executed')} / {low('motion_min_clearance')} / {low('min_distance_swept')} | "
-                     f"{uncertified} | {total('detours_found')} / {total('detours_failed')} "
-                     f"({total('detour_vias')}, {total('detour_time'):.2f}, {total('detour_extra_length'):.2f}) | "
-                     f"{sum(bool(r.get('halted')) for r in ok)} | {low('clearance_at_move')} | "
-                     f"{low('min_distance_after_move')} |")
-    return "\n".join(lines)
+        rows.append([scenario, method, len(ok), f"{sum(bool(r['success']) for r in ok)}/{len(ok)}",
+                     f"{med('points_regenerated'):.0f} (+{med('points_spread'):.0f})", f"{med('time'):.3f}",
+                     f"{med('max_step_plan'):.2f} -> {med('max_step_executed'):.2f}",
+                     f"{_lowest(ok, 'min_distance_executed')} / {_lowest(ok, 'motion_min_clearance')} / "
+                     f"{_lowest(ok, 'min_distance_swept')}",
+                     sum(not r.get("motion_certified", False) for r in ok),
+                     f"{total('detours_found')} / {total('detours_failed')} ({total('detour_vias')}, "
+                     f"{total('detour_time'):.2f}, {total('detour_extra_length'):.2f})",
+                     sum(bool(r.get("halted")) for r in ok), _lowest(ok, "clearance_at_move"),
+                     _lowest(ok, "min_distance_after_move")])
+    return ["Framework follower (part framework): medians over seeds, except success, the clearances "
+            "(minimum over seeds) and the detour counts (sums over seeds). Clearance at the points: Drake's "
+            "exact distance (refined capsule-box/cylinder pairs); of the motion: certified lower bound over "
+            "every configuration of the executed motion between the points, detours included (sphere model, "
+            "tolerance 1 mm), over the runs whose motion is certified (the others counted); sampled: Drake "
+            "at 4 interior samples per straight piece. Detours: motions between two points whose straight "
+            "joint-space line was not certified, found / not found (vias inserted, search time, extra "
+            "joint-space length summed over seeds).", ""] + markdown_table(
+        ["scenario", "method", "runs", "success", "points regenerated (+ spread)", "regeneration time [s]",
+         "largest joint step plan -> executed [rad]", "min clearance at points / of the motion (certified) / sampled [m]",
+         "motion not certified", "detours found / not found (vias, time [s], extra [rad])", "halted",
+         "clearance of the configuration held when the move is seen, against the new position [m]",
+         "min clearance after it [m]"], rows)
 
 
-def _motion_cell(ok: list[dict]) -> str:
-    """Smallest certified clearance of the executed motion over seeds, and runs not certified."""
-    values = [r.get("motion_min_clearance", np.nan) for r in ok]
+def _esm_row(part, scenario, h1, method, group: list[dict]) -> list:
+    ok = finished(group)
+    if not ok:
+        return [part, scenario, f"{h1:g}", method, "-", "raised"] + [""] * 11
     bad = sum(not r.get("motion_certified", False) for r in ok)
-    cell = f"{np.nanmin(values):.4f}" if not np.all(np.isnan(values)) else "-"
-    return cell + (f" ({bad} not certified)" if bad else "")
+    med = {k: median(values(ok, k)) for k in ("error_before_contact", "error", "final_error", "mu_ratio_before_contact",
+                                              "mu_ratio_steady", "mu_ratio_final", "steps_per_second", "ratio_to_qp")}
+    return [part, scenario, f"{h1:g}", method, ok[0]["budget"],
+            f"{min(r['min_distance'] for r in ok):.4f} (d={ok[0]['threshold']:g})",
+            _lowest(ok, "motion_min_clearance", ".4f") + (f" ({bad} not certified)" if bad else ""),
+            sum(r["threshold_violations"] for r in ok), "ok" if all(r["checks_ok"] for r in ok) else "FAIL",
+            f"{med['error_before_contact']:.1e}", f"{med['error']:.1e}", f"{med['final_error']:.1e}",
+            f"{med['mu_ratio_before_contact']:.4f}", f"{med['mu_ratio_steady']:.4f}", f"{med['mu_ratio_final']:.4f}",
+            f"{med['steps_per_second']:.1f}", f"{med['ratio_to_qp']:.1f}"]
 
 
 def summarize(records: list[dict]) -> str:
     """Table in the spirit of the paper's Fig. 4 numbers, one row per (part, scenario, h1, method)."""
     framework = [r for r in records if r["part"] == "framework"]
-    records = [r for r in records if r["part"] == "esm"]
-    groups: dict[tuple, list[dict]] = {}
-    for r in records:
-        groups.setdefault((r["part"], r["scenario"], r["h1"], r["method"]), []).append(r)
+    esm = group_by([r for r in records if r["part"] == "esm"], "part", "scenario", "h1", "method")
     lines = [
         "Medians over seeds. d = threshold; min dist = exact clearance at the samples (Drake); certified motion "
         "clearance = certified lower bound over the whole executed motion between the samples (obstacles "
@@ -274,31 +279,12 @@ def summarize(records: list[dict]) -> str:
         "samples from 0.5 s until the first active obstacle row; steady = samples after 0.5 s with no "
         "active obstacle row; μ/μ* against multi-start SLSQP with the "
         "flange pinned; steps/s = 1 / median step compute time; ×QP = step time / QP step time "
-        "(same process).",
-        "",
-        "| part | scenario | h1 | method | budget | min dist [m] | certified motion clearance [m] | viol | checks | "
-        "max err before contact [m] | "
-        "steady err [m] | final err [m] | μ/μ* before contact | μ/μ* steady | μ/μ* final | steps/s | ×QP |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for (part, scenario, h1, method), group in groups.items():
-        ok = [r for r in group if r.get("status") == "ok"]
-        if not ok:
-            lines.append(f"| {part} | {scenario} | {h1:g} | {method} | - | raised | | | | | | | | | | | |")
-            continue
-
-        def med(key):
-            return float(np.median([r[key] for r in ok]))
-
-        lines.append(
-            f"| {part} | {scenario} | {h1:g} | {method} | {ok[0]['budget']} | {min(r['min_distance'] for r in ok):.4f} "
-            f"(d={ok[0]['threshold']:g}) | {_motion_cell(ok)} | {sum(r['threshold_violations'] for r in ok)} | "
-            f"{'ok' if all(r['checks_ok'] for r in ok) else 'FAIL'} | {med('error_before_contact'):.1e} | "
-            f"{med('error'):.1e} | {med('final_error'):.1e} | {med('mu_ratio_before_contact'):.4f} | "
-            f"{med('mu_ratio_steady'):.4f} | {med('mu_ratio_final'):.4f} | {med('steps_per_second'):.1f} | "
-            f"{med('ratio_to_qp'):.1f} |")
+        "(same process).", ""] + markdown_table(
+        ["part", "scenario", "h1", "method", "budget", "min dist [m]", "certified motion clearance [m]", "viol",
+         "checks", "max err before contact [m]", "steady err [m]", "final err [m]", "μ/μ* before contact",
+         "μ/μ* steady", "μ/μ* final", "steps/s", "×QP"], [_esm_row(*key, group) for key, group in esm.items()])
     if framework:
-        lines += ["", _framework_table(framework)]
+        lines += [""] + _framework_table(framework)
     return "\n".join(lines)
 
 

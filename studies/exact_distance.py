@@ -31,6 +31,7 @@ import numpy as np
 
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
+from drake_mh.study.report.summary import cpu_and_load, finished, markdown_table
 
 ROBOTS = ("panda (bundled, capsules)", "panda_hand", "ur5")  # then drake_mh.robot.examples (meshes)
 SCENES = ("1 sphere", "10 mixed")  # drake_mh.scene.benchmark.BENCHMARK_SCENES
@@ -114,28 +115,25 @@ def run(case: Case) -> dict:
 
 def summarize(records: list[dict]) -> str:
     """Per robot and scene: µs per call (wall, CPU), ratios to Drake's query, correctness."""
-    ok = [r for r in records if r.get("status") == "ok"]
+    ok = sorted(finished(records), key=lambda r: (ROBOTS.index(r["robot"]), SCENES.index(r["scene"])))
     if not ok:
         return "no finished case"
-    loads = [r["load_average"] for r in ok] + [r["load_start"] for r in ok]
-    lines = [f"CPU: {ok[0]['cpu']}; 1-min load average before/after the timed rounds: "
-             f"{min(loads):.2f}-{max(loads):.2f}; min_distance vs smallest of distances: "
-             f"{max(r['mismatch'] for r in ok):.1e} m at most", "",
-             "| robot | scene | pairs (Drake's) | Drake query [µs] wall / CPU | min_distance [µs] wall / CPU | "
-             "ratio to Drake (CPU) | distances [µs] wall / CPU | ratio to Drake (CPU) | in collision | "
-             "above Drake [m] | Drake's optimism [mm] |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
 
     def us(r, name):
         return r[f"{name} [s]"] * 1e6, r[f"{name} cpu [s]"] * 1e6
 
-    for r in sorted(ok, key=lambda r: (ROBOTS.index(r["robot"]), SCENES.index(r["scene"]))):
+    rows = []
+    for r in ok:
         (dw, dc), (mw, mc), (aw, ac) = (us(r, m) for m in METHODS)
-        lines.append(
-            f"| {r['robot']} | {r['scene']} | {r['pairs']:.0f} ({r['drake_pairs']:.0f}) | {dw:.1f} / {dc:.1f} | "
-            f"{mw:.1f} / {mc:.1f} | {mc / dc:.2f} | {aw:.1f} / {ac:.1f} | {ac / dc:.2f} | {r['colliding']:.0%} | "
-            f"{r['above_drake']:.1e} | {r['drake_optimism'] * 1e3:.2f} |")
-    return "\n".join(lines)
+        rows.append([r["robot"], r["scene"], f"{r['pairs']:.0f} ({r['drake_pairs']:.0f})", f"{dw:.1f} / {dc:.1f}",
+                     f"{mw:.1f} / {mc:.1f}", f"{mc / dc:.2f}", f"{aw:.1f} / {ac:.1f}", f"{ac / dc:.2f}",
+                     f"{r['colliding']:.0%}", f"{r['above_drake']:.1e}", f"{r['drake_optimism'] * 1e3:.2f}"])
+    return "\n".join(
+        [f"{cpu_and_load(ok, loads=('load_average', 'load_start'), digits=2)} (before and after the timed rounds); "
+         f"min_distance vs smallest of distances: {max(r['mismatch'] for r in ok):.1e} m at most", ""]
+        + markdown_table(["robot", "scene", "pairs (Drake's)", "Drake query [µs] wall / CPU",
+                          "min_distance [µs] wall / CPU", "ratio to Drake (CPU)", "distances [µs] wall / CPU",
+                          "ratio to Drake (CPU)", "in collision", "above Drake [m]", "Drake's optimism [mm]"], rows))
 
 
 study = Study(

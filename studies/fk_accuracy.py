@@ -18,6 +18,7 @@ import numpy as np
 
 import drake_mh
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.summary import finished, group_by, markdown_table
 
 TOLERANCE = 1e-9
 CONFIGURATIONS = 2000
@@ -57,27 +58,19 @@ def run(case: Case) -> dict:
 
 def summarize(records: list[dict]) -> str:
     """Per-robot table of the largest differences over all replicates."""
-    lines = [
-        f"Largest |batched - Drake| over all configurations (pass: every difference < {TOLERANCE:g})",
-        "",
-        "| robot | nq | configurations | position [m] | rotation | Jacobian | pass |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    robots: dict[str, list[dict]] = {}
-    for record in records:
-        robots.setdefault(record["robot"], []).append(record)
-    for robot, group in robots.items():
-        ok = [r for r in group if r.get("status") == "ok"]
+    rows = []
+    for robot, group in group_by(records, "robot").items():
+        ok = finished(group)
         if not ok:
-            lines.append(f"| {robot} | - | - | - | - | - | raised |")
+            rows.append([robot, "-", "-", "-", "-", "-", "raised"])
             continue
         passed = len(ok) == len(group) and all(r["success"] for r in ok)
-        lines.append(
-            f"| {robot} | {ok[0]['nq']} | {sum(r['configurations'] for r in ok)} | "
-            f"{max(r['position_error'] for r in ok):.2e} | {max(r['rotation_error'] for r in ok):.2e} | "
-            f"{max(r['jacobian_error'] for r in ok):.2e} | {'yes' if passed else 'NO'} |"
-        )
-    return "\n".join(lines)
+        rows.append([robot, ok[0]["nq"], sum(r["configurations"] for r in ok)]
+                    + [f"{max(r[k] for r in ok):.2e}" for k in ("position_error", "rotation_error", "jacobian_error")]
+                    + ["yes" if passed else "NO"])
+    return "\n".join([f"Largest |batched - Drake| over all configurations (pass: every difference < {TOLERANCE:g})", ""]
+                     + markdown_table(["robot", "nq", "configurations", "position [m]", "rotation", "Jacobian", "pass"],
+                                      rows))
 
 
 study = Study(

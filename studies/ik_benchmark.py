@@ -37,6 +37,7 @@ from drake_mh.ik import IKProblem, solve_ik, verify
 from drake_mh.ik.drake import DrakeIKConfig
 from drake_mh.optim import available_methods
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.summary import finished, group_by, markdown_table, mean, median, p95, ratio, share, values
 
 TARGET_SEED = 20240605
 TRAC_IK_TOL = 1e-5  # [m] and [rad]
@@ -195,83 +196,60 @@ def _grid(quick: bool) -> list[dict]:
 # --- summary ------------------------------------------------------------------------------------
 
 
-def _ok(records, part):
-    return [r for r in records if r.get("part") == part]
-
-
-def _by_method(records) -> dict[str, list[dict]]:
-    out: dict[str, list[dict]] = {}
-    for r in records:
-        out.setdefault(r["method"].split(":", 1)[1], []).append(r)
-    return out
-
-
-def _times_ms(group) -> np.ndarray:
-    return 1e3 * np.array([r["time"] for r in group if r.get("status") == "ok"])
+def _part(records, part) -> dict[str, list[dict]]:
+    """Records of one part grouped by method (the label after ``part:``)."""
+    groups = group_by([r for r in records if r.get("part") == part], "method")
+    return {m.split(":", 1)[1]: g for m, g in groups.items()}
 
 
 def _summary_a(records) -> list[str]:
-    groups = _by_method(_ok(records, "a"))
+    groups = _part(records, "a")
     if not groups:
         return []
-    ref = groups.get("drake_snopt")
-    ref_mean = _times_ms(ref).mean() if ref else np.nan
-    n = max(len(g) for g in groups.values())
-    lines = [f"### (a) TRAC-IK protocol, Panda: 6-D pose at 1e-5, 5 ms timeout, {n} targets", "",
-             "Wall-clock times; the mean includes failures (which run to the timeout). `vs SNOPT` = mean "
-             "time of drake_snopt / mean time of the method, measured in the same run. `CPU` = mean process "
-             "CPU time (what a dedicated core would need: on a loaded machine wall-clock times include "
-             "waiting for a core, and the 5 ms wall-clock timeout cuts solves short).", "",
-             "| method | targets | success % | mean [ms] | median [ms] | p95 [ms] | CPU mean [ms] | vs SNOPT |",
-             "|---|---|---|---|---|---|---|---|"]
+    ref_mean = mean(values(groups.get("drake_snopt", []), "time", 1e3))
+    rows = []
     for method, group in groups.items():
-        t = _times_ms(group)
-        rate = 100 * np.mean([bool(r.get("success")) for r in group])
-        ratio = ref_mean / t.mean() if t.size and np.isfinite(ref_mean) else np.nan
-        cpu = 1e3 * np.mean([r.get("cpu_time", np.nan) for r in group if r.get("status") == "ok"] or [np.nan])
-        lines.append(f"| {method} | {len(group)} | {rate:.2f} | {t.mean():.3f} | {np.median(t):.3f} | "
-                     f"{np.percentile(t, 95):.3f} | {cpu:.3f} | {ratio:.1f}x |")
-    for name, (rate, mean) in PUBLISHED_PANDA.items():
-        lines.append(f"| {name} | 10000 | {rate:.2f} | {mean:.2f} | - | - | - | - |")
-    return lines + [""]
+        t = values(finished(group), "time", 1e3)
+        rows.append([method, len(group), f"{100 * share(group):.2f}", f"{mean(t):.3f}", f"{median(t):.3f}",
+                     f"{p95(t):.3f}", f"{mean(values(finished(group), 'cpu_time', 1e3)):.3f}",
+                     f"{ratio(ref_mean, mean(t)):.1f}x"])
+    rows += [[name, 10000, f"{rate:.2f}", f"{m:.2f}", "-", "-", "-", "-"] for name, (rate, m) in PUBLISHED_PANDA.items()]
+    return [f"### (a) TRAC-IK protocol, Panda: 6-D pose at 1e-5, 5 ms timeout, {max(map(len, groups.values()))} targets",
+            "", "Wall-clock times; the mean includes failures (which run to the timeout). `vs SNOPT` = mean "
+            "time of drake_snopt / mean time of the method, measured in the same run. `CPU` = mean process "
+            "CPU time (what a dedicated core would need: on a loaded machine wall-clock times include "
+            "waiting for a core, and the 5 ms wall-clock timeout cuts solves short).", ""] + markdown_table(
+        ["method", "targets", "success %", "mean [ms]", "median [ms]", "p95 [ms]", "CPU mean [ms]", "vs SNOPT"],
+        rows) + [""]
 
 
 def _summary_b(records) -> list[str]:
-    part = _ok(records, "b")
-    if not part:
-        return []
-    lines = ["### (b) Position-only IK (framework paper, Alg. 1) at equal evaluation budgets", "",
-             "| robot | method | runs | success @1 mm % | median error [m] | p95 error [m] | median nfe |",
-             "|---|---|---|---|---|---|---|"]
+    rows = []
     for robot in ("seed000_6dof", "panda"):
-        for method, group in _by_method([r for r in part if r["robot"] == robot]).items():
-            ok = [r for r in group if r.get("status") == "ok"]
-            err = np.array([r["error"] for r in ok]) if ok else np.array([np.nan])
-            nfe = np.array([r["nfe"] for r in ok]) if ok else np.array([np.nan])
-            rate = 100 * np.mean([bool(r.get("success")) for r in group])
-            lines.append(f"| {robot} | {method} | {len(group)} | {rate:.1f} | {np.median(err):.2e} | "
-                         f"{np.percentile(err, 95):.2e} | {np.median(nfe):.0f} |")
-    return lines + [""]
+        for method, group in _part([r for r in records if r.get("robot") == robot], "b").items():
+            err = values(finished(group), "error")
+            rows.append([robot, method, len(group), f"{100 * share(group):.1f}", f"{median(err):.2e}",
+                         f"{p95(err):.2e}", f"{median(values(finished(group), 'nfe')):.0f}"])
+    if not rows:
+        return []
+    return ["### (b) Position-only IK (framework paper, Alg. 1) at equal evaluation budgets", ""] + markdown_table(
+        ["robot", "method", "runs", "success @1 mm %", "median error [m]", "p95 error [m]", "median nfe"], rows) + [""]
 
 
 def _summary_c(records) -> list[str]:
-    groups = _by_method(_ok(records, "c"))
+    groups = _part(records, "c")
     if not groups:
         return []
-    lines = [f"### (c) Collision-free IK, Panda, sphere + box, clearance {CLEARANCE} m, 1 mm", "",
-             "`false free` counts results reported successful that Drake's exact signed distance says "
-             "collide (must be 0); `clearance violated` those closer than the clearance (must be 0). "
-             "`hybrid_blind` solves the same targets *without* the obstacles (its own report claims success); "
-             "its `success` is re-verified against the obstacles: it shows what an obstacle-blind solver "
-             "would hand over and that verification catches it.", "",
-             "| method | targets | success % | results colliding (any) | false free | clearance violated |",
-             "|---|---|---|---|---|---|"]
-    for method, group in groups.items():
-        ok = [r for r in group if r.get("status") == "ok"]
-        rate = 100 * np.mean([bool(r.get("success")) for r in group])
-        lines.append(f"| {method} | {len(group)} | {rate:.1f} | {sum(r['collides'] for r in ok)} | "
-                     f"{sum(r['false_free'] for r in ok)} | {sum(r['clearance_violated'] for r in ok)} |")
-    return lines + [""]
+    rows = [[method, len(group), f"{100 * share(group):.1f}"]
+            + [sum(r[k] for r in finished(group)) for k in ("collides", "false_free", "clearance_violated")]
+            for method, group in groups.items()]
+    return [f"### (c) Collision-free IK, Panda, sphere + box, clearance {CLEARANCE} m, 1 mm", "",
+            "`false free` counts results reported successful that Drake's exact signed distance says "
+            "collide (must be 0); `clearance violated` those closer than the clearance (must be 0). "
+            "`hybrid_blind` solves the same targets *without* the obstacles (its own report claims success); "
+            "its `success` is re-verified against the obstacles: it shows what an obstacle-blind solver "
+            "would hand over and that verification catches it.", ""] + markdown_table(
+        ["method", "targets", "success %", "results colliding (any)", "false free", "clearance violated"], rows) + [""]
 
 
 def summarize(records: list[dict]) -> str:

@@ -21,6 +21,7 @@ import numpy as np
 import drake_mh
 from drake_mh.ik import IKProblem, solve_ik
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.summary import finished, group_by, markdown_table, mean, median, ratio, share, values
 
 METHODS = ("drake_snopt", "hybrid", "de", "pso")
 TIMEOUT = 0.5  # [s]
@@ -59,21 +60,15 @@ def run(case: Case) -> dict:
 
 def summarize(records: list[dict]) -> str:
     """Per-method success, mean / median time, and the time ratio against Drake SNOPT."""
-    groups: dict[str, list[dict]] = {}
-    for record in records:
-        groups.setdefault(record["method"], []).append(record)
-    mean = {m: np.mean([r["time"] for r in g if r.get("status") == "ok"] or [np.nan]) for m, g in groups.items()}
-    lines = ["Panda, full pose at 1 mm / 0.01 rad, 0.5 s per solve; success verified with Drake. "
-             "`vs SNOPT` = mean time of drake_snopt / mean time of the method (same run).", "",
-             "| method | targets | success % | mean time [ms] | median time [ms] | vs SNOPT |",
-             "|---|---|---|---|---|---|"]
-    for method, group in groups.items():
-        times = np.array([r["time"] for r in group if r.get("status") == "ok"]) * 1e3
-        rate = 100 * np.mean([bool(r.get("success")) for r in group])
-        ratio = mean.get("drake_snopt", np.nan) / mean[method]
-        median = np.median(times) if times.size else np.nan
-        lines.append(f"| {method} | {len(group)} | {rate:.0f} | {1e3 * mean[method]:.2f} | {median:.2f} | {ratio:.1f}x |")
-    return "\n".join(lines)
+    groups = group_by(records, "method")
+    means = {m: mean(values(finished(g), "time")) for m, g in groups.items()}
+    rows = [[m, len(g), f"{100 * share(g):.0f}", f"{1e3 * means[m]:.2f}",
+             f"{median(values(finished(g), 'time', 1e3)):.2f}", f"{ratio(means.get('drake_snopt'), means[m]):.1f}x"]
+            for m, g in groups.items()]
+    return "\n".join(["Panda, full pose at 1 mm / 0.01 rad, 0.5 s per solve; success verified with Drake. "
+                      "`vs SNOPT` = mean time of drake_snopt / mean time of the method (same run).", ""]
+                     + markdown_table(["method", "targets", "success %", "mean time [ms]", "median time [ms]",
+                                       "vs SNOPT"], rows))
 
 
 study = Study(

@@ -42,6 +42,8 @@ import numpy as np
 
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
+from drake_mh.study.report.summary import (cell, cpu_and_load, finished, group_by, markdown_table, median, p95,
+                                           rank_lines, share, values)
 
 TIMEOUT = 10.0
 """[s] per plan (full grid)."""
@@ -208,137 +210,78 @@ def run(case: Case) -> dict:
 # --- summary --------------------------------------------------------------------------------------
 
 
-def _median(values) -> float:
-    values = [v for v in values if v == v]
-    return float(np.median(values)) if values else float("nan")
-
-
-def _p95(values) -> float:
-    values = [v for v in values if v == v]
-    return float(np.percentile(values, 95)) if values else float("nan")
-
-
-def _fmt(x, digits=1) -> str:
-    return "-" if x is None or x != x else f"{x:.{digits}f}"
-
-
 def _problem_table(ok: list[dict]) -> list[str]:
-    lines = ["| robot | set | problems | obstacles (mean) | straight line blocked [%] | start-goal distance, median "
-             "[rad] |", "|---|---|---|---|---|---|"]
-    seen: dict = {}
-    for r in ok:
-        seen.setdefault((r["robot"], r["set"]), {})[r["problem"]] = r
-    for (robot, name), problems in seen.items():
-        rows = list(problems.values())
-        blocked = 100 * np.mean([not r["straight_free"] for r in rows])
-        lines.append(f"| {robot} | {name} | {len(rows)} | {np.mean([r['obstacles'] for r in rows]):.1f} | "
-                     f"{blocked:.0f} | {_median([r['joint_distance'] for r in rows]):.2f} |")
-    return lines
+    rows = []
+    for (robot, name), group in group_by(ok, "robot", "set").items():
+        problems = list({r["problem"]: r for r in group}.values())
+        rows.append([robot, name, len(problems), f"{np.mean([r['obstacles'] for r in problems]):.1f}",
+                     f"{100 * np.mean([not r['straight_free'] for r in problems]):.0f}",
+                     f"{median(r['joint_distance'] for r in problems):.2f}"])
+    return markdown_table(["robot", "set", "problems", "obstacles (mean)", "straight line blocked [%]",
+                           "start-goal distance, median [rad]"], rows)
 
 
-def _jerk_share(wins: list[dict]) -> str:
-    """Share of verified motions within the robot's jerk limits ('-': not recorded, or no limits:
-    the records of runs before ``jerk_limited`` existed reported toppra's in-piece jerk instead)."""
-    known = [r["jerk_limited"] for r in wins if r.get("jerk_limited") is not None]
-    return f"{100 * np.mean(known):.0f}" if known else "-"
+def _by_method(rows: list[dict], methods: list[str]) -> dict[str, list[dict]]:
+    groups = group_by(rows, "method")
+    return {m: groups[m] for m in methods if m in groups}
 
 
 def _method_table(rows: list[dict], methods: list[str]) -> list[str]:
-    lines = ["| method | verified [%] | plan wall median / p95 [ms] | plan CPU median [ms] | path length median "
-             "[rad] | duration median [s] | certified clearance median [mm] | within jerk limits [%] |",
-             "|---|---|---|---|---|---|---|---|"]
-    for method in methods:
-        group = [r for r in rows if r["method"] == method]
-        if not group:
-            continue
+    table = []
+    for method, group in _by_method(rows, methods).items():
         wins = [r for r in group if r["success"]]
-        wall = [r["time"] * 1e3 for r in wins]
-        lines.append(
-            f"| {method} | {100 * len(wins) / len(group):.0f} ({len(wins)}/{len(group)}) | {_fmt(_median(wall), 2)} / "
-            f"{_fmt(_p95(wall), 2)} | {_fmt(_median([r['cpu'] * 1e3 for r in wins]), 2)} | "
-            f"{_fmt(_median([r['path_length'] for r in wins]), 2)} | {_fmt(_median([r['duration'] for r in wins]), 2)} | "
-            f"{_fmt(_median([r['min_clearance'] * 1e3 for r in wins]), 1)} | "
-            f"{_jerk_share(wins)} |")
-    return lines
+        wall = values(wins, "time", 1e3)
+        jerk = [r["jerk_limited"] for r in wins if r.get("jerk_limited") is not None]  # None: no jerk limits
+        table.append([method, f"{100 * len(wins) / len(group):.0f} ({len(wins)}/{len(group)})",
+                      f"{cell(median(wall), '.2f')} / {cell(p95(wall), '.2f')}",
+                      cell(median(values(wins, "cpu", 1e3)), ".2f"), cell(median(values(wins, "path_length")), ".2f"),
+                      cell(median(values(wins, "duration")), ".2f"), cell(median(values(wins, "min_clearance", 1e3)), ".1f"),
+                      f"{100 * np.mean(jerk):.0f}" if jerk else "-"])
+    return markdown_table(["method", "verified [%]", "plan wall median / p95 [ms]", "plan CPU median [ms]",
+                           "path length median [rad]", "duration median [s]", "certified clearance median [mm]",
+                           "within jerk limits [%]"], table)
 
 
 def _split_lines(rows: list[dict], methods: list[str]) -> list[str]:
     """For the planners that report when they found their first certified path (``t_found``):
     the plan's CPU time without the shortcut after it, and the shortcut's, over verified plans."""
     lines = []
-    for method in methods:
-        wins = [r for r in rows if r["method"] == method and r["success"] and r.get("shortcut_cpu") is not None]
+    for method, group in _by_method(rows, methods).items():
+        wins = [r for r in group if r["success"] and r.get("shortcut_cpu") is not None]
         if wins:
             first = [(r["cpu"] - r["shortcut_cpu"]) * 1e3 for r in wins]
             lines.append(f"- `{method}`: to the first certified path (CPU time minus the shortcut) median "
-                         f"{_median(first):.2f} ms, p95 {_p95(first):.2f} ms; the shortcut median "
-                         f"{_median([r['shortcut_cpu'] * 1e3 for r in wins]):.2f} ms")
+                         f"{median(first):.2f} ms, p95 {p95(first):.2f} ms; the shortcut median "
+                         f"{median(values(wins, 'shortcut_cpu', 1e3)):.2f} ms")
     return ["", "Plan and shortcut, where the planner reports both:", ""] + lines if lines else []
 
 
 def _set_table(rows: list[dict], methods: list[str]) -> list[str]:
-    sets = list(dict.fromkeys(r["set"] for r in rows))
-    lines = ["| method | " + " | ".join(sets) + " |", "|---|" + "---|" * len(sets)]
-    for method in methods:
-        cells = []
-        for name in sets:
-            group = [r for r in rows if r["method"] == method and r["set"] == name]
-            cells.append(f"{100 * np.mean([r['success'] for r in group]):.0f}" if group else "-")
-        if any(c != "-" for c in cells):
-            lines.append(f"| {method} | " + " | ".join(cells) + " |")
-    return lines
-
-
-def _ranks(rows: list[dict], methods: list[str], metric: str, label: str) -> list[str]:
-    """Friedman ranks and Wilcoxon-Holm against the best (the report's own statistics)."""
-    from pathlib import Path
-
-    from drake_mh.study.report.data import ReportData
-    from drake_mh.study.report.stats import rank_stats
-
-    present = [m for m in methods if any(r["method"] == m for r in rows)]
-    data = ReportData(folder=Path("."), meta={}, records=rows, fields=Fields(error=metric), methods=present,
-                      instance_keys=("robot", "set", "problem", "rep"))
-    stats = rank_stats(data, metric)
-    if stats is None:
-        return [f"{label}: needs two methods and one problem where every method ran."]
-    friedman = (f"Friedman chi2 = {stats.friedman_statistic:.1f}, p = {stats.friedman_p:.1e}"
-                if stats.friedman_statistic == stats.friedman_statistic else "Friedman: needs 3 methods and 2 blocks")
-    tests = {t.method: t for t in stats.pairwise}
-    lines = [f"{label}: {stats.n_blocks} blocks (robot x set x problem x replicate), a failure ranks last; {friedman}; "
-             f"Wilcoxon signed-rank of {stats.best} against each, Holm-corrected.", "",
-             f"| method | mean rank | {stats.best} wins/losses/ties | p (Holm) |", "|---|---|---|---|"]
-    for method, rank in zip(stats.methods, stats.average_ranks):
-        t = tests.get(method)
-        lines.append(f"| {method} | {rank:.2f} | " + ("(best) | |" if t is None else
-                                                     f"{t.wins}/{t.losses}/{t.ties} | {t.p_holm:.1e} |"))
-    return lines
+    sets = list(group_by(rows, "set"))
+    table = [[method] + [f"{100 * share(g):.0f}" if (g := [r for r in group if r["set"] == name]) else "-"
+                         for name in sets] for method, group in _by_method(rows, methods).items()]
+    return markdown_table(["method"] + sets, table)
 
 
 def summarize(records: list[dict]) -> str:
-    ok = [r for r in records if r.get("status") == "ok"]
+    ok = finished(records)
     if not ok:
         return "no finished case"
-    methods = list(dict.fromkeys(r["method"] for r in ok))
-    loads = [r["load_average"] for r in ok if r.get("load_average") == r.get("load_average")]
-    timeouts = sorted({r["timeout"] for r in ok})
-    lines = [f"CPU: {ok[0]['cpu_model']} ({os.cpu_count()} logical CPUs); 1-minute load average "
-             f"{min(loads, default=float('nan')):.2f}-{max(loads, default=float('nan')):.2f} during the run; "
-             f"{', '.join(f'{t:g}' for t in timeouts)} s per plan. Success = verified: the whole motion certified "
-             "collision-free (self-collision included) and retimed under the robot's limits; times are planning "
-             "only (no goal IK, no verification), over the verified plans.", "", "### Problems", ""]
+    methods = list(group_by(ok, "method"))
+    timeouts = ", ".join(f"{t:g}" for t in sorted({r["timeout"] for r in ok}))
+    lines = [f"{cpu_and_load(ok, cpu='cpu_model', digits=2)}; {timeouts} s per plan. Success = verified: the whole "
+             "motion certified collision-free (self-collision included) and retimed under the robot's limits; times "
+             "are planning only (no goal IK, no verification), over the verified plans.", "", "### Problems", ""]
     lines += _problem_table(ok)
-    for robot in dict.fromkeys(r["robot"] for r in ok):
-        rows = [r for r in ok if r["robot"] == robot]
+    for robot, rows in group_by(ok, "robot").items():
         lines += ["", f"### {robot}: all sets", ""] + _method_table(rows, methods) + _split_lines(rows, methods)
         lines += ["", f"Verified [%] per set ({robot}):", ""] + _set_table(rows, methods)
     if len(methods) > 1:
-        lines += ["", "### Ranks", ""]
-        lines += _ranks(ok, methods, "error", "Time to a verified motion") + [""]
-        lines += _ranks(ok, methods, "path_length_verified", "Path length of a verified motion")
-    lines += ["", "### Anchors (not measured in this run)", "",
-              "| planner | problems | solved [%] | plan time [ms] | note |", "|---|---|---|---|---|"]
-    lines += [f"| {a} | {b} | {c} | {d} | {e} |" for a, b, c, d, e in ANCHORS]
+        blocks = ("robot", "set", "problem", "rep")
+        lines += ["", "### Ranks", ""] + rank_lines(ok, methods, "error", blocks, "Time to a verified motion") + [""]
+        lines += rank_lines(ok, methods, "path_length_verified", blocks, "Path length of a verified motion")
+    lines += ["", "### Anchors (not measured in this run)", ""]
+    lines += markdown_table(["planner", "problems", "solved [%]", "plan time [ms]", "note"], ANCHORS)
     missing = _unavailable()
     if missing:
         lines += ["", f"Unavailable here (optional dependency missing, not registered): {', '.join(missing)}."]

@@ -32,6 +32,8 @@ import numpy as np
 from drake_mh.optim import available_methods, get_method, minimize
 from drake_mh.optim.testfunctions import cec2017, official_cec2017_data
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.stats import holm
+from drake_mh.study.report.summary import group_by, markdown_table, median, median_iqr, values
 
 FUNCTIONS = [1, 3, 4, 5, 9, 10]
 QUICK_FUNCTIONS = [4, 5]
@@ -109,23 +111,6 @@ def _ok(records):
     return [r for r in records if r.get("status", "ok") == "ok" and r.get("error") is not None]
 
 
-def _median_iqr(values) -> str:
-    v = np.asarray(values, dtype=float)
-    q1, med, q3 = np.percentile(v, [25, 50, 75])
-    return f"{med:.2e} [{q1:.1e}, {q3:.1e}]"
-
-
-def _holm(p: np.ndarray) -> np.ndarray:
-    order = np.argsort(p)
-    m = len(p)
-    adj = np.empty(m)
-    running = 0.0
-    for k, i in enumerate(order):
-        running = max(running, min(1.0, (m - k) * p[i]))
-        adj[i] = running
-    return adj
-
-
 def error_matrix(records, dim: int, shift: str):
     """Errors as a (blocks, methods) matrix; blocks = (function, rep) with all methods present."""
     methods = [m for m in available_methods() if any(r["method"] == m for r in records)]
@@ -139,14 +124,16 @@ def error_matrix(records, dim: int, shift: str):
 
 
 def ranking_table(records, dim: int) -> list[str]:
-    """Friedman mean ranks and Wilcoxon-Holm against the best method (shifted functions)."""
+    """Friedman mean ranks and Wilcoxon-Holm against the best method (shifted functions).
+
+    Wilcoxon's ``zero_method="zsplit"`` keeps the blocks where two methods tie (both reach the
+    CEC floor of 0), which are frequent here."""
     from scipy import stats
 
     E, methods, blocks = error_matrix(records, dim, "shifted")
     if len(blocks) < 2 or len(methods) < 2:
         return [f"(D = {dim}: not enough complete blocks for rank statistics)"]
-    R = stats.rankdata(E, axis=1)
-    mean_rank = R.mean(axis=0)
+    mean_rank = stats.rankdata(E, axis=1).mean(axis=0)
     try:
         chi2, p_f = stats.friedmanchisquare(*E.T)
     except ValueError:
@@ -156,99 +143,93 @@ def ranking_table(records, dim: int) -> list[str]:
     for j in range(len(methods)):
         if j != best and np.any(E[:, j] != E[:, best]):
             p[j] = stats.wilcoxon(E[:, j], E[:, best], zero_method="zsplit").pvalue
-    p_holm = _holm(np.delete(p, best))
-    p_adj = np.insert(p_holm, best, np.nan)
-    lines = [f"D = {dim}, shifted: Friedman chi2 = {chi2:.1f}, p = {p_f:.1e} over {len(blocks)} blocks "
-             f"(function x replicate); Wilcoxon signed-rank vs best ({methods[best]}), Holm-corrected",
-             "", "| method | mean rank | p (Holm) vs best |", "|---|---|---|"]
-    for j in np.argsort(mean_rank):
-        tag = "best" if j == best else f"{p_adj[j]:.1e}" + (" (n.s.)" if p_adj[j] > 0.05 else "")
-        lines.append(f"| {methods[j]} | {mean_rank[j]:.2f} | {tag} |")
-    return lines
+    p_adj = np.insert(holm(np.delete(p, best)), best, np.nan)
+    rows = [[methods[j], f"{mean_rank[j]:.2f}",
+             "best" if j == best else f"{p_adj[j]:.1e}" + (" (n.s.)" if p_adj[j] > 0.05 else "")]
+            for j in np.argsort(mean_rank)]
+    return [f"D = {dim}, shifted: Friedman chi2 = {chi2:.1f}, p = {p_f:.1e} over {len(blocks)} blocks "
+            f"(function x replicate); Wilcoxon signed-rank vs best ({methods[best]}), Holm-corrected",
+            ""] + markdown_table(["method", "mean rank", "p (Holm) vs best"], rows)
 
 
-def summarize(records: list[dict]) -> str:
-    """Per-function tables, ranks, convergence milestones, centre bias and overhead."""
+def _errors(cells: dict, method: str, dim: int, shift: str, function: int) -> list[float]:
+    return [r["error"] for r in cells.get((method, dim, shift, function), [])]
+
+
+def _geomean(x) -> float:
+    return math.exp(np.mean(np.log(x)))
+
+
+def _dimension_tables(recs, cells, dim, methods, functions) -> list[str]:
+    """Error tables (shifted and unshifted), ranks, convergence milestones, centre bias and the
+    in-run overhead at one dimension."""
+    out: list[str] = []
+    for shift in ("shifted", "unshifted"):
+        out += ["", f"### Error f - f*, median [IQR], D = {dim}, {shift}", ""] + markdown_table(
+            ["method"] + [f"F{k}" for k in functions],
+            [[m] + [median_iqr(_errors(cells, m, dim, shift, k), ".2e", ".1e") for k in functions] for m in methods])
+    out += ["", "### Ranks", ""] + ranking_table(recs, dim)
+    rows = []
+    for m in methods:  # milestones: median error at fractions of the budget, geometric mean over functions
+        row = [m]
+        for q in MILESTONES:
+            key = f"error_at_{int(100 * q)}pct"
+            per_f = [max(median(values(cells.get((m, dim, "shifted", k), []), key)), 0.0) for k in functions]
+            per_f = [v for v in per_f if v == v]
+            row.append(f"{_geomean(np.asarray(per_f) + 1e-12):.2e}" if per_f else "-")
+        rows.append(row)
+    out += ["", f"### Convergence, D = {dim}, shifted: median over functions x replicates of the "
+            "best-so-far error at a fraction of the budget (geometric mean over functions)", ""]
+    out += markdown_table(["method"] + [f"{int(100 * q)} %" for q in MILESTONES], rows)
+    rows = []
+    for m in methods:  # centre bias (Kudela 2022): shifted / unshifted median error
+        ratios = [max(median(s), SUCCESS_ERROR) / max(median(u), SUCCESS_ERROR) for k in functions
+                  if (s := _errors(cells, m, dim, "shifted", k)) and (u := _errors(cells, m, dim, "unshifted", k))]
+        if ratios:
+            rows.append([m, f"{_geomean(ratios):.2e}", ", ".join(f"F{k}: {x:.1e}" for k, x in zip(functions, ratios))])
+    out += ["", f"### Centre bias, D = {dim}: ratio of median errors shifted / unshifted "
+            "(geometric mean over functions; errors floored at 1e-8). >> 1: the method is drawn "
+            "to the origin (box centre)", ""] + markdown_table(["method", "ratio", "per function"], rows)
+    rows = [[m, g[0]["pop_size"], f"{median(values(g, 'overhead_us')):.1f}"]
+            for m in methods if (g := [r for r in recs if r["method"] == m and r["dim"] == dim and "overhead_us" in r])]
+    out += ["", f"### Optimizer overhead during the runs, D = {dim} (us per generation of P "
+            "evaluations, objective excluded; median over cases; runs may share cores)", ""]
+    return out + markdown_table(["method", "P", "overhead [us]"], rows)
+
+
+def _overhead_now(methods) -> list[str]:
+    """The stated target, P = 50, D = 7, measured now in this process, serially; each row also
+    times the plain-numpy reference generation just before the method, so the ratio is measured
+    under the same load (absolute microseconds drift with the machine)."""
     from drake_mh.optim.overhead import measure_overhead, measure_reference_us
 
-    recs = _ok(records)
-    data = sorted({r.get("cec_data", "?") for r in recs})
-    out: list[str] = [f"CEC 2017 shift/rotation data: {', '.join(data)} (official = organisers' files via "
-                      "the 'bench' extra; generated = seeded stand-ins)"]
-    dims = sorted({r["dim"] for r in recs})
-    methods = [m for m in available_methods() if any(r["method"] == m for r in recs)]
-    functions = sorted({r["function"] for r in recs})
-    for dim in dims:
-        for shift in ("shifted", "unshifted"):
-            out += ["", f"### Error f - f*, median [IQR], D = {dim}, {shift}", "",
-                    "| method | " + " | ".join(f"F{k}" for k in functions) + " |",
-                    "|---" * (len(functions) + 1) + "|"]
-            for m in methods:
-                cells = []
-                for k in functions:
-                    v = [r["error"] for r in recs if (r["method"], r["dim"], r["shift"], r["function"]) == (m, dim, shift, k)]
-                    cells.append(_median_iqr(v) if v else "-")
-                out.append(f"| {m} | " + " | ".join(cells) + " |")
-        out += ["", "### Ranks", ""] + ranking_table(recs, dim)
-        # convergence milestones: median error at fractions of the budget (shifted)
-        out += ["", f"### Convergence, D = {dim}, shifted: median over functions x replicates of the "
-                "best-so-far error at a fraction of the budget (geometric mean over functions)", "",
-                "| method | " + " | ".join(f"{int(100 * q)} %" for q in MILESTONES) + " |",
-                "|---" * (len(MILESTONES) + 1) + "|"]
-        for m in methods:
-            row = []
-            for q in MILESTONES:
-                key = f"error_at_{int(100 * q)}pct"
-                per_f = []
-                for k in functions:
-                    vals = [r[key] for r in recs if (r["method"], r["dim"], r["shift"], r["function"])
-                            == (m, dim, "shifted", k) and r.get(key) is not None]
-                    if vals:
-                        per_f.append(max(float(np.median(vals)), 0.0))
-                row.append(f"{math.exp(np.mean(np.log(np.asarray(per_f) + 1e-12))):.2e}" if per_f else "-")
-            out.append(f"| {m} | " + " | ".join(row) + " |")
-        # centre bias (Kudela 2022): shifted / unshifted median error, geometric mean over functions
-        out += ["", f"### Centre bias, D = {dim}: ratio of median errors shifted / unshifted "
-                "(geometric mean over functions; errors floored at 1e-8). >> 1: the method is drawn "
-                "to the origin (box centre)", "", "| method | ratio | per function |", "|---|---|---|"]
-        for m in methods:
-            ratios = []
-            for k in functions:
-                s = [r["error"] for r in recs if (r["method"], r["dim"], r["shift"], r["function"]) == (m, dim, "shifted", k)]
-                u = [r["error"] for r in recs if (r["method"], r["dim"], r["shift"], r["function"]) == (m, dim, "unshifted", k)]
-                if s and u:
-                    ratios.append((max(np.median(s), SUCCESS_ERROR)) / max(np.median(u), SUCCESS_ERROR))
-            if ratios:
-                g = math.exp(np.mean(np.log(ratios)))
-                out.append(f"| {m} | {g:.2e} | " + ", ".join(f"F{k}: {x:.1e}" for k, x in zip(functions, ratios)) + " |")
-        # in-run overhead at the benchmark's own P and D
-        out += ["", f"### Optimizer overhead during the runs, D = {dim} (us per generation of P "
-                "evaluations, objective excluded; median over cases; runs may share cores)", "",
-                "| method | P | overhead [us] |", "|---|---|---|"]
-        for m in methods:
-            v = [r["overhead_us"] for r in recs if r["method"] == m and r["dim"] == dim]
-            if v:
-                pop = next(r["pop_size"] for r in recs if r["method"] == m and r["dim"] == dim)
-                out.append(f"| {m} | {pop} | {np.median(v):.1f} |")
-    # the stated target: P = 50, D = 7, measured now in this process, serially; each row also
-    # times the plain-numpy reference generation just before the method, so the ratio is
-    # measured under the same load (absolute microseconds drift with the machine)
     rows, refs = [], []
     for m in methods:
         ref = measure_reference_us(pop_size=50, dim=7)
         us = measure_overhead(m, pop_size=50, dim=7, generations=30 if m == "cmaes" else 200)
         refs.append(ref)
-        rows.append(f"| {m} | {us:.1f} | {us / ref:.2f} | {'yes' if us <= OVERHEAD_TARGET_US else 'no'} |")
-    ref_text = f"{np.median(refs):.1f} us (median over the rows)" if refs else "-"
-    out += ["", f"### Overhead per generation at P = 50, D = 7 (target <= {OVERHEAD_TARGET_US:g} us; "
+        rows.append([m, f"{us:.1f}", f"{us / ref:.2f}", "yes" if us <= OVERHEAD_TARGET_US else "no"])
+    ref_text = f"{median(refs):.1f} us (median over the rows)" if refs else "-"
+    return ["", f"### Overhead per generation at P = 50, D = 7 (target <= {OVERHEAD_TARGET_US:g} us; "
             "measured serially while summarizing, median of 3 runs; CMA-ES is pycma)", "",
             "Reference = one plain-numpy generation (draw, scale and clip a (P, D) population, "
             "argmin of a (P,) vector; `drake_mh.optim.overhead.measure_reference_us`), timed just "
             f"before each method with the same protocol: {ref_text}. The ratio travels between "
-            "machines better than the microseconds.", "",
-            "| method | overhead [us] | overhead / reference | target met |", "|---|---|---|---|"]
-    out += rows
-    text = "\n".join(out).strip()
+            "machines better than the microseconds.", ""] + markdown_table(
+        ["method", "overhead [us]", "overhead / reference", "target met"], rows)
+
+
+def summarize(records: list[dict]) -> str:
+    """Per-function tables, ranks, convergence milestones, centre bias and overhead."""
+    recs = _ok(records)
+    cells = group_by(recs, "method", "dim", "shift", "function")
+    methods = [m for m in available_methods() if any(r["method"] == m for r in recs)]
+    functions = sorted({r["function"] for r in recs})
+    out = [f"CEC 2017 shift/rotation data: {', '.join(sorted({r.get('cec_data', '?') for r in recs}))} (official = "
+           "organisers' files via the 'bench' extra; generated = seeded stand-ins)"]
+    for dim in sorted({r["dim"] for r in recs}):
+        out += _dimension_tables(recs, cells, dim, methods, functions)
+    text = "\n".join(out + _overhead_now(methods)).strip()
     print(text)
     return text
 

@@ -1,4 +1,4 @@
-"""drake_mh's optimizers against mealpy and NiaPy on the CEC 2017 functions, same run (issue 17).
+"""drake_mh's optimizers against mealpy and NiaPy on the CEC 2017 functions, same run.
 
 Grid (full): CEC 2017 F1, F3, F4, F5 (as ``studies/optimizer_benchmark.py``, the
 same shift/rotation data), D = 10, shifted, 10 replicates, budget 10 000 D, box [-100, 100]^D.
@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import importlib.util
 import math
-import os
 import time
 
 import numpy as np
@@ -50,7 +49,8 @@ import numpy as np
 from drake_mh.optim import get_method, minimize
 from drake_mh.optim.testfunctions import cec2017
 from drake_mh.study import Case, Fields, Study
-from drake_mh.study.machine import cpu_model, load_average
+from drake_mh.study.machine import load_average
+from drake_mh.study.report.summary import cell, cpu_and_load, finished, group_by, markdown_table, mean, median, values
 
 SUCCESS_ERROR = 1e-8          # CEC 2017: errors at or below 1e-8 are reported as 0 (as optimizer_benchmark)
 
@@ -285,31 +285,84 @@ def _verdict(test: dict) -> str:
     return f"{'**better**' if test['A'] > 0.5 else 'worse'} ({test['p_holm']:.1e}, {effect})"
 
 
+def _time_ratios(rows: list[dict], default: dict, ours: bool) -> list[str]:
+    """Median over the same (function, replicate) of this entry's wall and CPU time over our
+    default entry's ("1" for the default itself)."""
+    if ours:
+        return ["1", "1"]
+    pairs = [(r, default[key]) for r in rows if (key := (r["algorithm"], r["dim"], r["function"], r["rep"])) in default]
+    cells = []
+    for field in ("time", "cpu_time"):
+        x = median([r[field] / base[field] for r, base in pairs if base[field] > 0])
+        cells.append(cell(x, f".{0 if x >= 10 else 2}f", "-") + ("x" if x == x else ""))
+    return cells
+
+
+def _table(ok: list[dict], functions: list[int]) -> list[str]:
+    default = {(r["algorithm"], r["dim"], r["function"], r["rep"]): r for r in ok
+               if r["library"] == "drake_mh" and r["method"] == r["algorithm"]}
+    groups = group_by(ok, "algorithm", "library", "method")
+    rows = []
+    for key in [(a, lib, m) for a in ALGORITHMS for lib, m in _entries(a) if (a, lib, m) in groups]:
+        entry = groups[key]
+        by_function = group_by(entry, "function")
+        rows.append([key[0], _label(entry[0])]
+                    + [f"{median(values(g, 'error')):.2e} / {median(values(g, 'time', 1e3)):.0f} ms"
+                       if (g := by_function.get(k)) else "-" for k in functions]
+                    + [f"{median(values(entry, 'nfe')):.0f}",
+                       f"{1e6 * median(r['time'] / max(r['nfe'], 1) for r in entry):.1f}",
+                       f"{np.sum([r['cpu_time'] for r in entry]) / np.sum([r['time'] for r in entry]):.2f}"]
+                    + _time_ratios(entry, default, key[2] == key[0] and key[1] == "drake_mh"))
+    return markdown_table(["algorithm", "library"] + [f"F{k}" for k in functions]
+                          + ["nfe (median)", "us / evaluation", "CPU / wall", "wall vs ours", "CPU vs ours"], rows)
+
+
+def _tests_table(tests: list[dict], functions: list[int], dims: list[int]) -> list[str]:
+    def count(key, better):
+        return sum(t[key] <= SIGNIFICANCE and (t["A"] > 0.5) == better for t in tests)
+
+    n_min = min(min(t["n_ours"], t["n_peer"]) for t in tests)
+    rows = []
+    for algorithm in ALGORITHMS:
+        for ours, peer in dict.fromkeys((t["ours"], t["peer"]) for t in tests if t["algorithm"] == algorithm):
+            for dim in dims:
+                found = {t["function"]: t for t in tests if (t["ours"], t["peer"], t["dim"]) == (ours, peer, dim)}
+                rows.append([f"`{ours}`" + (f" (D = {dim})" if len(dims) > 1 else ""), peer]
+                            + [_verdict(found[k]) if k in found else "-" for k in functions])
+    return ["", "Final error, ours against each peer of the algorithm, per function and D: Wilcoxon rank-sum "
+            "test (two-sided; runs are independent, nothing pairs them), Holm-corrected over the "
+            f"{len(tests) // max(len(functions) * len(dims), 1)} tests of the same function and D (one column), "
+            f"level {SIGNIFICANCE}. Cell: **better** / worse (ours has the lower / higher errors) or n.s., "
+            "then the Holm p and Vargha-Delaney A = P(ours < peer) + P(tie) / 2 (1: ours below every peer "
+            f"run, 0: above every one). Ours significantly better in {count('p_holm', True)}, worse in "
+            f"{count('p_holm', False)} of {len(tests)} (Holm over all {len(tests)} tests at once: "
+            f"{count('p_holm_all', True)} / {count('p_holm_all', False)}). With {n_min} runs a side the "
+            f"smallest possible two-sided p is {2 / math.comb(2 * n_min, n_min):.1e}.", ""] + markdown_table(
+        ["ours", "peer"] + [f"F{k}" for k in functions], rows)
+
+
 def summarize(records: list[dict]) -> str:
     """Median error and time per cell, wall and CPU time ratios theirs / ours on the same cases,
     and rank-sum tests (Holm) of our entries against the peers per function."""
-    ok = [r for r in records if r.get("status") == "ok"]
+    ok = finished(records)
     if not ok:
         return ""
     cells = {(r["function"], r["dim"], r["method"]) for r in ok}
-    per_rep = {rep: {(r["function"], r["dim"], r["method"]) for r in ok if r["rep"] == rep}
-               for rep in {r["rep"] for r in ok}}
+    per_rep = {rep: {(r["function"], r["dim"], r["method"]) for r in g} for rep, g in group_by(ok, "rep").items()}
     partial = sorted(rep for rep, seen in per_rep.items() if seen != cells)
     if len(partial) < len(per_rep):      # a stopped run (--first-by rep): only complete replicates
         ok = [r for r in ok if r["rep"] not in partial]
-    loads = np.array([r["load"] for r in ok], dtype=float)
     functions = sorted({r["function"] for r in ok})
     dims = sorted({r["dim"] for r in ok})
     reps = len({r["rep"] for r in ok})
     lines = [f"### drake_mh vs mealpy / NiaPy: CEC 2017, shifted, D = {', '.join(map(str, dims))}, "
              f"{reps} replicate(s)", "",
-             f"CPU: {cpu_model()} ({os.cpu_count()} logical CPUs); 1-minute load average during the run "
-             f"{np.nanmin(loads):.2f}-{np.nanmax(loads):.2f} (mean {np.nanmean(loads):.2f}). Budget "
-             f"{ok[0]['budget']} evaluations counted by our wrapper (a run stops at the budget or at error "
-             "<= 1e-8, reported as 0). Cells: median error f - f* / median wall time per run. `wall vs ours`, "
-             "`CPU vs ours` = median over the cases of (its wall / CPU time / that of our default entry of the "
-             "algorithm) on the same function and replicate (a run that reaches the target early is shorter: "
-             "`us / evaluation` = median wall time per counted evaluation, objective included).", ""]
+             f"{cpu_and_load(ok, cpu='case_cpu_model', loads=('load',), digits=2)} (mean "
+             f"{mean(values(ok, 'load')):.2f}). Budget {ok[0]['budget']} evaluations counted by our wrapper (a run "
+             "stops at the budget or at error <= 1e-8, reported as 0). Cells: median error f - f* / median wall time "
+             "per run. `wall vs ours`, `CPU vs ours` = median over the cases of (its wall / CPU time / that of our "
+             "default entry of the algorithm) on the same function and replicate (a run that reaches the target "
+             "early is shorter: `us / evaluation` = median wall time per counted evaluation, objective included).", ""]
     if partial and reps < len(per_rep):
         lines += [f"Left out: replicate(s) {', '.join(map(str, partial))}, not complete (the run was stopped).", ""]
     missing = [lib for lib in LIBRARIES if not installed(lib)]
@@ -319,57 +372,10 @@ def summarize(records: list[dict]) -> str:
     over = sorted({r["method"] for r in ok if r.get("over_budget")})
     if over:
         lines += [f"Asked for more than the budget (cut by the wrapper): {', '.join(over)}.", ""]
-    lines += ["| algorithm | library | " + " | ".join(f"F{k}" for k in functions) + " | nfe (median) | "
-              "us / evaluation | CPU / wall | wall vs ours | CPU vs ours |", "|---" * (len(functions) + 7) + "|"]
-    default = {(r["algorithm"], r["dim"], r["function"], r["rep"]): r for r in ok
-               if r["library"] == "drake_mh" and r["method"] == r["algorithm"]}
-    for algorithm in ALGORITHMS:
-        for library, method in _entries(algorithm):
-            rows = [r for r in ok if (r["algorithm"], r["library"], r["method"]) == (algorithm, library, method)]
-            if not rows:
-                continue
-            cells = []
-            for k in functions:
-                cell = [r for r in rows if r["function"] == k]
-                cells.append(f"{np.median([r['error'] for r in cell]):.2e} / "
-                             f"{1e3 * np.median([r['time'] for r in cell]):.0f} ms" if cell else "-")
-            pairs = [(r, default[key]) for r in rows
-                     if (key := (algorithm, r["dim"], r["function"], r["rep"])) in default]
-            ratios = []
-            for field in ("time", "cpu_time"):
-                values = [r[field] / base[field] for r, base in pairs if base[field] > 0]
-                ratios.append("1" if method == algorithm and library == "drake_mh" else
-                              f"{np.median(values):.{0 if np.median(values) >= 10 else 2}f}x" if values else "-")
-            cpu = np.sum([r["cpu_time"] for r in rows]) / np.sum([r["time"] for r in rows])
-            lines.append(f"| {algorithm} | {_label(rows[0])} | " + " | ".join(cells) +
-                         f" | {np.median([r['nfe'] for r in rows]):.0f} | "
-                         f"{1e6 * np.median([r['time'] / max(r['nfe'], 1) for r in rows]):.1f} | {cpu:.2f} | "
-                         f"{ratios[0]} | {ratios[1]} |")
+    lines += _table(ok, functions)
     tests = significance(ok)
     if tests:
-        def count(key, better):
-            return sum(t[key] <= SIGNIFICANCE and (t["A"] > 0.5) == better for t in tests)
-
-        n_min = min(min(t["n_ours"], t["n_peer"]) for t in tests)
-        lines += ["", "Final error, ours against each peer of the algorithm, per function and D: Wilcoxon rank-sum "
-                  "test (two-sided; runs are independent, nothing pairs them), Holm-corrected over the "
-                  f"{len(tests) // max(len(functions) * len(dims), 1)} tests of the same function and D (one column), "
-                  f"level {SIGNIFICANCE}. Cell: **better** / worse (ours has the lower / higher errors) or n.s., "
-                  "then the Holm p and Vargha-Delaney A = P(ours < peer) + P(tie) / 2 (1: ours below every peer "
-                  f"run, 0: above every one). Ours significantly better in {count('p_holm', True)}, worse in "
-                  f"{count('p_holm', False)} of {len(tests)} (Holm over all {len(tests)} tests at once: "
-                  f"{count('p_holm_all', True)} / {count('p_holm_all', False)}). With {n_min} runs a side the "
-                  f"smallest possible two-sided p is {2 / math.comb(2 * n_min, n_min):.1e}.", "",
-                  "| ours | peer | " + " | ".join(f"F{k}" for k in functions) + " |",
-                  "|---" * (len(functions) + 2) + "|"]
-        for algorithm in ALGORITHMS:
-            for ours, peer in dict.fromkeys((t["ours"], t["peer"]) for t in tests if t["algorithm"] == algorithm):
-                for dim in dims:
-                    cell = {t["function"]: t for t in tests
-                            if (t["ours"], t["peer"], t["dim"]) == (ours, peer, dim)}
-                    suffix = f" (D = {dim})" if len(dims) > 1 else ""
-                    lines.append(f"| `{ours}`{suffix} | {peer} | " +
-                                 " | ".join(_verdict(cell[k]) if k in cell else "-" for k in functions) + " |")
+        lines += _tests_table(tests, functions, dims)
     text = "\n".join(lines)
     print(text)
     return text

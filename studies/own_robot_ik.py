@@ -19,6 +19,7 @@ import numpy as np
 
 from drake_mh.robot.examples import load_example_arm
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.summary import finished, group_by, markdown_table, median, values
 
 ROBOTS = ("panda_hand", "ur5", "xarm7", "kinova")  # drake_mh.robot.examples
 METHODS = ("hybrid", "drake_snopt")
@@ -65,23 +66,19 @@ def run(case: Case) -> dict:
 
 
 def summarize(records: list[dict]) -> str:
-    """Success rate and mean time per robot and method."""
-    ok = [r for r in records if r.get("status") == "ok"]
-    lines = [f"Full-pose IK, {TIMEOUT * 1e3:g} ms timeout, tolerance {TOLERANCE:g} m / rad (TRAC-IK protocol)",
-             "", "| robot | nq | method | targets | success | mean time [ms] | median time [ms] |",
-             "|---|---|---|---|---|---|---|"]
-    for name in ROBOTS:
-        for method in METHODS:
-            group = [r for r in ok if r["robot"] == name and r["method"] == method]
-            if not group:
-                continue
-            n = sum(r["targets"] for r in group)
-            rate = sum(r["success"] * r["targets"] for r in group) / n
-            mean = sum(r["time"] * r["targets"] for r in group) / n
-            median = float(np.median([r["median_time"] for r in group]))
-            lines.append(f"| {name} | {group[0]['nq']} | {method} | {n} | {100 * rate:.1f} % | "
-                         f"{1e3 * mean:.2f} | {1e3 * median:.2f} |")
-    return "\n".join(lines)
+    """Success rate and mean time per robot and method (each case solves a batch of targets)."""
+    groups = group_by(finished(records), "robot", "method")
+    rows = []
+    for key in [(name, method) for name in ROBOTS for method in METHODS if (name, method) in groups]:
+        group = groups[key]
+        n = sum(r["targets"] for r in group)
+        rate = sum(r["success"] * r["targets"] for r in group) / n
+        mean_time = sum(r["time"] * r["targets"] for r in group) / n
+        rows.append([key[0], group[0]["nq"], key[1], n, f"{100 * rate:.1f} %", f"{1e3 * mean_time:.2f}",
+                     f"{1e3 * median(values(group, 'median_time')):.2f}"])
+    return "\n".join([f"Full-pose IK, {TIMEOUT * 1e3:g} ms timeout, tolerance {TOLERANCE:g} m / rad (TRAC-IK protocol)",
+                      ""] + markdown_table(["robot", "nq", "method", "targets", "success", "mean time [ms]",
+                                            "median time [ms]"], rows))
 
 
 study = Study(

@@ -10,7 +10,7 @@ into the shelf, then rounded to 1e-4 rad and written below). Every method plans 
 * ``straight`` — the baseline;
 * ``drake_kto`` — Drake's ``KinematicTrajectoryOptimization`` + SNOPT from the straight line
   (margin: the sphere model's bound); ``drake_kto margin 0`` asks Drake for the problem's
-  clearance only (the issue's setting); ``drake_kto_warm`` from the ``rrt_connect`` path;
+  clearance only; ``drake_kto_warm`` from the ``rrt_connect`` path;
 * ``ompl_rrtconnect`` / ``ompl_bitstar`` — OMPL 2.0.1 with our checker (when installed: the
   ``peers`` extra); ``rrt_connect`` — ours, for reference.
 
@@ -31,6 +31,7 @@ import numpy as np
 
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
+from drake_mh.study.report.summary import cpu_and_load, finished, group_by, markdown_table, median, p95, values
 
 TIMEOUT = 10.0
 
@@ -136,42 +137,36 @@ def run(case: Case) -> dict:
     return record
 
 
-def _median(values) -> float:
-    values = [v for v in values if v == v]
-    return float(np.median(values)) if values else float("nan")
+def _row(label: str, rows: list[dict]) -> list:
+    wins = [r for r in rows if r["success"]]
+    flags = [r for r in rows if "disagrees" in r]
+    disagree = "—"
+    if flags:
+        false_ok = sum(1 for r in flags if r["solver_success"] and not r["success"])
+        false_fail = sum(1 for r in flags if not r["solver_success"] and r["success"])
+        disagree = f"{false_ok} / {false_fail} ({false_ok + false_fail} of {len(flags)})"
+    lost = [r for r in rows if not r["success"]]
+    collide = sum(1 for r in lost if r.get("exact_min_sampled", np.inf) < 0)
+    graze = sum(1 for r in lost if r.get("exact_min_sampled", -np.inf) >= 0)
+    why = f"{collide} / {graze} / {len(lost) - collide - graze}" if lost else "—"
+    wall = values(rows, "time", 1e3)
+    return [label, f"{len(wins)}/{len(rows)}", f"{median(wall):.1f}", f"{median(values(rows, 'cpu', 1e3)):.1f}",
+            f"{p95(wall):.1f}", f"{median(values(wins, 'path_length')):.2f}", f"{median(values(wins, 'duration')):.2f}",
+            disagree, why]
 
 
 def summarize(records: list[dict]) -> str:
-    ok = [r for r in records if r.get("status") == "ok"]
+    ok = finished(records)
     if not ok:
         return "no finished case"
-    loads = [r["load_average"] for r in ok]
-    lines = [f"CPU: {ok[0]['cpu_model']}; 1-min load average {min(loads):.1f}-{max(loads):.1f}; {TIMEOUT:.0f} s per plan; "
-             f"{len({r['problem'] for r in ok})} problems",
-             "", "| method | verified | median plan wall [ms] | median plan CPU [ms] | p95 wall [ms] | median path "
-             "length [rad] (verified) | median duration [s] | solver flag: ok but not verified / failed but verified "
-             "| not verified: collides (exact, sampled) / clear but not certified / no path |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for label in VARIANTS:
-        rows = [r for r in ok if r["method"] == label]
-        if not rows:
-            continue
-        wins = [r for r in rows if r["success"]]
-        flags = [r for r in rows if "disagrees" in r]
-        disagree = "—"
-        if flags:
-            false_ok = sum(1 for r in flags if r["solver_success"] and not r["success"])
-            false_fail = sum(1 for r in flags if not r["solver_success"] and r["success"])
-            disagree = f"{false_ok} / {false_fail} ({false_ok + false_fail} of {len(flags)})"
-        lost = [r for r in rows if not r["success"]]
-        collide = sum(1 for r in lost if r.get("exact_min_sampled", np.inf) < 0)
-        graze = sum(1 for r in lost if r.get("exact_min_sampled", -np.inf) >= 0)
-        why = f"{collide} / {graze} / {len(lost) - collide - graze}" if lost else "—"
-        wall = [r["time"] for r in rows]
-        lines.append(f"| {label} | {len(wins)}/{len(rows)} | {_median(wall) * 1e3:.1f} | "
-                     f"{_median([r['cpu'] for r in rows]) * 1e3:.1f} | {np.percentile(wall, 95) * 1e3:.1f} | "
-                     f"{_median([r['path_length'] for r in wins]):.2f} | {_median([r['duration'] for r in wins]):.2f} | "
-                     f"{disagree} | {why} |")
+    groups = group_by(ok, "method")
+    lines = [f"{cpu_and_load(ok, cpu='cpu_model')}; {TIMEOUT:.0f} s per plan; {len(group_by(ok, 'problem'))} problems",
+             ""] + markdown_table(
+        ["method", "verified", "median plan wall [ms]", "median plan CPU [ms]", "p95 wall [ms]",
+         "median path length [rad] (verified)", "median duration [s]",
+         "solver flag: ok but not verified / failed but verified",
+         "not verified: collides (exact, sampled) / clear but not certified / no path"],
+        [_row(label, groups[label]) for label in VARIANTS if label in groups])
     missing = _unavailable()
     if missing:
         lines += ["", f"Not available here (not registered): {', '.join(missing)}."]

@@ -32,6 +32,7 @@ import numpy as np
 
 import drake_mh
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.summary import finished, group_by, markdown_table, median, p95, values
 
 WAYPOINTS = 7
 SPREAD = 0.8
@@ -101,38 +102,33 @@ METHODS = ("toppra@100", "drake-toppra@100", "toppra@1000", "drake-toppra@1000",
 
 def summarize(records: list[dict]) -> str:
     """Medians per method and gridpoints, and ratios against Drake's Toppra (same path, same run)."""
-    ok = [r for r in records if r.get("status") == "ok"]
-    failed = [r for r in records if r.get("status") != "ok"]
-    by = {}
-    for r in ok:
-        by.setdefault((r["retimer"], r["gridpoints"]), {})[r["rep"]] = r
-    lines = ["| method | gridpoints | cases | duration [s] median | time [ms] median (p95) | solve only [ms] | "
-             "duration / Drake | time / Drake | worst certified ratio | violations |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
-    for (method, grid), reps in sorted(by.items(), key=lambda kv: (kv[0][1], kv[0][0])):
-        rs = list(reps.values())
-        dur_ratio = np.median([r["duration_vs_drake"] for r in rs])
-        time_ratio = np.median([r["time_vs_drake"] for r in rs])
-        t = np.array([r["time"] for r in rs]) * 1e3
-        viol = sum(not r["success"] for r in rs)
-        label = "-" if method == "ruckig" else str(grid)
-        base_label = "" if method != "ruckig" else " (vs 100)"
-        lines.append(
-            f"| {method} | {label} | {len(rs)} | {np.median([r['duration'] for r in rs]):.3f} | "
-            f"{np.median(t):.2f} ({np.percentile(t, 95):.2f}) | "
-            f"{np.median([r['solve_time'] for r in rs]) * 1e3:.2f} | {dur_ratio:.3f}{base_label} | "
-            f"{time_ratio:.2f}{base_label} | {max(r['error'] for r in rs):.7f} | {viol} |")
-    top = by.get(("toppra", 100), {})
-    lines += ["", f"Target: toppra <= 10 ms at 100 gridpoints with torque limits: median "
-              f"{np.median([r['time'] for r in top.values()]) * 1e3:.2f} ms, "
-              f"{sum(r['time'] <= 0.010 for r in top.values())}/{len(top)} cases within."
-              if top else "", f"Cases that raised: {len(failed)}; violations (> 1 + {TOL:g}): "
+    ok = finished(records)
+    groups = group_by(ok, "retimer", "gridpoints")
+    rows = []
+    for (method, grid), rs in sorted(groups.items(), key=lambda kv: (kv[0][1], kv[0][0])):
+        rs = list({r["rep"]: r for r in rs}.values())
+        vs = "" if method != "ruckig" else " (vs 100)"
+        t = values(rs, "time", 1e3)
+        rows.append([method, "-" if method == "ruckig" else grid, len(rs), f"{median(values(rs, 'duration')):.3f}",
+                     f"{median(t):.2f} ({p95(t):.2f})", f"{median(values(rs, 'solve_time', 1e3)):.2f}",
+                     f"{median(values(rs, 'duration_vs_drake')):.3f}{vs}", f"{median(values(rs, 'time_vs_drake')):.2f}{vs}",
+                     f"{max(r['error'] for r in rs):.7f}", sum(not r["success"] for r in rs)])
+    lines = markdown_table(["method", "gridpoints", "cases", "duration [s] median", "time [ms] median (p95)",
+                            "solve only [ms]", "duration / Drake", "time / Drake", "worst certified ratio",
+                            "violations"], rows)
+    top = list({r["rep"]: r for r in groups.get(("toppra", 100), [])}.values())
+    lines.append("")
+    if top:
+        lines.append(f"Target: toppra <= 10 ms at 100 gridpoints with torque limits: median "
+                     f"{median(values(top, 'time', 1e3)):.2f} ms, {sum(r['time'] <= 0.010 for r in top)}/{len(top)} "
+                     "cases within.")
+    lines += [f"Cases that raised: {len(records) - len(ok)}; violations (> 1 + {TOL:g}): "
               f"{sum(not r['success'] for r in ok)}.",
               "Time = best of repeated `retime` calls including the dense certification; "
               "'solve only' leaves the certification out. Duration / time ratios: medians over "
               "paths of the ratio to `drake-toppra` on the same path at the same gridpoints "
               "(ruckig: at 100), the two timed alternately in the same case (robust to load drift)."]
-    return "\n".join(x for x in lines if x is not None).strip()
+    return "\n".join(lines).strip()
 
 
 study = Study(

@@ -26,6 +26,7 @@ from drake_mh._support.cache import temporary_cache
 from drake_mh.robot.examples import EXAMPLE_ARMS, example_robot_data_root, load_example_arm
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model
+from drake_mh.study.report.summary import cpu_and_load, finished, group_by, markdown_table, median, values
 
 ROBOTS = EXAMPLE_ARMS  # name -> (path inside example-robot-data, end-effector frame)
 CACHED_LOADS, QUICK_CACHED_LOADS = 5, 2
@@ -70,22 +71,15 @@ def run(case: Case) -> dict:
 
 def summarize(records: list[dict]) -> str:
     """One row per robot: medians over replicates."""
-    ok = [r for r in records if r.get("status") == "ok"]
-    lines = [f"CPU: {ok[0]['cpu'] if ok else '?'}; 1-min load average during the cases: "
-             + (f"{min(r['load_average'] for r in ok):.1f}-{max(r['load_average'] for r in ok):.1f}" if ok else "?"),
-             "",
-             "| robot | nq | locked | hulls | visual .obj | first load [s] | cached load [s] | cached / first |",
-             "|---|---|---|---|---|---|---|---|"]
-    for name in ROBOTS:
-        group = [r for r in ok if r["robot"] == name]
-        if not group:
-            continue
-        first = float(np.median([r["time_first"] for r in group]))
-        cached = float(np.median([r["time"] for r in group]))
-        g = group[0]
-        lines.append(f"| {name} | {g['nq']} | {g['locked']} | {g['hulls']} | {g['visual_conversions']} | "
-                     f"{first:.3f} | {cached:.3f} | {cached / first:.2f} |")
-    return "\n".join(lines)
+    groups = group_by(finished(records), "robot")
+    rows = []
+    for name in [n for n in ROBOTS if n in groups]:
+        group, g = groups[name], groups[name][0]
+        first, cached = median(values(group, "time_first")), median(values(group, "time"))
+        rows.append([name, g["nq"], g["locked"], g["hulls"], g["visual_conversions"], f"{first:.3f}", f"{cached:.3f}",
+                     f"{cached / first:.2f}"])
+    return "\n".join([cpu_and_load(finished(records)), ""] + markdown_table(
+        ["robot", "nq", "locked", "hulls", "visual .obj", "first load [s]", "cached load [s]", "cached / first"], rows))
 
 
 study = Study(

@@ -28,7 +28,7 @@ tables (:mod:`drake_mh.scene.pair_table`): the code before those tables, as the 
 baseline (same trees: the tables change the cost of each check, not its answer).
 The batched checks are the scene's :func:`drake_mh.scene.kernels.states.check_states` (early
 exit, two clearances per link and link pair); the MotionBenchMaker-like figures of
-:mod:`drake_mh.planning.rrt_connect` (issue #18's 0.5 ms target) come from the problem sets of
+:mod:`drake_mh.planning.rrt_connect` (its 0.5 ms median target) come from the problem sets of
 :mod:`drake_mh.planning.problems`, not from this study's scenes.
 The 1-minute load average and the CPU are recorded (shared machines: compare within a run).
 
@@ -42,6 +42,7 @@ import numpy as np
 
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
+from drake_mh.study.report.summary import cpu_and_load, finished, markdown_table
 
 SCENES = ("table", "shelf", "slot", "table self")
 METHODS = ("rrt_connect", "rrt_connect_smooth")
@@ -187,37 +188,35 @@ def run(case: Case) -> dict:
 
 
 def summarize(records: list[dict]) -> str:
-    ok = [r for r in records if r.get("status") == "ok"]
+    order = {name: i for i, name in enumerate(SCENES)}
+    ok = sorted(finished(records), key=lambda r: order.get(r["scene"], 99))
     if not ok:
         return "no finished case"
-    lo, hi = min(r["load_average"] for r in ok), max(r["load_max"] for r in ok)
-    lines = [f"CPU: {ok[0]['cpu']}; 1-min load average during the cases: {lo:.1f}-{hi:.1f} (2 shared cores: "
-             "wall time includes waiting for a core, CPU time does not)", "",
-             "| scene | method | problems × seeds | straight free | success | plan median [ms] wall (CPU) | "
-             "p95 wall (CPU) | verify median [ms] | plan + verify median [ms] | nodes | motions | configurations "
-             "checked | length [rad] |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    order = {name: i for i, name in enumerate(SCENES)}
-    for r in sorted(ok, key=lambda r: order.get(r["scene"], 99)):
+    rows = []
+    for r in ok:
         for m in METHODS + ((BASELINE,) if f"{BASELINE} success" in r else ()):
-            lines.append(
-                f"| {r['scene']} | {m} | {r['problems']} × {r['seeds']} | {r['straight_free']:.0%} | "
-                f"{r[f'{m} success']:.0%} | {r[f'{m} wall median [s]'] * 1e3:.2f} ({r[f'{m} cpu median [s]'] * 1e3:.2f}) | "
-                f"{r[f'{m} wall p95 [s]'] * 1e3:.2f} ({r[f'{m} cpu p95 [s]'] * 1e3:.2f}) | "
-                f"{r[f'{m} verify median [s]'] * 1e3:.2f} | {r[f'{m} plan+verify median [s]'] * 1e3:.2f} | "
-                f"{r[f'{m} nodes']:.0f} | {r[f'{m} motions']:.0f} | {r[f'{m} states']:.0f} | "
-                f"{r[f'{m} length [rad]']:.2f} |")
+            ms = {k: r[f"{m} {k} [s]"] * 1e3 for k in ("wall median", "cpu median", "wall p95", "cpu p95",
+                                                       "verify median", "plan+verify median")}
+            rows.append([r["scene"], m, f"{r['problems']} × {r['seeds']}", f"{r['straight_free']:.0%}",
+                         f"{r[f'{m} success']:.0%}", f"{ms['wall median']:.2f} ({ms['cpu median']:.2f})",
+                         f"{ms['wall p95']:.2f} ({ms['cpu p95']:.2f})", f"{ms['verify median']:.2f}",
+                         f"{ms['plan+verify median']:.2f}", f"{r[f'{m} nodes']:.0f}", f"{r[f'{m} motions']:.0f}",
+                         f"{r[f'{m} states']:.0f}", f"{r[f'{m} length [rad]']:.2f}"])
+    lines = [f"{cpu_and_load(ok, loads=('load_average', 'load_max'))} (2 shared cores: wall time includes waiting for a "
+             "core, CPU time does not)", ""] + markdown_table(
+        ["scene", "method", "problems × seeds", "straight free", "success", "plan median [ms] wall (CPU)",
+         "p95 wall (CPU)", "verify median [ms]", "plan + verify median [ms]", "nodes", "motions",
+         "configurations checked", "length [rad]"], rows)
     mbm = [r for r in ok if f"{BASELINE} success" in r]
     if mbm:
-        ratios = [r[f"{BASELINE} cpu median [s]"] / r["rrt_connect cpu median [s]"] for r in mbm]
         lines += ["", "MotionBenchMaker scenes, rrt_connect against the same planner without pair floor tables "
                   "(same run, interleaved): CPU median ratio " + ", ".join(
-                      f"{r['scene']} {x:.1f}x" for r, x in zip(mbm, ratios))]
+                      f"{r['scene']} {r[f'{BASELINE} cpu median [s]'] / r['rrt_connect cpu median [s]']:.1f}x"
+                      for r in mbm)]
     lines += ["", "Where rrt_connect's time goes (profiled pass, share of the kernel's time; shortcutting includes "
-              "its own checks):", "", "| scene | sampling | nearest neighbours | batched checks | certification "
-              "within margins | shortcutting |", "|---|---|---|---|---|---|"]
-    for r in sorted(ok, key=lambda r: order.get(r["scene"], 99)):
-        shares = " | ".join(f"{r[f'rrt_connect {k} share']:.1%}" for k in SPLIT)
-        lines.append(f"| {r['scene']} | {shares} |")
+              "its own checks):", ""] + markdown_table(
+        ["scene", "sampling", "nearest neighbours", "batched checks", "certification within margins", "shortcutting"],
+        [[r["scene"]] + [f"{r[f'rrt_connect {k} share']:.1%}" for k in SPLIT] for r in ok])
     return "\n".join(lines)
 
 

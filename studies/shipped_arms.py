@@ -51,7 +51,7 @@ _CACHE: dict = {"robots": {}, "problems": {}}
 def _robot(name: str):
     if name not in _CACHE["robots"]:
         import drake_mh
-        from drake_mh.example_arms import example_robot_data_root
+        from drake_mh.robot.examples import example_robot_data_root
 
         root = example_robot_data_root()
         if root is None:

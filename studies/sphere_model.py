@@ -27,6 +27,7 @@ from drake_mh._support.cache import temporary_cache
 from drake_mh.robot.examples import load_example_arm
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
+from drake_mh.study.report.summary import cpu_and_load, finished, markdown_table
 
 ROBOTS = ("panda (bundled, capsules)", "panda_hand", "ur5", "xarm7", "kinova")  # then drake_mh.robot.examples
 N_BATCH, N_EXACT = 1000, 20
@@ -96,19 +97,13 @@ def run(case: Case) -> dict:
 
 def summarize(records: list[dict]) -> str:
     """One row per robot and tolerance."""
-    ok = [r for r in records if r.get("status") == "ok"]
-    loads = [r["load_average"] for r in ok]
-    lines = [f"CPU: {ok[0]['cpu'] if ok else '?'}; 1-min load average during the cases: "
-             + (f"{min(loads):.1f}-{max(loads):.1f}" if ok else "?"),
-             "",
-             "| robot | tolerance [m] | spheres | per link | bound [mm] | first build [s] | cached [s] | "
-             "batch [µs/config] | exact [µs/config] | exact / batch | in collision |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in sorted(ok, key=lambda r: (ROBOTS.index(r["robot"]), r["tolerance"])):
-        lines.append(f"| {r['robot']} | {r['tolerance']:g} | {r['spheres']} | {r['per_link_min']}-{r['per_link_max']} | "
-                     f"{r['bound'] * 1e3:.2f} | {r['time']:.3f} | {r['time_cached']:.4f} | {r['batch_us']:.1f} | "
-                     f"{r['exact_us']:.0f} | {r['exact_us'] / r['batch_us']:.1f}x | {r['colliding']:.0%} |")
-    return "\n".join(lines)
+    ok = sorted(finished(records), key=lambda r: (ROBOTS.index(r["robot"]), r["tolerance"]))
+    rows = [[r["robot"], f"{r['tolerance']:g}", r["spheres"], f"{r['per_link_min']}-{r['per_link_max']}",
+             f"{r['bound'] * 1e3:.2f}", f"{r['time']:.3f}", f"{r['time_cached']:.4f}", f"{r['batch_us']:.1f}",
+             f"{r['exact_us']:.0f}", f"{r['exact_us'] / r['batch_us']:.1f}x", f"{r['colliding']:.0%}"] for r in ok]
+    return "\n".join([cpu_and_load(ok), ""] + markdown_table(
+        ["robot", "tolerance [m]", "spheres", "per link", "bound [mm]", "first build [s]", "cached [s]",
+         "batch [µs/config]", "exact [µs/config]", "exact / batch", "in collision"], rows))
 
 
 study = Study(

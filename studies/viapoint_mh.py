@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from drake_mh.study import Case, Fields, Study
+from drake_mh.study.report.summary import finished, group_by, markdown_table, median, p95, values
 
 BUDGET = 6000
 TIMEOUT = 20.0
@@ -114,27 +115,22 @@ def run(case: Case) -> dict:
 
 
 def summarize(records: list[dict]) -> str:
-    ok = [r for r in records if r.get("status") == "ok" and "skipped" not in r]
-    if not ok:
-        return ""
-    lines = ["| method | solved | median plan time [s] (CPU) | p95 [s] | path / straight (median) | "
-             "retimed duration [s] | min certified clearance [mm] | evaluations (median) | exact check |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for label in METHODS:
-        rs = [r for r in ok if r["method"] == label]
-        if not rs:
-            continue
+    groups = group_by([r for r in finished(records) if "skipped" not in r], "method")
+    rows = []
+    for label in [m for m in METHODS if m in groups]:
+        rs = groups[label]
         wins = [r for r in rs if r["success"]]
-        t = np.array([r["time"] for r in rs], float)
-        cpu = np.array([r.get("cpu_time", np.nan) for r in rs], float)
-        ratio = np.median([r["error"] for r in wins]) if wins else np.nan
-        dur = np.median([r["duration"] for r in wins]) if wins else np.nan
-        clear = min((r["min_clearance"] for r in wins), default=np.nan)
         bad = sum(1 for r in wins if not (r["exact_min_distance"] >= 0.0))
-        lines.append(f"| {label} | {len(wins)}/{len(rs)} | {np.median(t):.3f} ({np.median(cpu):.3f}) | "
-                     f"{np.percentile(t, 95):.3f} | {ratio:.2f} | {dur:.2f} | {clear * 1e3:.1f} | "
-                     f"{np.median([r['nfe'] for r in rs]):.0f} | {'ok' if not bad else f'{bad} collide'} |")
-    return "\n".join(lines)
+        clear = values(wins, "min_clearance", 1e3)
+        rows.append([label, f"{len(wins)}/{len(rs)}", f"{median(values(rs, 'time')):.3f} ({median(values(rs, 'cpu_time')):.3f})",
+                     f"{p95(values(rs, 'time')):.3f}", f"{median(values(wins, 'error')):.2f}",
+                     f"{median(values(wins, 'duration')):.2f}", f"{clear.min() if clear.size else float('nan'):.1f}",
+                     f"{median(values(rs, 'nfe')):.0f}", "ok" if not bad else f"{bad} collide"])
+    if not rows:
+        return ""
+    return "\n".join(markdown_table(
+        ["method", "solved", "median plan time [s] (CPU)", "p95 [s]", "path / straight (median)", "retimed duration [s]",
+         "min certified clearance [mm]", "evaluations (median)", "exact check"], rows))
 
 
 study = Study(

@@ -6,7 +6,7 @@ keeps the helper's old code after the helper's file changes. Measured here: afte
 the packed arrays' layout in ``scene/kernels/packing.py``, ``Scene.collision_free`` of one
 configuration (compiled in the unchanged ``scene/kernels/entry.py``) read the new buffers with
 the old offsets and accepted a MotionBenchMaker goal that the same code rejects from a clean
-cache. Editable installs (the README's) meet this after every ``git pull``.
+cache. Editable installs (``pip install -e``) meet this after every ``git pull``.
 
 So, unless the user chose a folder (``NUMBA_CACHE_DIR``), the cache lives in
 ``cache_dir("numba")/<fingerprint>``, the fingerprint a content hash of every module of the

@@ -18,7 +18,7 @@ Every link is then a constant offset from the moving frame of its nearest moving
 rotation product, one rotation about z, and the Jacobian column ``[z_k; z_k × (p_E − o_k)]``.
 
 The kernels (:mod:`drake_mh.kinematics.kernels`) are numba-compiled, vectorized across blocks of
-configurations (chosen by measurement, see ``studies/bench_kinematics.py`` and the README:
+configurations (chosen by measurement, ``studies/bench_kinematics.py``, docs/benchmarks.md:
 numpy's per-call overhead dominates at the population sizes metaheuristics use).
 """
 

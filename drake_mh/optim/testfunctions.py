@@ -24,8 +24,8 @@ hybrid and composition functions are not implemented. Shift vectors and rotation
 are the organisers' data files when the optional ``opfunu`` package (extra ``bench``) is
 installed - only its data files are used: opfunu 1.0.4's own CEC 2017 classes are
 renumbered and several differ from the official definitions (Zakharov without the
-``0.5 i`` weights, Rastrigin without the 5.12/100 scale, Levy with a 5.12/100 scale;
-see its issues #39 and #47) - and seeded random ones otherwise (``data="generated"``).
+``0.5 i`` weights, Rastrigin without the 5.12/100 scale, Levy with a 5.12/100 scale,
+as reported on opfunu's tracker) - and seeded random ones otherwise (``data="generated"``).
 """
 
 from __future__ import annotations

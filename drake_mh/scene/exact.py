@@ -1,14 +1,11 @@
 """Exact signed distances of a :class:`drake_mh.scene.Scene`: compiled where Drake is slow or
 optimistic, Drake's query for the rest.
 
-Where the 387 µs of a Panda-vs-one-sphere ``Scene.min_distance`` went (cProfile, before this
-module): per pair of Drake's answer two ``GetPoseInWorld`` (5.7 µs each: a ``RigidTransform``
-is built in Python) and two ``RigidTransform @ point`` products, a ``GetBodyFromFrameId`` name
-lookup, the refinement dispatch and a ``DistancePair`` (1.3 µs), then a sort — against Drake's
-28.7 µs for the query itself. A capsule link against a box obstacle added a Python call of
-``capsule_distance`` per pair (6-7 ms per configuration against 10 mixed obstacles).
+Why compiled: reading Drake's answer pair by pair from Python (a ``GetPoseInWorld`` of several
+µs per geometry, a Python call per refined pair) cost many times Drake's query itself; one
+compiled call per configuration does not (its cost against Drake's query: docs/benchmarks.md).
 
-How distances are computed now (:class:`ExactDistances`, one per scene):
+How distances are computed (:class:`ExactDistances`, one per scene):
 
 * **link geometry vs obstacle** for every link shape :mod:`drake_mh.scene.kernels.exact`
   handles (sphere, capsule, box, cylinder, ellipsoid, convex mesh): one compiled call per
@@ -20,7 +17,7 @@ How distances are computed now (:class:`ExactDistances`, one per scene):
   query in the scene's context (:meth:`ExactDistances.exclude`).
 * Where the exact method does not hold — a capsule's axis inside a box or cylinder, or
   overlapping GJK cores — Drake's ``ComputeSignedDistancePairClosestPoints`` is asked for that
-  pair and the smaller value kept (Drake's penetration depth; as before this module).
+  pair and the smaller value kept (Drake's penetration depth).
 * **Drake's query** (``ComputeSignedDistancePairwiseClosestPoints``) still answers self pairs
   other than capsule-capsule, and link shapes the kernels do not know (none in the bundled or
   example robots).

@@ -20,9 +20,9 @@ def cpu_model() -> str:
     what ``platform`` knows.
 
     Virtual machines often show a bare model name ("AMD EPYC") whatever the generation behind
-    it, and timings under the same name differ by a third or more (the collision kernel of
-    ``collision_speed`` measured 107-109 ns per configuration on 2026-11-25 and 76 on a family 26
-    machine on 2026-11-27): the family and model say whether two records ran on the same kind.
+    it, and the same code's timings under the same name differed by a third between two such
+    machines (docs/benchmarks.md): the family and model say whether two records ran on the same
+    kind.
     """
     with contextlib.suppress(OSError):
         return _describe(Path("/proc/cpuinfo").read_text())

@@ -1,10 +1,10 @@
 """Compiling the planning kernels in the background while other work runs (``drake-mh demo``).
 
 From an empty numba cache, the quick ``motion_benchmark`` would spend minutes compiling: the
-verification, retiming and certificate kernels on its first case (112 s measured on 2026-11-25,
-51 s on an earlier, faster day) and ``rrt_connect``'s kernel on its second (61 s), one after the
-other on one core, while the machine's second core idles. :func:`start` compiles them in two separate processes (numba's disk
-cache then serves the study) while the demo's other studies run; :func:`wait` joins them before
+verification, retiming and certificate kernels on its first case and ``rrt_connect``'s kernel on
+its second (about a minute or two each), one after the other on one core, while the machine's
+second core idles. :func:`start` compiles them in two separate processes (numba's disk cache then
+serves the study) while the demo's other studies run; :func:`wait` joins them before
 the study that needs them. A warm cache makes the process cheap (loading only, a few seconds).
 Nothing here is timed or reported: a failure only means the study compiles for itself.
 """

@@ -4,7 +4,7 @@ Time parameterization and certification need joint torques at hundreds of path s
 the ABC via-point study at population x time samples (20,000 evaluations x 100 samples per
 run). Drake's ``CalcInverseDynamics`` costs ~13 µs per call from Python (measured, Panda), so
 :class:`BatchDynamics` runs the recursive Newton-Euler algorithm (RNEA) vectorized over ``N``
-samples in numpy instead. Nothing is typed per robot: the kinematic tree comes from
+samples, compiled with numba, instead. Nothing is typed per robot: the kinematic tree comes from
 :func:`drake_mh.kinematics.compile_chain` (joint frames and axes read from Drake) and the
 masses, centres of mass and rotational inertias from each body's
 ``default_spatial_inertia()``; welded bodies are lumped onto their moving ancestor. The

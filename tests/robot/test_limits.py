@@ -46,7 +46,7 @@ def _urdf_limits(path, joint):
 
 @pytest.fixture(scope="module")
 def erd_panda_path():
-    from drake_mh.example_arms import EXAMPLE_ARMS
+    from drake_mh.robot.examples import EXAMPLE_ARMS
 
     return erd_root() / EXAMPLE_ARMS["panda_hand"][0]
 

@@ -20,7 +20,7 @@ from drake_mh.trajectories.limits_for import DEFAULT_ACCELERATION, DEFAULT_JERK,
 @pytest.fixture(scope="module")
 def shipped():
     """example-robot-data's UR5 and Panda with hand as shipped (no acceleration limits)."""
-    from drake_mh.example_arms import EXAMPLE_ARMS
+    from drake_mh.robot.examples import EXAMPLE_ARMS
 
     root = erd_root()
     return {name: drake_mh.load_robot(root / EXAMPLE_ARMS[name][0], ee_frame=EXAMPLE_ARMS[name][1])

@@ -22,8 +22,8 @@ bounds and the initial guess change between solves):
 ``margin`` defaults to the sphere model's bound (``scene.sphere_model.bound``, ~9.5 mm for the
 Panda): the verification certifies clearance under the sphere model, which is up to that much
 more pessimistic than Drake's exact distance, so a solution resting on ``clearance`` exactly
-would not verify. Drake's GJK is also optimistic for some pairs (README), another reason for a
-margin. ``margin=0`` asks Drake for the problem's clearance only (the issue's setting).
+would not verify. Drake's GJK is also optimistic for some pairs (docs/collision.md), another
+reason for a margin. ``margin=0`` asks Drake for the problem's clearance only.
 
 SNOPT (shipped with the pip wheel) solves it; where it is not available IPOPT does, and
 ``info["solver"]`` says so (a warning is logged once). The initial guess is the straight

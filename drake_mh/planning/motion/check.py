@@ -262,14 +262,11 @@ def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance,
     2. Otherwise (free, but within the margins somewhere) a refinement decides, with at most
        ``max_evals`` configurations (undecided: rejected), on the rows that came within their
        margins only: a row that kept them at every state is certified on every piece, so no
-       later state checks it (replayed certified motions of the MotionBenchMaker plans:
-       27 -> 24 µs each, rejected ones 3.5 -> 3.0 µs). With ``by_values`` None,
-       :func:`_refine`: conservative advancement from both ends of each uncertain piece on the
-       clearance values the check reports for those rows (41 configurations per refined
-       MotionBenchMaker motion, against 84 for the boolean bisection at halving margins it
-       replaced and 70 for the other choice; certified motions 23 -> 18.5 µs; 26 with the
-       links' local bound on ``τ``, :func:`drake_mh.scene.kernels.states._link_tau`: the
-       refinement 15.4 -> 12.4 µs per refined motion), else (any
+       later state checks it. With ``by_values`` None, :func:`_refine`: conservative
+       advancement from both ends of each uncertain piece on the clearance values the check
+       reports for those rows, with the links' local bound on ``τ``
+       (:func:`drake_mh.scene.kernels.states._link_tau`; 26 configurations per refined
+       MotionBenchMaker motion, against 70 for the bisection), else (any
        other value, e.g. True) the scene's
        :func:`drake_mh.scene.kernels.segments.certify_segments` (the bound on clearance values
        from :func:`~drake_mh.scene.kernels.collision.link_clearances`). The choice is made at

@@ -240,8 +240,7 @@ def problem_set(name: str, robot="panda", count: int = 10, seed: int = 0, cleara
             (:class:`drake_mh.geometry.spheres.SphereModel`, default 1 cm), what start and goal are
             certified with and planners check against. Coarser is fewer spheres, so faster
             checks, but more pessimistic: configurations near obstacles are no longer certified
-            free, narrow passages close (docs/planning.md, "Sphere tolerance: speed against
-            pessimism"). Problem ``i`` may differ between tolerances (a draw certified at one may
+            free, narrow passages close (docs/planning.md, "Sphere tolerance"). Problem ``i`` may differ between tolerances (a draw certified at one may
             not be at another).
 
     Returns:

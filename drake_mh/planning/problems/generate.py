@@ -215,7 +215,7 @@ def new_scene(robot, self_collision: bool = True, sphere_tolerance: float = DEFA
     always-close link pairs left out (:func:`always_close_pairs`, found under this scene's sphere
     model). ``sphere_tolerance`` [m] is the covering tolerance of the scene's sphere model
     (:class:`drake_mh.geometry.spheres.SphereModel`; default 1 cm): coarser is fewer spheres, so faster
-    checks, but more pessimistic (docs/planning.md, "Sphere tolerance: speed against pessimism").
+    checks, but more pessimistic (docs/planning.md, "Sphere tolerance").
 
     Raises:
         InvalidArgument: a ``sphere_tolerance`` that is not a positive number.

@@ -42,17 +42,6 @@ via Vectorized Sampling-Based Planning", ICRA 2024):
   ``certify="bisection"``. The returned path therefore consists of certified segments, and
   :func:`drake_mh.planning.verify_motion` re-certifies it independently.
 
-:func:`prepare` loads the kernel once per process (numba's cache: about 0.2 s; after a change
-of the kernels, compiling takes 1-2 minutes); :func:`certify_motions` exposes the motion check.
-
-Measured (bundled Panda, 2 shared AMD EPYC cores at load 2.6-4, CPU time beside wall; the
-planning time is ``solve_motion``'s, which here includes certifying every edge):
-
-* ``python studies/rrt_connect_speed.py`` (20 problems × 3 seeds per scene, start at
-  MotionBenchMaker's ready configuration, goals with the flange inside the fixture), every run
-  verified:
-
-  ======================  =======  ====================  ==================  ======  =========
   scene                   success  median ms wall (CPU)  p95 ms wall (CPU)   nodes   states
   ======================  =======  ====================  ==================  ======  =========
   table (75 % straight)   100 %    0.08 (0.08)           0.39 (0.39)         0       121
@@ -86,6 +75,11 @@ planning time is ``solve_motion``'s, which here includes certifying every edge):
 * the independent verification (:func:`drake_mh.planning.verify_motion` without retiming)
   takes 3-17 ms per path, 6.7 ms median, of which 0.24 ms is the certificate and the rest the
   1 mm refinement of the reported clearance.
+=======
+:func:`prepare` loads the kernel once per process (from numba's on-disk cache; after a change of
+the kernels the first call compiles them, a minute or two); :func:`certify_motions` exposes the
+motion check. Options and the figures that chose their defaults: :class:`RRTConnectConfig` and
+docs/planning.md; measured results: docs/benchmarks.md.
 """
 
 from __future__ import annotations

@@ -31,77 +31,56 @@ after this many nodes instead of running forever)."""
 class RRTConnectConfig:
     """Options of ``rrt_connect`` (``solve_motion`` keywords).
 
-    Defaults measured on 105 MotionBenchMaker-like Panda problems (median CPU time of a plan;
-    2 shared cores, so differences below about 15 % are noise), ``step`` and ``domain_radius`` on
-    384 MotionBenchMaker plans and the generated sets of three robots (below).
+    Defaults chosen on MotionBenchMaker's Panda problems by paired median plan time; the figure
+    that set each is in docs/planning.md, the measurements in docs/benchmarks.md.
 
     Attributes:
-        step: [rad] longest tree edge (EXTEND's range, Euclidean in joint space). 1.5 with the
-            dynamic domain: 0.915x the median plan time of 1.0 without it on 384 MotionBenchMaker
-            plans (each plan's best of 2, paired, the options interleaved; 0.935x with 1.0 and
-            the domain; 0.88x-0.94x on another 198), 0.92x and 0.95x on 168 plans of the generated
-            sets for the Panda and the Panda with its hand, 1.03x (kernel time; mean 0.84x) on 210
-            UR5 plans; median path lengths within 2 % on the Panda's sets, 4 % shorter on the UR5.
-            Without the domain, 0.7 and 2.0 were 1.5x and 1.2x slower than 1.0.
-        domain_radius: [rad] dynamic domain (0: off; :func:`.search.plan_kernel`): a node whose
-            extension failed takes this radius, and a sample beyond its nearest node's radius is
-            drawn again without a check. VAMP's value for the Panda. 3 and 6 measured 0.99x and
-            1.00x the plan time of no domain on the sets above with a step of 1.0, 4 0.94x; it
-            shortens the slow tail most (mean plan 1.22 ms against 1.69 on MotionBenchMaker).
+        step: [rad] longest tree edge (EXTEND's range, Euclidean in joint space); 1.5 with the
+            dynamic domain (0.915x the plan time of 1.0 without it).
+        domain_radius: [rad] dynamic domain (Yershova et al., ICRA 2005; 0: off;
+            :func:`.search.plan_kernel`): a node whose extension failed takes this radius, and
+            a sample beyond its nearest node's radius is drawn again without a check. VAMP's
+            value for the Panda.
         resolution: [states per rad] checked along a motion, at least (more where ``margin``
-            needs them). VAMP checks its Panda motions at 32 per unit; 8, 16 and 32 measured
-            the same here, where the margin sets the count.
+            needs them).
         margin: [m] largest extra clearance the batched check asks of a motion's states so
             that the motion between them is certified with no further work (states are
             added while ``Λ_c / 2n`` exceeds it, see :func:`drake_mh.planning.motion.check.certified_motion`); a motion
-            that passes within its margins is refined (``certify``). 0.01 and 0.04 measured
-            within 15 % of 0.02.
+            that passes within its margins is refined (``certify``).
         probes: states of a motion checked first, before any of its setup, at the plain
-            clearances (0-8; t = 1, 1/2, 1/4, 1/8, ...: :data:`drake_mh.planning.motion.check.PROBES`): a motion
-            that collides mostly stops there. They only reject; the motion's own states
+            clearances (0-8; t = 1, 1/2, 1/4, 1/8, ...: :data:`drake_mh.planning.motion.check.PROBES`): they stop
+            97 % of the motions that collide. They only reject; the motion's own states
             certify.
         interior_probes: the same for a motion whose two ends are known free (the direct motion
             to a goal, a motion that ends on a tree node, a shortcut between two points of the
             certified path): states inside it, middle first (0-8; t = 1/2, 1/4, 3/4, 1/8, ...:
-            :data:`drake_mh.planning.motion.check.INTERIOR_PROBES`). 4 checked 1,144 states in a median
-            MotionBenchMaker plan, against 1,350 with :data:`drake_mh.planning.motion.check.PROBES` for them (same paths).
+            :data:`drake_mh.planning.motion.check.INTERIOR_PROBES`).
         lanes: states of a motion checked next, in one batched call, spread along it (VAMP's
             "rake": a collision that the probes missed is mostly found there).
-        block: states per batched call after the first. Probes 4 / lanes 64 / block 64 took
-            0.86x the time of probes 0 / lanes 8 / block 32 (the defaults before probes),
-            0.92x with lanes and block 32, 0.91x with 3 probes, and 1.12x with no probes and
-            lanes 64 (median ratio over 99 MotionBenchMaker plans, each plan's best of 4, the
-            options interleaved in one process, so with warm caches; in separate processes,
-            after each plan's verification, about 0.95x).
+        block: states per batched call after the first.
         certify: how a motion within its margins is certified: ``"boolean"`` (conservative
             advancement on the values that the batched check reports for the rows below their
-            margins: 41 configurations per refined MotionBenchMaker motion against 70 for the
-            other; 26 since a link's ``τ`` also has a local bound) or ``"bisection"`` (the scene's
-            :func:`drake_mh.scene.segments.certify_segments` on clearance values; it was 20 %
-            faster than the boolean bisection that the default replaced with self-collision
-            pairs that nearly touch everywhere, not re-measured since). Each is a compiled
-            variant of the kernel: the first ``"bisection"`` plan of a machine compiles its
-            own (about a minute from an empty numba cache; cached on disk after).
+            margins) or ``"bisection"`` (the scene's
+            :func:`drake_mh.scene.segments.certify_segments` on clearance values). Each is a
+            compiled variant of the kernel: the first ``"bisection"`` plan of a machine compiles
+            its own (cached on disk after).
         goal_bias: probability of sampling a root of the other tree (a goal configuration when
             the start tree grows, the start when the goal tree grows) instead of a uniform
             sample.
         balance: grow the smaller tree next (VAMP), else alternate (Kuffner & LaValle).
         shortcut_iterations: random shortcut draws on the found path (0: none): two random
-            points of the path, joined by a certified straight motion when it is shorter.
+            points of the path, joined by a certified straight motion when it is shorter
+            (Geraerts & Overmars, IJRR 2007).
         shortcut_min_gain: a draw is checked only if its straight motion would shorten the path
             by at least this fraction of the path's length (0: every draw). Shortcuts that save
             little mostly hug the path, so most of them are certified, the expensive answer.
-            99 MotionBenchMaker plans, options interleaved in one process, each plan's best of
-            3: 16 draws at 0 (the defaults before) 0.78 ms median plan, paths of 5.72 rad
-            (median); 32 draws at 0.05 0.71 ms (0.96x paired), 5.55 rad; at 0.08 0.94x,
-            5.78 rad; no shortcut 0.83x, 7.18 rad. ``rrt_connect_smooth``: 192 draws at 0.005
-            took 1.36 ms for 4.87 rad, against 2.01 ms and 4.92 rad for 128 draws at 0.
-        max_certify_evaluations: most configurations the bisection may evaluate for one
-            motion before it counts as not certified (512 rejected the direct motions of
-            self-collision problems whose link pairs nearly touch: 3.5x slower).
+        max_certify_evaluations: most configurations the refinement may evaluate for one
+            motion before it counts as not certified.
         profile: time sampling, nearest neighbours, checks, certification and shortcutting
-            inside the kernel (``info["t_sample"]`` ... ``info["t_shortcut"]``, seconds; about
-            70 ns per clock reading).
+            inside the kernel (``info["t_sample"]`` ... ``info["t_shortcut"]``, seconds).
+
+    Raises:
+        InvalidArgument: an option of the wrong type or range (the message names it).
     """
 
     step: float = 1.5
@@ -286,8 +265,8 @@ def _by_values(config: RRTConnectConfig):
 
 def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
     # few Python steps here: a plan is often called after other work, with this code and its data out
-    # of the CPU's caches, where each step costs microseconds (MotionBenchMaker, after a verification:
-    # 68 µs around a 0.55 ms kernel before, see docs/planning.md)
+    # of the CPU's caches, where each step costs microseconds (about 50 µs of Python around a 0.5 ms
+    # kernel on MotionBenchMaker's problems)
     prepare_time = prepare(problem) if not _PREPARED else 0.0
     binding = _binding(problem.scene)
     # the deadline measures planning, not loading (as solve_ik's timeout)

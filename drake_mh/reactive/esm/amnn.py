@@ -23,8 +23,8 @@ Two implementations of the same step: ``compiled=True`` runs all layers in one n
 (:mod:`drake_mh.reactive.esm.amnn_compiled`); ``compiled=False`` runs ARO-amnn through the Python
 ask/tell loop. Both draw the same random numbers and return bit-identical steps.
 
-The paper runs L = 1000, P = 128 on a GPU at 30 Hz; ``docs/esm.md`` gives the rates
-measured on one CPU core (``studies/amnn_speed.py``).
+The paper runs L = 1000, P = 128 on a GPU at 30 Hz; the rates on one CPU core
+(``studies/amnn_speed.py``) are in docs/benchmarks.md.
 """
 
 from __future__ import annotations

@@ -230,12 +230,12 @@ def _groups_free(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, 
 
     For a link of several groups: a link of one group is its bounding sphere, known to be near,
     and its spheres are tested directly (:func:`_range_free`; a group test there measured
-    20-30 % slower planning on the capsule Panda, and this function inlined into the batch
-    kernel 107 -> 136 ns per capsule-Panda configuration against 10 obstacles).
+    20-30 % slower planning on the capsule Panda). Not inlined: inlined into the batch kernel it
+    measured 136 ns per capsule-Panda configuration against 10 obstacles instead of 107.
 
     Scalar on purpose: the lanes that reach a link's spheres are few per block (about 4 of 128
     per link and obstacle in the 10-obstacle benchmark), where SIMD loops over compacted lanes
-    cost more in loop overhead than they save (measured: 128 -> 115 ns per configuration)."""
+    cost more in loop overhead than they save (measured 128 ns per configuration against 115)."""
     for u in range(u0, u1):
         x, y, z = _lane_point(a, u_offset, u, 0, R, p, b)
         if not _point_free(k, kinds, R_WO, p_WO, dims, clearance + u_radius[u], x, y, z) and not _range_free(

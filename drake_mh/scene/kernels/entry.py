@@ -124,7 +124,7 @@ ONE_SIGNATURE = (numba.types.Array(numba.float64, 1, "A"), numba.float64, numba.
 
 def one_entry_point():
     """The compiled entry point of :func:`collision_free_one` for :data:`ONE_SIGNATURE`: a call
-    skips numba's type dispatch (about 0.15 µs of 0.6 when it took six arguments), so its caller
+    skips numba's type dispatch (about 0.15 µs per call), so its caller
     must pass exactly those types (:meth:`drake_mh.scene.batch.CollisionModel.free_function`)."""
     return collision_free_one.compile(ONE_SIGNATURE)  # the compiled entry point (numba Dispatcher.compile)
 

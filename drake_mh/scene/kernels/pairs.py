@@ -81,7 +81,8 @@ def _near_groups(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, 
     sphere is at least ``bound`` from it is passed whole (its spheres are inside it,
     :func:`drake_mh.scene.batch.sphere_groups`; with ``lower`` its value is the bound of its
     spheres), and only the spheres kept are moved into the world. Link 5 against link 7 of the
-    hand Panda (131 x 40 spheres) near a collision: 0.89 -> 0.56 µs."""
+    hand Panda (131 x 40 spheres) near a collision: 0.56 µs per call, 0.89 with every sphere
+    moved into the world first."""
     if a >= 0:
         dx, dy, dz = cx - p[a, 0, b], cy - p[a, 1, b], cz - p[a, 2, b]
         lx = R[a, 0, 0, b] * dx + R[a, 1, 0, b] * dy + R[a, 2, 0, b] * dz
