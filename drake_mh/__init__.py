@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import importlib
 
-from drake_mh import _numba_cache
+from drake_mh import _compile, _numba_cache
 
 _numba_cache.configure()  # before any kernel module is imported: numba's cache, keyed by the sources
+_compile.install()  # one line on stderr before a kernel compiles (drake_mh._compile)
 
 from drake_mh import errors  # noqa: E402
 

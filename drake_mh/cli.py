@@ -32,6 +32,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "drake_mh.ik.cli",  # ik (from the IK issue)
     "drake_mh.study.commands",  # study, report
     "drake_mh.study.demo",  # demo
+    "drake_mh.study.warmup_cli",  # warmup (compile every kernel ahead)
     "drake_mh.viz.cli",  # app (from the visualisation issue)
     "drake_mh.viz.plan_cli",  # plan (one motion: issue #18)
 )

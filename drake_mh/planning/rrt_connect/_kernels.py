@@ -17,6 +17,7 @@ import numba
 import numpy as np
 
 from drake_mh._borrow import borrow
+from drake_mh._compile import stable_calls
 from drake_mh.planning.rrt_connect._clock import now
 from drake_mh.planning.rrt_connect._motion import certified_motion, motion_capacity, workspaces
 from drake_mh.planning.rrt_connect._stats import ITERATIONS, NN_SCANS, NODES, OUT_OF_DOMAIN, SHORTCUTS_KEPT, \
@@ -126,6 +127,7 @@ def _next_tree(balance, a, count):
     return 1 - a
 
 
+@stable_calls()
 @numba.njit(cache=True)
 def _out_of_domain(q, i_node, V, D, a):
     """Whether sample ``q`` lies beyond the domain radius of its nearest node ``i_node`` of tree
@@ -139,6 +141,7 @@ def _out_of_domain(q, i_node, V, D, a):
     return d > radius * radius
 
 
+@stable_calls()
 @numba.njit(cache=True)
 def _trace(V, P, tree, i):
     """Rows of tree ``tree`` from node ``i`` up to its root, in that order."""
@@ -155,6 +158,7 @@ def _trace(V, P, tree, i):
     return out
 
 
+@stable_calls()
 @numba.njit(cache=True)
 def _root(P, tree, i):
     while P[tree, i] >= 0:
