@@ -160,6 +160,23 @@ def run_group(name: str) -> dict:
     return {"group": name, "seconds": time.perf_counter() - wall, "cpu": time.process_time() - cpu, "error": error}
 
 
+def check_groups(groups: Iterable[str] | None = None, processes: int | None = None) -> tuple[list[str], int]:
+    """``(group names, worker processes)`` of a :func:`warmup` call, checked.
+
+    Raises:
+        InvalidArgument: an unknown group name, or fewer than 1 process.
+    """
+    from drake_mh.errors import InvalidArgument
+
+    names = list(GROUPS if groups is None else groups)
+    unknown = [name for name in names if name not in GROUPS]
+    if unknown:
+        raise InvalidArgument(f"unknown kernel family {unknown}; families are {list(GROUPS)} (drake-mh warmup --list)")
+    if processes is not None and (isinstance(processes, bool) or not isinstance(processes, int) or processes < 1):
+        raise InvalidArgument(f"processes must be an integer >= 1, got {processes!r}")
+    return names, max(1, min(len(names), processes or os.cpu_count() or 1))
+
+
 def warmup(groups: Iterable[str] | None = None, processes: int | None = None,
            progress: Callable[[dict], None] | None = None) -> list[dict]:
     """Compiles the kernels of ``groups`` (default: all of :data:`GROUPS`) in ``processes``
@@ -175,13 +192,9 @@ def warmup(groups: Iterable[str] | None = None, processes: int | None = None,
         One :func:`run_group` result per group, in the order they finished.
 
     Raises:
-        KeyError: an unknown group name.
+        InvalidArgument: an unknown group name, or fewer than 1 process.
     """
-    names = list(GROUPS if groups is None else groups)
-    unknown = [name for name in names if name not in GROUPS]
-    if unknown:
-        raise KeyError(f"unknown warm-up group(s) {unknown}; groups are {list(GROUPS)}")
-    workers = max(1, min(len(names), processes or os.cpu_count() or 1))
+    names, workers = check_groups(groups, processes)
     results = []
     context = multiprocessing.get_context("spawn")
     with concurrent.futures.ProcessPoolExecutor(workers, mp_context=context) as pool:

@@ -27,23 +27,16 @@ def cmd_warmup(args: argparse.Namespace) -> int:
     """``drake-mh warmup [GROUP ...] [--jobs N] [--list]``: exit 0 when every family compiled."""
     import os
 
-    from drake_mh.errors import InvalidArgument
-    from drake_mh.study.warmup import GROUPS, warmup
+    from drake_mh.study.warmup import GROUPS, check_groups, warmup
 
     if args.list:
         for name, (what, _) in GROUPS.items():
             print(f"{name:16s} {what}")
         return 0
-    unknown = [name for name in args.groups if name not in GROUPS]
-    if unknown:
-        raise InvalidArgument(f"unknown kernel family {unknown}; families are {list(GROUPS)} (drake-mh warmup --list)")
-    if args.jobs is not None and args.jobs < 1:
-        raise InvalidArgument(f"--jobs must be at least 1, got {args.jobs}")
-    names = args.groups or list(GROUPS)
+    names, workers = check_groups(args.groups or None, args.jobs)
+    print(f"compiling {len(names)} kernel families in {workers} processes (cached in "
+          f"{os.environ.get('NUMBA_CACHE_DIR', 'numba’s default folder')}; cached kernels only load)", flush=True)
     quiet = getattr(args, "quiet", False)
-    print(f"compiling {len(names)} kernel families in {min(len(names), args.jobs or os.cpu_count() or 1)} processes "
-          f"(cached in {os.environ.get('NUMBA_CACHE_DIR', 'numba’s default folder')}); already cached kernels load "
-          f"in seconds", flush=True)
     start, done, failed = time.perf_counter(), [], []
 
     def progress(result: dict) -> None:
@@ -55,7 +48,7 @@ def cmd_warmup(args: argparse.Namespace) -> int:
             print(f"[{len(done)}/{len(names)}] {result['group']}: {result['seconds']:.0f} s "
                   f"({result['cpu']:.0f} s CPU) {status}", flush=True)
 
-    warmup(names, processes=args.jobs, progress=progress)
+    warmup(names, processes=workers, progress=progress)
     print(f"{len(done) - len(failed)}/{len(names)} kernel families ready in {time.perf_counter() - start:.0f} s",
           flush=True)
     if failed:
