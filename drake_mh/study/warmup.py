@@ -284,7 +284,11 @@ def main(argv: list[str] | None = None) -> int:
     records = _recorder()
     if args.group:
         out = run_group(args.group)
-        out["kernels"] = [[m, q, len(a), w, c] for m, q, a, w, c in records]
+        kernels: dict = {}  # (module, qualname) -> [specializations, wall s, CPU s]
+        for m, q, _, w, c in records:
+            entry = kernels.setdefault((m, q), [0, 0.0, 0.0])
+            entry[0], entry[1], entry[2] = entry[0] + 1, entry[1] + w, entry[2] + c
+        out["kernels"] = [[m, q, *entry] for (m, q), entry in kernels.items()]
         if args.signatures:
             with open(args.signatures, "wb") as fh:
                 pickle.dump([(m, q, a) for m, q, a, _, _ in records], fh)
