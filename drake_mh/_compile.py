@@ -9,7 +9,7 @@ minutes. So:
   once numba is imported: before a kernel of the package compiles at the top level (called from
   Python, not from another kernel), one line goes to the ``drake_mh.compile`` logger at WARNING,
   which Python prints on stderr when the user configured no logging; it names the kernel, about
-  how long it takes here from an empty cache (:data:`EXPECTED_SECONDS`) and where it is cached.
+  how long it takes here from an empty cache (:data:`KERNELS`) and where it is cached.
   :func:`compile_seconds` counts the seconds spent compiling, for callers that report them.
 * :func:`stable_calls` makes a kernel that other kernels call compile once per argument *types*,
   not once per constant *value* a caller passes (numba compiles a separate copy of a kernel for
@@ -29,18 +29,18 @@ import time
 
 logger = logging.getLogger("drake_mh.compile")
 
-EXPECTED_SECONDS = {
-    "collision_free_one": 25,
-    "collision_free_packed": 25,
-    "obstacle_clearances_packed": 25,
-    "plan_kernel": 120,
-    "certify_segments": 40,
-    "certify_motions": 100,
-    "prm_kernel": 200,
-    "lm_run": 30,
+KERNELS = {
+    "collision_free_one": ("the scene's collision check of one configuration", 21),
+    "collision_free_packed": ("the scene's batched collision check", 28),
+    "obstacle_clearances_packed": ("the scene's batched clearances", 25),
+    "certify_segments": ("the certified motion check", 40),
+    "plan_kernel": ("rrt_connect's planner", 120),
+    "certify_motions": ("rrt_connect's motion check", 100),
+    "prm_kernel": ("lazy_prm_star's planner", 200),
 }
-"""[s] CPU time to compile a kernel from an empty cache on the reference machine (2-core AMD EPYC,
-``drake-mh study first_call``); kernels not listed take a few seconds to a minute."""
+"""What the kernels a user's first calls compile do, and the CPU seconds each takes from an empty
+cache on the reference machine (2-core AMD EPYC; ``drake-mh study first_call``). Others take a
+few seconds to a minute."""
 
 _STATE = {"depth": 0, "seconds": 0.0, "started": 0.0, "first": True, "installed": False}
 _LOCK = threading.Lock()
@@ -50,7 +50,7 @@ def compile_seconds() -> float:
     """Seconds this process has spent compiling the package's kernels (top-level compiles, their
     callees included); read it before and after a call to get that call's share."""
     with _LOCK:
-        running = time.perf_counter() - _STATE["started"] if _STATE["depth"] else 0.0
+        running = time.perf_counter() - _STATE["started"] if _STATE["depth"] and _STATE.get("ours") else 0.0
         return _STATE["seconds"] + running
 
 
@@ -59,8 +59,8 @@ def _cache_folder() -> str:
 
 
 def _announce(name: str) -> None:
-    seconds = EXPECTED_SECONDS.get(name)
-    about = f"about {seconds} s" if seconds else "seconds to a minute"
+    what, seconds = KERNELS.get(name, (None, None))
+    about = f"{what}, about {seconds} s" if what else "seconds to a minute"
     if _STATE["first"]:
         _STATE["first"] = False
         logger.warning("drake_mh: compiling %s (%s, once per machine: cached in %s; `drake-mh warmup` compiles "
