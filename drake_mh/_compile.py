@@ -34,8 +34,8 @@ KERNELS = {
     "collision_free_packed": ("the scene's batched collision check", 28),
     "obstacle_clearances_packed": ("the scene's batched clearances", 25),
     "certify_segments": ("the certified motion check", 40),
-    "plan_kernel": ("rrt_connect's planner", 120),
-    "certify_motions": ("rrt_connect's motion check", 100),
+    "plan_kernel": ("rrt_connect's planner", 110),
+    "certify_motions": ("rrt_connect's motion check", 95),
     "prm_kernel": ("lazy_prm_star's planner", 200),
 }
 """What the kernels a user's first calls compile do, and the CPU seconds each takes from an empty
