@@ -67,11 +67,21 @@ def _rrt_connect() -> None:
 
 def _verification() -> None:
     """A motion's verification, retiming and certificates (:func:`drake_mh.planning.verify_motion`
-    through the ``straight`` planner on a generated problem)."""
-    from drake_mh.planning import solve_motion
-    from drake_mh.planning.problems import problem_set
+    of the free straight motion of a first plan; the problem is given without a MotionProblem,
+    whose checks belong to :func:`_motion_problem`)."""
+    from types import SimpleNamespace
 
-    solve_motion(problem_set("table_pick", "panda", count=1)[0], "straight", seed=0, timeout=1.0)
+    import numpy as np
+
+    from drake_mh.planning import verify_motion
+
+    robot, scene = _panda_scene()
+    goal = np.array([1.0, 0.3, 0.0, -1.5, 0.0, 1.8, 0.7])
+    problem = SimpleNamespace(robot=robot, scene=scene, q_start=robot.home.copy(), goal_configurations=goal[None],
+                              goal_pose=None, frame=None, clearance=0.01, self_clearance=0.0)
+    result = verify_motion(problem, np.array([robot.home, goal]), "straight")
+    if result.trajectory is None:
+        raise RuntimeError(f"the warm-up motion was not retimed ({result.message}): its kernels did not all compile")
 
 
 def _lazy_prm_star() -> None:
