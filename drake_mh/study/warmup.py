@@ -217,6 +217,16 @@ def warmup(groups: Iterable[str] | None = None, processes: int | None = None,
     return results
 
 
+def _demo_planning() -> None:
+    """The quick ``motion_benchmark``'s kernels besides the planner's: its problem set's generation
+    (IK, exact distances) and a motion's verification and retiming."""
+    from drake_mh.planning import solve_motion
+    from drake_mh.planning.problems import problem_set
+
+    solve_motion(problem_set("table_pick", "panda", count=1)[0], "straight", seed=0, timeout=1.0)
+    _verification()
+
+
 def _run(target) -> None:
     try:
         target()
@@ -225,12 +235,12 @@ def _run(target) -> None:
 
 
 def start() -> list:
-    """Starts the compilation of the planning kernels in two new processes (``spawn``):
-    ``rrt_connect``'s and the verification's (the quick ``motion_benchmark``'s); an empty list
+    """Starts the compilation of the quick ``motion_benchmark``'s kernels in two new processes
+    (``spawn``): ``rrt_connect``'s, and its problem set's and verification's; an empty list
     if processes cannot start. Nothing here is timed or reported: a failure only means the
     study compiles for itself."""
     processes = []
-    for target in (_rrt_connect, _verification):
+    for target in (_rrt_connect, _demo_planning):
         try:
             process = multiprocessing.get_context("spawn").Process(target=_run, args=(target,),
                                                                    name="drake_mh-warmup", daemon=True)
