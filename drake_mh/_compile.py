@@ -33,7 +33,7 @@ KERNELS = {
     "collision_free_one": ("the scene's collision check of one configuration", 21),
     "collision_free_packed": ("the scene's batched collision check", 28),
     "obstacle_clearances_packed": ("the scene's batched clearances", 25),
-    "certify_segments": ("the certified motion check", 40),
+    "certify_segments": ("the certified motion check", 57),
     "plan_kernel": ("rrt_connect's planner", 110),
     "certify_motions": ("rrt_connect's motion check", 95),
     "prm_kernel": ("lazy_prm_star's planner", 200),
