@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import importlib
 
-from drake_mh._support import numba_cache
+from drake_mh._support import compilation, numba_cache
 
 numba_cache.configure()  # before any kernel module is imported: numba's cache, keyed by the sources
+compilation.install()  # one line on stderr before a kernel compiles (drake_mh._support.compilation)
 
 from drake_mh import errors  # noqa: E402
 

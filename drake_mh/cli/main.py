@@ -20,14 +20,14 @@ import traceback
 from collections.abc import Sequence
 from typing import NoReturn
 
-from drake_mh.cli import app, demo, ik, plan, retime, robots, study
+from drake_mh.cli import app, demo, ik, plan, retime, robots, study, warmup
 from drake_mh.errors import DrakeMhError
 
 logger = logging.getLogger(__name__)
 
 PROG = "drake-mh"
 
-COMMANDS = (robots, ik, study, demo, app, plan, retime)
+COMMANDS = (robots, ik, study, demo, app, plan, retime, warmup)
 """The command modules, in help order (``study`` adds ``study`` and ``report``)."""
 COMMAND_MODULES: tuple[str, ...] = tuple(module.__name__ for module in COMMANDS)
 """Their names."""

@@ -18,6 +18,7 @@ import math
 import numba
 import numpy as np
 
+from drake_mh._support.compilation import stable_calls
 from drake_mh.planning.motion.clock import now
 from drake_mh.planning.motion.stats import BY_MARGIN, BY_PROBES, MOTIONS, REFINE_EVALS, REFINED, REJECTED, \
     STATES, T_CERTIFY, T_CHECK
@@ -228,6 +229,7 @@ def probe_collides(qa, qb, ctx, interior):
     return check_states(PT, 0, probes, link, pair, link, pair, mws[8], mws[15], ctx, mws[13], mws[14]) == COLLISION
 
 
+@stable_calls()
 @numba.njit(cache=True)
 def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance, resolution, max_margin, max_evals,
                      by_values, stats, clock, buf, profile, interior):

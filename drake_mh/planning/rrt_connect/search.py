@@ -16,6 +16,7 @@ import math
 import numba
 import numpy as np
 
+from drake_mh._support.compilation import stable_calls
 from drake_mh._support.borrow import borrow
 from drake_mh._support.random import below, uniform
 from drake_mh.planning.motion import certified_motion, drop_collinear, motion_capacity, now, shortcut, workspaces
@@ -94,6 +95,7 @@ def _next_tree(balance, a, count):
     return 1 - a
 
 
+@stable_calls()
 @numba.njit(cache=True)
 def _out_of_domain(q, i_node, V, D, a):
     """Whether sample ``q`` lies beyond the domain radius of its nearest node ``i_node`` of tree
@@ -107,6 +109,7 @@ def _out_of_domain(q, i_node, V, D, a):
     return d > radius * radius
 
 
+@stable_calls()
 @numba.njit(cache=True)
 def _trace(V, P, tree, i):
     """Rows of tree ``tree`` from node ``i`` up to its root, in that order."""
@@ -123,6 +126,7 @@ def _trace(V, P, tree, i):
     return out
 
 
+@stable_calls()
 @numba.njit(cache=True)
 def _root(P, tree, i):
     while P[tree, i] >= 0:

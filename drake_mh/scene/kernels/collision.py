@@ -29,6 +29,7 @@ import math
 import numba
 import numpy as np
 
+from drake_mh._support.compilation import stable_calls
 from drake_mh.kinematics.kernels import frames_block
 from drake_mh.scene.kernels.pairs import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
@@ -221,6 +222,7 @@ def _range_free(b, a, s0, s1, s_offset, s_radius, clearance, R, p, k, kinds, R_W
     return True
 
 
+@stable_calls()
 @numba.njit(cache=True, fastmath=FASTMATH)  # not inlined: a copy in collision_free's lane loop slowed it 25 %
 def _groups_free(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, clearance, R, p, k, kinds, R_WO,
                  p_WO, dims):
@@ -350,6 +352,7 @@ def _compact_centres(c, offsets, r, Rc, pc, ccx, ccy, ccz):
         ccz[i] = pc[2, i] + Rc[2, 0, i] * o0 + Rc[2, 1, i] * o1 + Rc[2, 2, i] * o2
 
 
+@stable_calls()
 @numba.njit(cache=True, fastmath=FASTMATH)
 def _spheres_sd(c, s0, s1, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, s_offset, s_radius, ccx, ccy, ccz, sd, sc):
     """``sc[i] = min(sc[i], sd_k(c_s) - r_s)`` over spheres ``s0 .. s1-1`` for the ``c``
@@ -361,6 +364,7 @@ def _spheres_sd(c, s0, s1, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, s_offse
             sc[i] = min(sc[i], sd[i] - s_radius[s])
 
 
+@stable_calls()
 @numba.njit(cache=True, fastmath=FASTMATH)
 def _groups_sd(c, u0, u1, lim, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, u_start, u_offset, u_radius, s_offset,
                s_radius, ccx, ccy, ccz, sd, sc, glb, fl):
@@ -400,6 +404,7 @@ def _groups_sd(c, u0, u1, lim, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, u_s
         sc[i] = min(sc[i], fl[i])
 
 
+@stable_calls()
 @numba.njit(cache=True, fastmath=FASTMATH)
 def link_clearances(QT, tau, fine_below, pair_fine_below, mode, parent, KR, Kp, perm, kind, qidx,
                     g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,

@@ -31,6 +31,8 @@ import math
 
 import numba
 
+from drake_mh._support.compilation import stable_calls
+
 FASTMATH = {"nnan", "nsz", "contract"}
 """Fast-math flags of the collision kernels. No ``ninf``: infinite values mean "nothing near"
 here, and LLVM may fold ``x < inf`` under it."""
@@ -118,6 +120,7 @@ def _near_groups(b, a, u0, u1, u_start, u_offset, u_radius, s_offset, s_radius, 
     return n, low
 
 
+@stable_calls("lower")
 @numba.njit(cache=True, fastmath=FASTMATH)
 def pair_clearance(b, ga, gb, bound, stop, lower, g_anchor, g_start, g_radius, g_ustart, u_start, u_offset, u_radius,
                    cax, cay, caz, cbx, cby, cbz, s_offset, s_radius, R, p, buf):

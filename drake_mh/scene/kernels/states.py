@@ -46,6 +46,7 @@ import math
 import numba
 import numpy as np
 
+from drake_mh._support.compilation import stable_calls
 from drake_mh.kinematics.kernels import frames_block
 from drake_mh.scene.kernels.collision import _centre_block, _obstacle_free, _point_distance, _point_free
 from drake_mh.scene.kernels.pairs import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
@@ -200,6 +201,7 @@ def _groups_lanes(m, a, u0, u1, margin, plain, k, ctx):
     return answer
 
 
+@stable_calls()
 @numba.njit(cache=True, fastmath=FASTMATH)
 def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, inv_lam, speeds, ctx, out, tau):
     """Check configurations ``QT[:, n0:n0+m]`` at two clearance levels in one pass.
@@ -351,6 +353,7 @@ def check_states(QT, n0, m, link_margin, pair_margin, link_plain, pair_plain, in
     return answer
 
 
+@stable_calls()
 @numba.njit(cache=True)
 def check_blocks(QT, n, lanes, margins, plain, inv_lam, speeds, ctx, out, tau):
     """Columns ``0 .. n-1`` of ``QT`` in blocks (:func:`check_states`): the first of ``lanes[0]``

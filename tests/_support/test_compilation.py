@@ -1,0 +1,146 @@
+"""Compilation made visible and shorter (drake_mh/_support/compilation.py): the notice before a kernel
+compiles, the seconds counted, one specialization per kernel, the inliner's shared copies."""
+
+from __future__ import annotations
+
+import copy
+import logging
+import os
+import subprocess
+import sys
+import textwrap
+
+import numba
+import numpy as np
+import pytest
+
+import drake_mh  # noqa: F401 - installs the compile listener
+from drake_mh._support import compilation as _compile
+
+
+def _kernel_in(module: str, source: str, name: str):
+    """A fresh numba kernel whose function belongs to ``module`` (compiled on its first call)."""
+    namespace = {"np": np, "numba": numba}
+    exec(textwrap.dedent(source), namespace)  # noqa: S102 - test source
+    function = namespace[name]
+    function.__module__ = module
+    return numba.njit(cache=False)(function)
+
+
+def test_a_package_kernel_is_announced_and_timed(caplog):
+    kernel = _kernel_in("drake_mh.fake_kernels", """
+        def summed(x):
+            s = 0.0
+            for v in x:
+                s += v
+            return s
+    """, "summed")
+    before = _compile.compile_seconds()
+    with caplog.at_level(logging.WARNING, logger="drake_mh.compile"):
+        assert kernel(np.arange(4.0)) == 6.0
+        kernel(np.arange(3.0))  # compiled already: no second notice
+    notices = [r.getMessage() for r in caplog.records if r.name == "drake_mh.compile"]
+    assert len(notices) == 1 and "compiling summed" in notices[0]
+    assert _compile.compile_seconds() > before
+
+
+def test_other_kernels_are_neither_announced_nor_counted(caplog):
+    kernel = _kernel_in("user_code", "def twice(x):\n    return 2 * x\n", "twice")
+    before = _compile.compile_seconds()
+    with caplog.at_level(logging.WARNING, logger="drake_mh.compile"):
+        assert kernel(2.0) == 4.0
+    assert not [r for r in caplog.records if r.name == "drake_mh.compile"]
+    assert _compile.compile_seconds() == before
+
+
+def _callers(callee):
+    @numba.njit(cache=False)
+    def with_constant(x):
+        return callee(x, 0)
+
+    @numba.njit(cache=False)
+    def with_variable(x, i):
+        return callee(x, i)
+
+    return with_constant, with_variable
+
+
+def _offset(x, i):
+    return x + i
+
+
+def test_stable_calls_compiles_one_copy_for_constants_and_variables():
+    plain = numba.njit(cache=False)(_offset)
+    stable = _compile.stable_calls()(numba.njit(cache=False)(_offset))
+    for callee, copies in ((plain, 2), (stable, 1)):
+        with_constant, with_variable = _callers(callee)
+        assert with_constant(1.0) == 1.0 and with_variable(1.0, 2) == 3.0
+        assert len(callee.signatures) == copies  # numba's own: one copy for f(x, 0), one for f(x, i)
+
+
+def test_stable_calls_keeps_the_constants_it_is_told_to():
+    stable = _compile.stable_calls("i")(numba.njit(cache=False)(_offset))
+    with_constant, with_variable = _callers(stable)
+    assert with_constant(1.0) == 1.0 and with_variable(1.0, 2) == 3.0
+    assert len(stable.signatures) == 2
+    with pytest.raises(ValueError, match="no parameter"):
+        _compile.stable_calls("j")(numba.njit(cache=False)(_offset))
+
+
+def _branchy(x):
+    s = 0.0
+    for i in range(x.shape[0]):
+        if x[i] > 0:
+            s += x[i]
+        else:
+            s -= 2 * x[i]
+    return s
+
+
+def test_shared_block_copies_equal_numba_s_own_copies():
+    """The inliner's copy of a function's IR, block by block: the same blocks as numba's own
+    (a fresh deepcopy per block), sharing one scope as the original blocks do."""
+    from numba.core import ir
+    from numba.core.compiler import run_frontend
+
+    blocks = run_frontend(_branchy).blocks
+    shared = _compile._SharedBlockCopies(copy, ir.Block)
+    for _ in range(2):  # a second copy of the same IR starts anew
+        ours = {label: shared.deepcopy(block) for label, block in blocks.items()}
+        numbas = {label: copy.deepcopy(block) for label, block in blocks.items()}
+        assert ours.keys() == numbas.keys()
+        for label in blocks:
+            assert [str(s) for s in ours[label].body] == [str(s) for s in numbas[label].body]
+            assert ours[label] is not blocks[label] and ours[label].scope is not blocks[label].scope
+        assert len({id(b.scope) for b in ours.values()}) == len({id(b.scope) for b in blocks.values()})
+
+
+@pytest.mark.slow
+def test_a_first_plan_says_what_compiles_before_it_compiles(tmp_path):
+    """The first-plan script from an empty cache, in a new process: the notice is on stderr
+    before the marker that follows the first compiled call (no timing asserted)."""
+    script = tmp_path / "first_plan.py"
+    script.write_text(textwrap.dedent("""
+        import sys
+        import numpy as np
+        import drake_mh
+        from drake_mh.planning import MotionProblem
+        from drake_mh.scene import Box, Scene, Sphere
+        panda = drake_mh.load_robot("panda")
+        scene = Scene(panda)
+        scene.add("ball", Sphere(0.1), [0.5, 0.0, 0.5])
+        scene.add("table", Box(1.0, 1.0, 0.05), [0.5, 0.0, -0.05])
+        print("MARK before", file=sys.stderr, flush=True)
+        MotionProblem(panda, scene, panda.home.copy(), np.array([1.0, 0.3, 0.0, -1.5, 0.0, 1.8, 0.7]), clearance=0.01)
+        print("MARK problem built", file=sys.stderr, flush=True)
+    """))
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "DRAKE_MH_NUMBA_CACHE_DIR")}
+    env["DRAKE_MH_CACHE"] = str(tmp_path / "cache")
+    done = subprocess.run([sys.executable, str(script)], env=env, capture_output=True, text=True, timeout=1800)
+    assert done.returncode == 0, done.stderr[-3000:]
+    lines = done.stderr.splitlines()
+    marks = [i for i, line in enumerate(lines) if line.startswith("MARK")]
+    notices = [i for i, line in enumerate(lines) if line.startswith("drake_mh: compiling")]
+    assert len(marks) == 2 and notices, done.stderr[-3000:]
+    assert marks[0] < notices[0] < marks[1]  # announced after the script started, before the call returned
+    assert str(tmp_path / "cache") in lines[notices[0]]  # says where it is cached
