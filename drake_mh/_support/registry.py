@@ -94,6 +94,10 @@ class Registry:
         self._entries[name] = _Entry(description, value, load, None if args is None else tuple(args),
                                      tuple(requires))
 
+    def remove(self, name: str) -> None:
+        """Removes method ``name`` (one you added; nothing if there is none)."""
+        self._entries.pop(name, None)
+
     def register(self, name: str, description: str = "", requires: tuple[str, ...] = ()):
         """Decorator form of :meth:`add`: ``@METHODS.register("name", "what it does")``."""
 

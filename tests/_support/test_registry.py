@@ -70,6 +70,8 @@ def test_register_adds_the_decorated_function_and_extend_runs_once_before_the_fi
     assert table.get("early") is early
     with pytest.raises(UnknownMethod):
         table.get("EARLY")  # case-sensitive by default
+    table.remove("early")
+    assert table.names() == ["late"]
 
 
 def test_the_three_tables_agree_with_their_entry_points():

@@ -152,12 +152,13 @@ def test_problem_errors():
         solve_motion(problem, "straight", timeout=-1)
 
 
-def test_prepare_gets_the_options_before_the_clock(monkeypatch):
+def test_prepare_gets_the_options_before_the_clock(request):
     """solve_motion hands the plan's options to its prepare (issue #18): a prepare with
     **options gets them all, one that names some gets those, and its time is not planning time."""
     import time
 
-    from drake_mh.planning import prepare_motion_method, solve
+    from drake_mh.planning import prepare_motion_method, register
+    from drake_mh.planning.methods import METHODS
     from drake_mh.planning.straight import plan as straight
 
     seen = []
@@ -171,7 +172,8 @@ def test_prepare_gets_the_options_before_the_clock(monkeypatch):
         time.sleep(0.05)
 
     plan.prepare = prepare
-    monkeypatch.setitem(solve._METHODS, "test_prepared", (plan, "test"))
+    register("test_prepared", "test")(plan)
+    request.addfinalizer(lambda: METHODS.remove("test_prepared"))
     q_goal = PANDA.home.copy()
     q_goal[0] += 0.5
     problem = MotionProblem(PANDA, ball_scene(), PANDA.home, q_goal)
