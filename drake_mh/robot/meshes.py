@@ -23,6 +23,7 @@ import numpy as np
 
 from drake_mh._support.cache import atomic_write_bytes, cache_dir, content_hash
 from drake_mh.errors import MeshConversionError
+from drake_mh.geometry.mesh import collada_unit
 
 logger = logging.getLogger(__name__)
 
@@ -43,7 +44,7 @@ def _load_trimesh(path: Path):
     except Exception as exc:  # trimesh raises many kinds (ValueError, KeyError, ImportError ...)
         raise MeshConversionError(str(path), f"{type(exc).__name__}: {exc}") from exc
     if path.suffix.lower() == ".dae":
-        scale = _collada_unit(path)
+        scale = collada_unit(path)
         if scale != 1.0:  # ROS tools (assimp) scale by <unit meter>; trimesh does not
             mesh.apply_scale(scale)
     vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=float)
@@ -51,23 +52,6 @@ def _load_trimesh(path: Path):
         raise MeshConversionError(str(path), f"the file holds {len(vertices)} finite vertices, "
                                   "a convex hull needs at least 4 that are not coplanar")
     return mesh
-
-
-def _collada_unit(path: Path) -> float:
-    """The ``<unit meter="...">`` of a COLLADA file's asset (1 when absent or unreadable)."""
-    import re
-
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(16384).decode("utf-8", "replace")
-    except OSError:
-        return 1.0
-    match = re.search(r"<unit\b[^>]*\bmeter\s*=\s*[\"']([^\"']+)[\"']", head)
-    try:
-        value = float(match.group(1)) if match else 1.0
-    except ValueError:
-        return 1.0
-    return value if np.isfinite(value) and value > 0 else 1.0
 
 
 def _obj_bytes(vertices: np.ndarray, faces: np.ndarray, comment: str) -> bytes:

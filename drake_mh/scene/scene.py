@@ -30,10 +30,12 @@ import numpy as np
 
 from drake_mh.errors import SceneError, UnknownObstacle
 from drake_mh.scene.exact import DistancePair, ExactDistances, exclude_from_drake, link_kinds
+from drake_mh.geometry.cloud import PointCloud
+from drake_mh.geometry.mesh import Mesh
 from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere, as_shape
 from drake_mh.geometry.spheres import DEFAULT_TOLERANCE, SphereModel
 
-__all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule"]
+__all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule", "Mesh", "PointCloud"]
 
 _F8, _NDARRAY, _INF = np.dtype(np.float64), np.ndarray, float("inf")  # Scene.collision_free's fast paths
 
