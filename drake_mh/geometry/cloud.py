@@ -209,7 +209,32 @@ class PointCloud:
                 drop[i] = any(d.distance < margin for d in query.ComputeSignedDistanceToPoint(p_W[i], margin))
         return self._derived(self.points[~drop])
 
+    @property
+    def digest(self) -> str:
+        """SHA-256 of the points and the radius: names the cloud (in reprs and caches)."""
+        if "_digest" not in self.__dict__:
+            from drake_mh._support.cache import content_hash
+
+            self._digest = content_hash("drake_mh-point-cloud", self.points.tobytes(), repr(self.radius))
+        return self._digest
+
+    @property
+    def circumradius(self) -> float:
+        """Radius [m] of the smallest origin-centred ball that holds every ball of the cloud."""
+        return float(np.sqrt(np.max(np.einsum("ij,ij->i", self.points, self.points)))) + self.radius
+
+    def signed_distance(self, p_O: np.ndarray) -> np.ndarray:
+        """Exact signed distance ``(...)`` [m] of points ``p_O (..., 3)`` (in O) to the union of
+        the balls: the distance to the nearest point (scipy's ``cKDTree``) minus the radius."""
+        from scipy.spatial import cKDTree
+
+        if "_tree" not in self.__dict__:
+            self._tree = cKDTree(self.points)
+        p = np.asarray(p_O, dtype=float)
+        return self._tree.query(p.reshape(-1, 3))[0].reshape(p.shape[:-1]) - self.radius
+
     def __repr__(self) -> str:
         extra = f", dropped={self.dropped}" if self.dropped else ""
         source = f", source={self.source!r}" if self.source else ""
-        return f"PointCloud({len(self.points)} points, radius={self.radius!r}{extra}{source})"
+        return (f"PointCloud({len(self.points)} points, radius={self.radius!r}{extra}{source}, "
+                f"digest={self.digest[:12]!r})")

@@ -26,7 +26,7 @@ import numpy as np
 from drake_mh._support.cache import content_hash
 from drake_mh.errors import ObstacleFileError, ObstacleFileNotFound
 
-__all__ = ["Mesh", "MESH_SUFFIXES", "collada_unit", "read_surface"]
+__all__ = ["Mesh", "MESH_SUFFIXES", "collada_unit", "read_surface", "obj_bytes"]
 
 MESH_SUFFIXES = (".stl", ".obj", ".dae", ".ply", ".off", ".gltf", ".glb", ".vtk")
 """File suffixes :class:`Mesh` reads (case-insensitive)."""
@@ -45,6 +45,14 @@ def collada_unit(path: Path) -> float:
     except ValueError:
         return 1.0
     return value if np.isfinite(value) and value > 0 else 1.0
+
+
+def obj_bytes(vertices: np.ndarray, faces: np.ndarray, comment: str) -> bytes:
+    """A Wavefront ``.obj`` file of the triangles ``vertices[faces]`` (full precision)."""
+    lines = [f"# {comment}"]
+    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in np.asarray(vertices, dtype=float).tolist()]
+    lines += [f"f {i} {j} {k}" for i, j, k in (np.asarray(faces, dtype=np.int64) + 1).tolist()]
+    return ("\n".join(lines) + "\n").encode()
 
 
 def _scale3(scale, path) -> tuple:
@@ -184,6 +192,44 @@ class Mesh:
             return False
         hull = mesh.convex_hull.volume
         return bool(hull > 0 and abs(abs(mesh.volume) - hull) <= 1e-6 * hull)
+
+    @property
+    def circumradius(self) -> float:
+        """Radius [m] of the smallest origin-centred ball that holds the mesh and its convex
+        pieces grown by their cover excess."""
+        from drake_mh.geometry.convex_pieces import convex_pieces
+
+        pieces = convex_pieces(self)
+        return float(max(np.linalg.norm(np.concatenate(pieces.vertices), axis=1).max(),
+                         np.linalg.norm(self.vertices, axis=1).max()) + pieces.excess)
+
+    def signed_distance(self, p_O: np.ndarray) -> np.ndarray:
+        """A lower bound ``(...)`` [m] of the signed distance of points ``p_O (..., 3)`` (in O) to
+        the mesh: the smallest over its convex pieces (grown by their cover excess) of their
+        plane bound (:meth:`drake_mh.geometry.convex_pieces.ConvexPieces.signed_distance_bound`);
+        exact inside a piece."""
+        from drake_mh.geometry.convex_pieces import convex_pieces
+
+        return convex_pieces(self).signed_distance_bound(p_O)
+
+    def obj_file(self) -> Path:
+        """The scaled surface as a cached ``.obj`` file (under ``cache_dir("meshes")``), for
+        Drake and Meshcat, which read ``.obj`` but not every format :class:`Mesh` does."""
+        from drake_mh._support.cache import atomic_write_bytes, cache_dir
+
+        path = cache_dir("meshes") / f"{self.digest[:32]}_obstacle.obj"
+        if not path.is_file():
+            atomic_write_bytes(path, obj_bytes(self.vertices, self.faces, f"{self.path.name} scaled (drake_mh)"))
+        return path
+
+    def to_drake(self):
+        """A ``pydrake.geometry.Mesh`` of the scaled surface (:meth:`obj_file`): for Meshcat and
+        illustration. Drake's proximity queries would use its convex hull; a
+        :class:`drake_mh.scene.Scene` checks the convex pieces instead
+        (:mod:`drake_mh.geometry.convex_pieces`)."""
+        from pydrake.geometry import Mesh as DrakeMesh
+
+        return DrakeMesh(str(self.obj_file()))
 
     def __eq__(self, other) -> bool:
         return isinstance(other, Mesh) and other.digest == self.digest

@@ -15,7 +15,6 @@ conversion kind, so an edited mesh gets a new entry and a second load reads the 
 
 from __future__ import annotations
 
-import io
 import logging
 from pathlib import Path
 
@@ -23,7 +22,7 @@ import numpy as np
 
 from drake_mh._support.cache import atomic_write_bytes, cache_dir, content_hash
 from drake_mh.errors import MeshConversionError
-from drake_mh.geometry.mesh import collada_unit
+from drake_mh.geometry.mesh import collada_unit, obj_bytes
 
 logger = logging.getLogger(__name__)
 
@@ -52,16 +51,6 @@ def _load_trimesh(path: Path):
         raise MeshConversionError(str(path), f"the file holds {len(vertices)} finite vertices, "
                                   "a convex hull needs at least 4 that are not coplanar")
     return mesh
-
-
-def _obj_bytes(vertices: np.ndarray, faces: np.ndarray, comment: str) -> bytes:
-    out = io.StringIO()
-    out.write(f"# {comment}\n")
-    for x, y, z in np.asarray(vertices, dtype=float).tolist():
-        out.write(f"v {x!r} {y!r} {z!r}\n")
-    for i, j, k in (np.asarray(faces, dtype=np.int64) + 1).tolist():
-        out.write(f"f {i} {j} {k}\n")
-    return out.getvalue().encode()
 
 
 def _cached(path: Path, kind: str, make) -> Path:
@@ -97,7 +86,7 @@ def collision_hull(path: str | Path) -> Path:
             raise MeshConversionError(str(path), f"no 3-D convex hull ({exc})") from exc
         if len(hull.faces) < 4:
             raise MeshConversionError(str(path), "the mesh is flat (its hull has no volume)")
-        return _obj_bytes(np.asarray(hull.vertices), np.asarray(hull.faces),
+        return obj_bytes(np.asarray(hull.vertices), np.asarray(hull.faces),
                           f"convex hull of {path.name} (drake_mh)")
 
     return _cached(path, "hull", make)
@@ -115,7 +104,7 @@ def visual_mesh(path: str | Path) -> Path:
 
     def make() -> bytes:
         mesh = _load_trimesh(path)
-        return _obj_bytes(np.asarray(mesh.vertices), np.asarray(mesh.faces),
+        return obj_bytes(np.asarray(mesh.vertices), np.asarray(mesh.faces),
                           f"{path.name} converted for Meshcat (drake_mh)")
 
     return _cached(path, "visual", make)

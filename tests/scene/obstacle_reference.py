@@ -1,0 +1,45 @@
+"""Independent references for mesh and point-cloud obstacles: the robot's collision geometry
+posed by Drake on a fresh context, its exact signed distance to points by the closed forms of
+drake_mh.geometry.shapes (sphere, box, cylinder, capsule links), and dense samples of the
+original (not decomposed) mesh surface."""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from drake_mh.geometry.shapes import from_drake
+
+
+class PointDistance:
+    """``min over robot geometries and points of sd_geometry(point)`` for configurations."""
+
+    def __init__(self, robot):
+        from pydrake.geometry import Role
+
+        self.robot = robot
+        self.context = robot.diagram.CreateDefaultContext()
+        self.plant_context = robot.plant.GetMyMutableContextFromRoot(self.context)
+        self.sg_context = robot.scene_graph.GetMyContextFromRoot(self.context)
+        inspector = robot.scene_graph.model_inspector()
+        self.geometries = [(gid, from_drake(inspector.GetShape(gid)))
+                           for gid in inspector.GetAllGeometryIds(Role.kProximity)
+                           if inspector.GetFrameId(gid) != inspector.world_frame_id()]
+
+    def __call__(self, q, points_W: np.ndarray) -> float:
+        """Smallest signed distance [m] of the robot at ``q`` to ``points_W (n, 3)``."""
+        self.robot.plant.SetPositions(self.plant_context, q)
+        query = self.robot.scene_graph.get_query_output_port().Eval(self.sg_context)
+        best = np.inf
+        for gid, shape in self.geometries:
+            X = query.GetPoseInWorld(gid)
+            R, p = X.rotation().matrix(), X.translation()
+            best = min(best, float(shape.signed_distance((points_W - p) @ R).min()))
+        return best
+
+
+def surface_samples(mesh, X_WO: np.ndarray, count: int = 20000, seed: int = 0) -> np.ndarray:
+    """``(count, 3)`` points of the mesh's surface in W (even sampling, deterministic)."""
+    surface = trimesh.Trimesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), process=False)
+    points, _ = trimesh.sample.sample_surface(surface, count, seed=seed)
+    return np.asarray(points) @ X_WO[:3, :3].T + X_WO[:3, 3]
