@@ -339,7 +339,7 @@ class ExactDistances:
             for obstacle in state.clouds:
                 rows = cloud_rows(self, state, q, obstacle, best)
                 if len(rows):
-                    best = min(best, float(rows[:, 0].min()))
+                    best = min(best, float(rows[:, 1].min()))  # column 0: the geometry
         return float(best)
 
     def distances(self, q, max_distance: float) -> list[DistancePair]:

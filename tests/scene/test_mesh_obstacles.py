@@ -105,9 +105,10 @@ def test_distances_one_pair_per_link_and_mesh():
     scene, points = mesh_scene(5)
     q = near_configurations(scene, 5, 2)[0]
     pairs = scene.distances(q)
-    keys = [(p.link, p.other) for p in pairs]
-    assert len(keys) == len(set(keys)) or len(PANDA.link_names()) < len(keys)  # per geometry, not per piece
-    assert {p.other for p in pairs} == {"bin", "bracket"}
+    geometries = len(scene._robot_ids)
+    assert len(convex_pieces(BIN)) > 2
+    for name in ("bin", "bracket"):  # one pair per link geometry, not one per piece
+        assert 0 < sum(p.other == name for p in pairs) <= geometries
     assert min(p.distance for p in pairs) == pytest.approx(scene.min_distance(q), abs=1e-12)
     per_obstacle = scene.batch_obstacle_distances(q.reshape(1, -1))
     assert per_obstacle.shape == (1, 2)

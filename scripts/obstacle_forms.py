@@ -1,7 +1,7 @@
 """Mesh and point-cloud obstacles: build times, query times and planning, against primitives.
 
-A small measuring script (not a Study grid yet; the full integration into
-``studies/motion_benchmark.py`` is a follow-up). It prints, with the CPU model and the load
+A small measuring script, not a study (``studies/`` holds :class:`drake_mh.study.Study` grids;
+the full integration into ``studies/motion_benchmark.py`` is a follow-up). It prints, with the CPU model and the load
 average:
 
 1. **Decomposition**: CoACD and the cover-excess bound per test mesh (``tests/data/``) from an
@@ -18,7 +18,7 @@ average:
    (1 point per cm², radius 0): verified success and whole-call time (plan + verification +
    retiming) per form.
 
-Run: ``python studies/obstacle_forms.py [--quick]``.
+Run: ``python scripts/obstacle_forms.py [--quick]``.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
 
 def _timed(function, rounds: int = 1):
     """Median wall and CPU seconds (:func:`collision_speed._timed`, the same method)."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
     from collision_speed import _timed as timed
 
     return timed(function, rounds)
