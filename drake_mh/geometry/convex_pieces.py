@@ -1,8 +1,9 @@
 """The convex pieces a scene checks a mesh obstacle with, and how far the mesh may leave them.
 
-* A convex mesh (:attr:`drake_mh.geometry.mesh.Mesh.is_convex`) is one piece: its convex hull
-  (which holds every triangle: no excess).
-* Any other mesh is cut into convex pieces by CoACD (Wei et al., "Approximate Convex
+* A convex mesh (:attr:`drake_mh.geometry.mesh.Mesh.is_convex`) whose hull has at most 32
+  vertices is one piece: its convex hull (which holds every triangle: no excess).
+* Any other mesh (a curved convex one too: its hull's vertices are simplified to 32, as the
+  kernels test every plane of a piece) is cut into convex pieces by CoACD (Wei et al., "Approximate Convex
   Decomposition for 3D Meshes with Collision-Aware Concavity and Tree Search", SIGGRAPH 2022;
   the ``coacd`` package, parameters :data:`COACD_PARAMETERS`), a few seconds to a minute per
   mesh, so the result is cached on disk (:func:`drake_mh._support.cache.cache_dir`
@@ -43,7 +44,7 @@ COACD_PARAMETERS = {"threshold": 0.05, "max_ch_vertex": 32, "preprocess_mode": "
 """CoACD's defaults (concavity ``threshold`` 0.05, seed 0), except at most 32 vertices per
 hull (fewer planes for the kernels to test)."""
 
-_VERSION = "1"  # bump when the decomposition or the bound changes: old cache entries are not reused
+_VERSION = "2"  # bump when the decomposition or the bound changes: old cache entries are not reused
 _START_EDGE, _LEVELS, _MAX_TRIANGLES = 0.008, 4, 400_000
 
 
@@ -84,17 +85,18 @@ class ConvexPieces:
         its facets, and the normalised sums of the facet normals at each edge and each vertex
         (tighter bounds near them: :mod:`drake_mh.scene.kernels.pieces`) — and a ball about
         ``centre`` (the middle of its bounding box) that holds the grown piece."""
+        from scipy.spatial import ConvexHull
+
         out = []
         for V in self.vertices:
-            normals, _, simplices = _hull_planes(V)
-            extra = []
-            for v in range(len(V)):  # vertex and edge directions from the facets that touch them
+            normals, _, _ = _hull_planes(V)
+            hull = ConvexHull(V)
+            face = hull.equations[:, :3]
+            extra = [face[:, None, :] + face[hull.neighbors]]  # each edge: the sum of its two facets' normals
+            for v in range(len(V)):  # each vertex: the sum of the distinct facet normals that touch it
                 touching = normals[np.abs(normals @ V[v] - (V @ normals.T).max(axis=0)) <= 1e-9]
                 extra.append(touching.sum(axis=0))
-                for i in range(len(touching)):
-                    for j in range(i + 1, len(touching)):
-                        extra.append(touching[i] + touching[j])
-            extra = np.asarray(extra).reshape(-1, 3)
+            extra = np.vstack([np.asarray(e).reshape(-1, 3) for e in extra])
             extra = extra[np.linalg.norm(extra, axis=1) > 1e-9]
             directions = np.vstack([normals, extra / np.linalg.norm(extra, axis=1, keepdims=True)])
             directions = np.unique(np.round(directions, 9), axis=0)
@@ -247,12 +249,13 @@ def convex_pieces(mesh) -> ConvexPieces:
         except (OSError, ValueError, KeyError):
             logger.warning("unreadable cache entry %s: decomposing again", path)
     start = time.perf_counter()
-    convex = mesh.is_convex
-    if convex:
-        from scipy.spatial import ConvexHull
+    from scipy.spatial import ConvexHull
 
-        parts = [mesh.vertices[ConvexHull(mesh.vertices).vertices]]  # holds every triangle: no excess
-    else:
+    hull = mesh.vertices[ConvexHull(mesh.vertices).vertices]
+    convex = mesh.is_convex and len(hull) <= COACD_PARAMETERS["max_ch_vertex"]
+    if convex:
+        parts = [hull]  # holds every triangle: no excess
+    else:  # not convex, or a hull of many vertices (a curved mesh) that CoACD simplifies
         import coacd
 
         coacd.set_log_level("error")

@@ -28,7 +28,13 @@ How distances are computed now (:class:`ExactDistances`, one per scene):
   a cheap lower bound (obstacle SDF at the link's bounding-sphere centre minus its radius),
   stopping when the bound reaches the smallest distance found.
 
-Guarantee: every value is the exact signed distance, or (certified GJK) at most
+Meshes and point clouds: a mesh is one row per convex piece, a ``HULL`` core grown by the
+pieces' cover excess (:mod:`drake_mh.geometry.convex_pieces`), for every link shape (spheres
+and capsules through their point and segment cores), the nearest piece reported per link
+geometry; a point cloud is computed by :mod:`drake_mh.scene.cloud_distance`.
+
+Guarantee: every value is the exact signed distance (to a mesh: to its pieces grown by the
+cover excess, which hold the mesh), or (certified GJK) at most
 :data:`drake_mh.scene.kernels.gjk.TOLERANCE` below it — never above it where Drake is optimistic.
 """
 
@@ -439,7 +445,8 @@ def drake_reference(scene):
     robot-robot pairs filtered out unless ``scene.self_collision`` (then Drake's default filter
     of adjacent links), and capsule-capsule pairs filtered out (Drake 1.51's query never returns
     on collinear touching axes). A mesh is registered as its convex pieces (Drake ``Convex``
-    shapes, not grown by their cover excess); a point cloud is left out (Drake has no such shape). The reference for benchmarks and tests: the scene's own context
+    shapes, not grown by their cover excess); a point cloud is left out (Drake has no such
+    shape). The reference for benchmarks and tests: the scene's own context
     no longer asks Drake for the pairs :class:`ExactDistances` computes.
 
     Returns:
