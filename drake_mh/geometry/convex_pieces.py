@@ -39,12 +39,12 @@ __all__ = ["ConvexPieces", "convex_pieces", "cover_excess", "COACD_PARAMETERS"]
 
 logger = logging.getLogger(__name__)
 
-COACD_PARAMETERS = {"threshold": 0.05, "max_ch_vertex": 32, "preprocess_mode": "auto", "resolution": 2000,
-                    "mcts_nodes": 20, "mcts_iterations": 150, "mcts_max_depth": 3, "seed": 0}
-"""CoACD's defaults (concavity ``threshold`` 0.05, seed 0), except at most 32 vertices per
-hull (fewer planes for the kernels to test)."""
+COACD_PARAMETERS = {"threshold": 0.05, "max_ch_vertex": 32, "decimate": True, "preprocess_mode": "auto",
+                    "resolution": 2000, "mcts_nodes": 20, "mcts_iterations": 150, "mcts_max_depth": 3, "seed": 0}
+"""CoACD's defaults (concavity ``threshold`` 0.05, seed 0), except hulls decimated to at most
+32 vertices (fewer planes for the kernels to test; the cover excess measures what that costs)."""
 
-_VERSION = "2"  # bump when the decomposition or the bound changes: old cache entries are not reused
+_VERSION = "3"  # bump when the decomposition or the bound changes: old cache entries are not reused
 _START_EDGE, _LEVELS, _MAX_TRIANGLES = 0.008, 4, 400_000
 
 
@@ -172,7 +172,13 @@ def _exact_distances(points: np.ndarray, V: np.ndarray, simplices: np.ndarray) -
     return out
 
 
-def _corner_distances(corners: np.ndarray, hulls: list) -> np.ndarray:
+def _corner_distances(corners: np.ndarray, hulls: list, chunk: int = 20000) -> np.ndarray:
+    """:func:`_chunk_distances` a ``chunk`` of corners at a time (bounded memory)."""
+    return np.concatenate([_chunk_distances(corners[i:i + chunk], hulls) for i in range(0, len(corners), chunk)]
+                          or [np.zeros((0, len(hulls)))])
+
+
+def _chunk_distances(corners: np.ndarray, hulls: list) -> np.ndarray:
     """``(n, P)`` [m]: the distance of each corner to each piece (0 inside; exact), ``inf``
     where it is more than 1 cm (outside the piece's bounding box grown by 1 cm) and another
     piece is nearer.
