@@ -43,3 +43,14 @@ def surface_samples(mesh, X_WO: np.ndarray, count: int = 20000, seed: int = 0) -
     surface = trimesh.Trimesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), process=False)
     points, _ = trimesh.sample.sample_surface(surface, count, seed=seed)
     return np.asarray(points) @ X_WO[:3, :3].T + X_WO[:3, 3]
+
+
+def near_configurations(scene, seed: int, count: int = 200) -> np.ndarray:
+    """``(count, nq)`` configurations of the scene's robot, half of them near an obstacle (the
+    sphere model's clearance between -1 and 5 cm), the rest farther."""
+    robot = scene.robot
+    rng = np.random.default_rng(seed)
+    Q = rng.uniform(robot.lower, robot.upper, (20 * count, robot.nq))
+    d = scene.batch_min_distance(Q)
+    near, far = Q[(d > -0.01) & (d < 0.05)], Q[d >= 0.05]
+    return np.vstack([near[:count // 2], far[:count - min(len(near), count // 2)]])

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 import drake_mh
 from drake_mh.errors import SceneError
 from drake_mh.scene import PointCloud, Scene
-from obstacle_reference import PointDistance
+from obstacle_reference import PointDistance, near_configurations
 
 PANDA = drake_mh.load_robot("panda")
 REFERENCE = PointDistance(PANDA)
@@ -34,14 +34,6 @@ def cloud_scene(seed: int, radius: float = 0.01):
     scene.add("cloud", PointCloud(points, radius), rpy=(0, 0, rng.uniform(-0.3, 0.3)))
     X = scene.obstacles["cloud"].X_WO
     return scene, points @ X[:3, :3].T + X[:3, 3], radius
-
-
-def near_configurations(scene, seed, count=200):
-    rng = np.random.default_rng(seed)
-    Q = rng.uniform(PANDA.lower, PANDA.upper, (20 * count, PANDA.nq))
-    d = scene.batch_min_distance(Q)
-    near, far = Q[(d > -0.01) & (d < 0.05)], Q[d >= 0.05]
-    return np.vstack([near[:count // 2], far[:count - min(len(near), count // 2)]])
 
 
 def test_kd_tree_finds_the_nearest_point_and_the_grid_bounds_it():

@@ -15,7 +15,7 @@ import drake_mh
 from drake_mh.errors import ObstacleFileError, SceneError
 from drake_mh.geometry.convex_pieces import convex_pieces
 from drake_mh.scene import Box, Mesh, Scene
-from obstacle_reference import PointDistance, surface_samples
+from obstacle_reference import PointDistance, near_configurations, surface_samples
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 PANDA = drake_mh.load_robot("panda")
@@ -31,15 +31,6 @@ def mesh_scene(seed: int):
     scene.add("bracket", BRACKET, rng.uniform([-0.6, -0.6, 0.2], [0.0, -0.2, 0.8]), rpy=rng.uniform(-3, 3, 3))
     points = np.vstack([surface_samples(o.shape, o.X_WO) for o in scene.obstacles.values()])
     return scene, points
-
-
-def near_configurations(scene, seed, count=300):
-    """Configurations, half of them near an obstacle (the model's clearance below 5 cm)."""
-    rng = np.random.default_rng(seed)
-    Q = rng.uniform(PANDA.lower, PANDA.upper, (20 * count, PANDA.nq))
-    d = scene.batch_min_distance(Q)
-    near, far = Q[(d > -0.01) & (d < 0.05)], Q[d >= 0.05]
-    return np.vstack([near[:count // 2], far[:count - min(len(near), count // 2)]])
 
 
 def test_cover_excess_bounds_the_surface():
