@@ -54,3 +54,20 @@ def near_configurations(scene, seed: int, count: int = 200) -> np.ndarray:
     d = scene.batch_min_distance(Q)
     near, far = Q[(d > -0.01) & (d < 0.05)], Q[d >= 0.05]
     return np.vstack([near[:count // 2], far[:count - min(len(near), count // 2)]])
+
+
+def check_certified_segments(scene, points_W: np.ndarray, rho: float, seed: int) -> None:
+    """Certify 12 segments from free configurations near the obstacles (joint steps of σ = 0.3
+    rad) and assert that 40 configurations along each certified one keep its certified lower
+    bound from ``points_W`` (balls of radius ``rho``), by :class:`PointDistance`."""
+    robot = scene.robot
+    rng = np.random.default_rng(seed)
+    QA = near_configurations(scene, seed, 60)
+    QA = QA[scene.collision_free(QA)][:12]
+    QB = np.clip(QA + rng.normal(0.0, 0.3, QA.shape), robot.lower, robot.upper)
+    cert = scene.certify_segments(QA, QB)
+    assert cert.certified.any()
+    reference = PointDistance(robot)
+    for i in np.flatnonzero(cert.certified):
+        for t in np.linspace(0.0, 1.0, 40):
+            assert reference(QA[i] + t * (QB[i] - QA[i]), points_W) - rho >= cert.lower[i] - 1e-9

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 import drake_mh
 from drake_mh.errors import SceneError
 from drake_mh.scene import PointCloud, Scene
-from obstacle_reference import PointDistance, near_configurations
+from obstacle_reference import PointDistance, check_certified_segments, near_configurations
 
 PANDA = drake_mh.load_robot("panda")
 REFERENCE = PointDistance(PANDA)
@@ -78,15 +78,7 @@ def test_batched_check_never_calls_a_touching_configuration_free(seed, radius):
 @given(seed=st.integers(0, 10_000))
 def test_certified_segments_hold_under_dense_sampling(seed):
     scene, points, rho = cloud_scene(seed)
-    rng = np.random.default_rng(seed)
-    QA = near_configurations(scene, seed, 60)
-    QA = QA[scene.collision_free(QA)][:12]
-    QB = np.clip(QA + rng.normal(0.0, 0.3, QA.shape), PANDA.lower, PANDA.upper)
-    cert = scene.certify_segments(QA, QB)
-    assert cert.certified.any()
-    for i in np.flatnonzero(cert.certified):
-        for t in np.linspace(0.0, 1.0, 40):
-            assert REFERENCE(QA[i] + t * (QB[i] - QA[i]), points) - rho >= cert.lower[i] - 1e-9
+    check_certified_segments(scene, points, rho, seed)
 
 
 def test_distances_and_drake_point_query():

@@ -15,7 +15,7 @@ import drake_mh
 from drake_mh.errors import ObstacleFileError, SceneError
 from drake_mh.geometry.convex_pieces import convex_pieces
 from drake_mh.scene import Box, Mesh, Scene
-from obstacle_reference import PointDistance, near_configurations, surface_samples
+from obstacle_reference import PointDistance, check_certified_segments, near_configurations, surface_samples
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 PANDA = drake_mh.load_robot("panda")
@@ -81,15 +81,7 @@ def test_batched_check_never_calls_a_touching_configuration_free(seed):
 @given(seed=st.integers(0, 10_000))
 def test_certified_segments_hold_under_dense_sampling(seed):
     scene, points = mesh_scene(seed)
-    rng = np.random.default_rng(seed)
-    QA = near_configurations(scene, seed, 60)
-    QA = QA[scene.collision_free(QA)][:12]
-    QB = np.clip(QA + rng.normal(0.0, 0.3, QA.shape), PANDA.lower, PANDA.upper)
-    cert = scene.certify_segments(QA, QB)
-    assert cert.certified.any()
-    for i in np.flatnonzero(cert.certified):
-        for t in np.linspace(0.0, 1.0, 40):
-            assert REFERENCE(QA[i] + t * (QB[i] - QA[i]), points) >= cert.lower[i] - 1e-9
+    check_certified_segments(scene, points, 0.0, seed)
 
 
 def test_distances_one_pair_per_link_and_mesh():
