@@ -28,6 +28,8 @@ _LAZY = {
     "Sphere": "drake_mh.scene",
     "Box": "drake_mh.scene",
     "Cylinder": "drake_mh.scene",
+    "Mesh": "drake_mh.scene",
+    "PointCloud": "drake_mh.scene",
     "SphereModel": "drake_mh.geometry.spheres",
     "dh_to_urdf": "drake_mh.robot.dh",
     "minimize": "drake_mh.optim",

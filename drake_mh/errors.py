@@ -172,6 +172,28 @@ class SceneError(DrakeMhError, ValueError):
     """An obstacle or scene request is invalid (bad size, duplicate or unknown name)."""
 
 
+class ObstacleFileError(SceneError):
+    """An obstacle file (a mesh, a point cloud) is missing, unreadable, empty or of a format
+    drake_mh does not read, or its scale is not valid.
+
+    Attributes:
+        path: the file.
+        reason: what was wrong, and how to fix it.
+    """
+
+    def __init__(self, path, reason: str):
+        self.path = str(path)
+        self.reason = reason
+        super().__init__(f"obstacle file {self.path}: {reason}")
+
+
+class ObstacleFileNotFound(ObstacleFileError, FileNotFoundError):
+    """An obstacle file does not exist (or is not a file)."""
+
+    def __str__(self) -> str:  # FileNotFoundError would format its own message otherwise
+        return self.args[0]
+
+
 class UnknownObstacle(DrakeMhError, LookupError):
     """An obstacle name is not in the scene.
 

@@ -27,6 +27,10 @@ load average are recorded (shared machines: ratios hold better than absolute tim
 Correctness is checked in the same run: every configuration ``collision_free`` accepts is
 free by Drake's exact distance (``violations`` must be 0). Results: docs/benchmarks.md.
 
+The scenes (:mod:`drake_mh.scene.benchmark`): one ball, ten mixed primitives, the same ten as
+meshes, and as a 50,000-point cloud sampled on their surfaces (no Drake rows there: Drake has
+no point-cloud shape).
+
 Run: ``drake-mh study collision_speed [--quick]`` or ``python studies/collision_speed.py [--quick]``.
 """
 
@@ -42,7 +46,7 @@ from drake_mh.study.machine import cpu_model, load_average
 from drake_mh.study.report.summary import cell, cpu_and_load, finished, markdown_table
 
 ROBOTS = ("panda (bundled, capsules)", "panda_hand")  # then drake_mh.robot.examples
-SCENES = ("1 sphere", "10 mixed")  # drake_mh.scene.benchmark.BENCHMARK_SCENES
+SCENES = ("1 sphere", "10 mixed", "10 mixed as meshes", "10 mixed as a point cloud")  # drake_mh.scene.benchmark
 N_BATCH, N_EXACT, N_SEGMENTS, N_ONE, ONE_CALLS = 1024, 50, 200, 200, 2000
 """``N_ONE`` configurations cycled through by the ``ONE_CALLS`` calls of an ``N = 1`` sample."""
 WARM_CALLS = 20
@@ -121,6 +125,7 @@ def run(case: Case) -> dict:
         QB = np.clip(QA + rng.normal(0.0, sigma, QA.shape), robot.lower, robot.upper)
         segments[label] = (QA, QB)
     drake_bool, drake_distance = _drake(scene, True), _drake(scene, False)
+    cloud = case["scene"].endswith("point cloud")  # Drake has no point-cloud shape: no Drake rows
     methods = {
         "collision_free": (lambda: scene.collision_free(Q), n_batch),
         "collision_free warm": (lambda: scene.collision_free(Q), n_batch),
@@ -134,6 +139,8 @@ def run(case: Case) -> dict:
     }
     for label, (QA, QB) in segments.items():
         methods[f"certify_segments {label}"] = ((lambda QA=QA, QB=QB: scene.certify_segments(QA, QB)), len(QA))
+    if cloud:
+        del methods["Drake HasCollisions"], methods["Drake distance"]
     for function, _ in methods.values():  # compile / load everything first
         function()
     rounds = 3 if case.quick else 9
@@ -145,6 +152,8 @@ def run(case: Case) -> dict:
             samples[name].append((wall / (count * calls), cpu / (count * calls)))
     per_call = {name: (float(np.median([w for w, _ in v])), float(np.median([c for _, c in v])))
                 for name, v in samples.items()}
+    for name in ("Drake HasCollisions", "Drake distance"):
+        per_call.setdefault(name, (float("nan"), float("nan")))
     free = scene.collision_free(exact_Q)
     exact = scene.exact_min_distance(exact_Q)
     certs = {label: scene.certify_segments(QA, QB) for label, (QA, QB) in segments.items()}

@@ -15,7 +15,6 @@ conversion kind, so an edited mesh gets a new entry and a second load reads the 
 
 from __future__ import annotations
 
-import io
 import logging
 from pathlib import Path
 
@@ -23,6 +22,7 @@ import numpy as np
 
 from drake_mh._support.cache import atomic_write_bytes, cache_dir, content_hash
 from drake_mh.errors import MeshConversionError
+from drake_mh.geometry.mesh import collada_unit, obj_bytes
 
 logger = logging.getLogger(__name__)
 
@@ -43,7 +43,7 @@ def _load_trimesh(path: Path):
     except Exception as exc:  # trimesh raises many kinds (ValueError, KeyError, ImportError ...)
         raise MeshConversionError(str(path), f"{type(exc).__name__}: {exc}") from exc
     if path.suffix.lower() == ".dae":
-        scale = _collada_unit(path)
+        scale = collada_unit(path)
         if scale != 1.0:  # ROS tools (assimp) scale by <unit meter>; trimesh does not
             mesh.apply_scale(scale)
     vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=float)
@@ -51,33 +51,6 @@ def _load_trimesh(path: Path):
         raise MeshConversionError(str(path), f"the file holds {len(vertices)} finite vertices, "
                                   "a convex hull needs at least 4 that are not coplanar")
     return mesh
-
-
-def _collada_unit(path: Path) -> float:
-    """The ``<unit meter="...">`` of a COLLADA file's asset (1 when absent or unreadable)."""
-    import re
-
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(16384).decode("utf-8", "replace")
-    except OSError:
-        return 1.0
-    match = re.search(r"<unit\b[^>]*\bmeter\s*=\s*[\"']([^\"']+)[\"']", head)
-    try:
-        value = float(match.group(1)) if match else 1.0
-    except ValueError:
-        return 1.0
-    return value if np.isfinite(value) and value > 0 else 1.0
-
-
-def _obj_bytes(vertices: np.ndarray, faces: np.ndarray, comment: str) -> bytes:
-    out = io.StringIO()
-    out.write(f"# {comment}\n")
-    for x, y, z in np.asarray(vertices, dtype=float).tolist():
-        out.write(f"v {x!r} {y!r} {z!r}\n")
-    for i, j, k in (np.asarray(faces, dtype=np.int64) + 1).tolist():
-        out.write(f"f {i} {j} {k}\n")
-    return out.getvalue().encode()
 
 
 def _cached(path: Path, kind: str, make) -> Path:
@@ -113,7 +86,7 @@ def collision_hull(path: str | Path) -> Path:
             raise MeshConversionError(str(path), f"no 3-D convex hull ({exc})") from exc
         if len(hull.faces) < 4:
             raise MeshConversionError(str(path), "the mesh is flat (its hull has no volume)")
-        return _obj_bytes(np.asarray(hull.vertices), np.asarray(hull.faces),
+        return obj_bytes(np.asarray(hull.vertices), np.asarray(hull.faces),
                           f"convex hull of {path.name} (drake_mh)")
 
     return _cached(path, "hull", make)
@@ -131,7 +104,7 @@ def visual_mesh(path: str | Path) -> Path:
 
     def make() -> bytes:
         mesh = _load_trimesh(path)
-        return _obj_bytes(np.asarray(mesh.vertices), np.asarray(mesh.faces),
+        return obj_bytes(np.asarray(mesh.vertices), np.asarray(mesh.faces),
                           f"{path.name} converted for Meshcat (drake_mh)")
 
     return _cached(path, "visual", make)

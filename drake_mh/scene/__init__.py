@@ -10,6 +10,6 @@
   pairs where Drake's GJK is optimistic).
 """
 
-from drake_mh.scene.scene import Box, Capsule, Cylinder, DistancePair, Obstacle, Scene, Sphere
+from drake_mh.scene.scene import Box, Capsule, Cylinder, DistancePair, Mesh, Obstacle, PointCloud, Scene, Sphere
 
-__all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule"]
+__all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule", "Mesh", "PointCloud"]

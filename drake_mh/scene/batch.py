@@ -32,33 +32,104 @@ from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere
 
 
 def obstacle_arrays(obstacles) -> tuple:
-    """``(kinds (K,), R_WO (K, 3, 3), p_WO (K, 3), v_WO (K, 3), dims (K, 3))`` of the obstacles
-    (``v_WO`` zero: the kernels' per-lane displacement, set by segment checks)."""
-    obstacles = list(obstacles)
-    n = len(obstacles)
-    kinds = np.empty(n, np.int64)
-    R_WO, p_WO, dims = np.empty((n, 3, 3)), np.empty((n, 3)), np.zeros((n, 3))
-    for k, obstacle in enumerate(obstacles):
-        shape = obstacle.shape
-        R_WO[k], p_WO[k] = obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3]
-        if isinstance(shape, Sphere):
-            kinds[k], dims[k, 0] = K.SPHERE, shape.radius
+    """``(kinds (K,), R_WO (K, 3, 3), p_WO (K, 3), v_WO (K, 3), dims (D, 3))`` of the obstacles
+    as the kernels read them (``v_WO`` zero: the kernels' per-lane displacement, set by segment
+    checks). A mesh is one kernel obstacle per convex piece (:func:`obstacle_owners` maps them
+    back), a point cloud one; ``dims`` is the shape table of :mod:`.kernels.pieces`: the
+    obstacles' rows, then the pieces' planes and the clouds' k-d trees."""
+    from drake_mh.geometry.cloud import PointCloud
+    from drake_mh.geometry.convex_pieces import convex_pieces
+    from drake_mh.geometry.mesh import Mesh
+    from drake_mh.scene.kernels.pieces import CLOUD, CONVEX
+
+    rows = []  # (kind, R_WO, p_WO, dims row, data rows or None)
+    for obstacle in obstacles:
+        shape, R, p = obstacle.shape, obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3]
+        if isinstance(shape, Mesh):
+            for centre, radius, normals, offsets in convex_pieces(shape).kernel_planes:
+                M = len(offsets)
+                table = np.zeros((M + (M + 2) // 3, 3))
+                table[:M] = normals @ R.T  # in W
+                table[M:].reshape(-1)[:M] = offsets
+                rows.append((CONVEX, np.eye(3), R @ centre + p, (M, radius), table))
+        elif isinstance(shape, PointCloud):
+            rows.append(_cloud_rows(shape, R, p, CLOUD))
+        elif isinstance(shape, Sphere):
+            rows.append((K.SPHERE, R, p, (shape.radius, 0.0, 0.0), None))
         elif isinstance(shape, Box):
-            kinds[k], dims[k] = K.BOX, 0.5 * np.asarray(shape.size)
+            rows.append((K.BOX, R, p, tuple(0.5 * np.asarray(shape.size)), None))
         elif isinstance(shape, Cylinder):
-            kinds[k], dims[k, :2] = K.CYLINDER, (shape.radius, 0.5 * shape.length)
+            rows.append((K.CYLINDER, R, p, (shape.radius, 0.5 * shape.length, 0.0), None))
         elif isinstance(shape, Capsule):
-            kinds[k], dims[k, :2] = K.CAPSULE, (shape.radius, 0.5 * shape.length)
-        else:  # Scene.add accepts only these four
+            rows.append((K.CAPSULE, R, p, (shape.radius, 0.5 * shape.length, 0.0), None))
+        else:  # Scene.add accepts only these
             raise TypeError(f"no batched distance for obstacle shape {type(shape).__name__}")
-    return kinds, R_WO, p_WO, np.zeros((n, 3)), dims
+    n = len(rows)
+    kinds = np.array([r[0] for r in rows], np.int64)
+    R_WO, p_WO = np.empty((n, 3, 3)), np.empty((n, 3))
+    tables, start = [np.zeros((n, 3))], n
+    for k, (_, R, p, row, table) in enumerate(rows):
+        R_WO[k], p_WO[k] = R, p
+        if table is None:
+            tables[0][k] = row
+        else:  # (start of its data, count, bounding radius)
+            tables[0][k] = (start, row[0], row[1])
+            tables.append(table)
+            start += len(table)
+    return kinds, R_WO, p_WO, np.zeros((n, 3)), np.ascontiguousarray(np.concatenate(tables))
+
+
+GRID_CELLS = 65_536
+"""Most cells of a point cloud's grid (:mod:`.kernels.pieces`); the cell is at least 2 cm."""
+
+
+def _cloud_rows(cloud, R: np.ndarray, p: np.ndarray, kind: int) -> tuple:
+    """A point cloud's kernel row and data (:mod:`.kernels.pieces`): its grid of distance
+    bounds, then its points in W in k-d tree order; centred on their bounding box."""
+    from scipy import ndimage
+
+    from drake_mh.scene.kernels.pieces import kd_build
+
+    p_W = np.ascontiguousarray(cloud.points @ R.T + p)
+    low, high = p_W.min(axis=0), p_W.max(axis=0)
+    h = max(0.02, float(np.prod(high - low + 0.02)) ** (1.0 / 3.0) / GRID_CELLS ** (1.0 / 3.0))
+    shape = np.floor((high - low) / h).astype(np.int64) + 1
+    cells = np.minimum(np.floor((p_W - low) / h).astype(np.int64), shape - 1)
+    occupied = np.zeros(shape, bool)
+    occupied[cells[:, 0], cells[:, 1], cells[:, 2]] = True
+    near = ndimage.binary_dilation(occupied, structure=np.ones((3, 3, 3), bool))
+    floor = h * ndimage.distance_transform_edt(~near) if not near.all() else np.zeros(shape)
+    n_cells, N = floor.size, len(p_W)
+    head = 3 + (n_cells + 2) // 3
+    table = np.zeros((head + N + (N + 2) // 3, 3))
+    table[0] = cloud.radius, h, head
+    table[1], table[2] = low, shape
+    table[3:head].reshape(-1)[:n_cells] = np.maximum(floor.reshape(-1) - 1e-9, 0.0)  # round-off of the cells
+    order, axes = kd_build(p_W)
+    table[head:head + N] = p_W[order]
+    table[head + N:].reshape(-1)[:N] = axes
+    centre = 0.5 * (low + high)
+    radius = float(np.sqrt(np.max(np.einsum("ij,ij->i", p_W - centre, p_W - centre)))) + cloud.radius
+    return kind, np.eye(3), centre, (N, radius), table
+
+
+def obstacle_owners(obstacles) -> np.ndarray:
+    """``(K,)`` int64: for each kernel obstacle of :func:`obstacle_arrays`, the index of the
+    obstacle it belongs to (a mesh's pieces share their mesh's)."""
+    from drake_mh.geometry.convex_pieces import convex_pieces
+    from drake_mh.geometry.mesh import Mesh
+
+    return np.array([i for i, o in enumerate(obstacles)
+                     for _ in range(len(convex_pieces(o.shape)) if isinstance(o.shape, Mesh) else 1)], np.int64)
 
 
 def bounding_radii(obstacles: tuple) -> np.ndarray:
-    """``(K,)`` radius of the smallest origin-centred sphere containing each obstacle [m]."""
-    kinds, _, _, _, dims = obstacles
+    """``(K,)`` radius of the smallest ``p_WO``-centred sphere containing each obstacle [m]."""
+    kinds, _, _, _, table = obstacles
+    dims = table[:len(kinds)]
     radii = np.where(kinds == K.BOX, np.linalg.norm(dims, axis=1), dims[:, 0])
     radii = np.where(kinds == K.CYLINDER, np.hypot(dims[:, 0], dims[:, 1]), radii)
+    radii = np.where(kinds >= K.CONVEX, dims[:, 2], radii)
     return np.ascontiguousarray(np.where(kinds == K.CAPSULE, dims[:, 0] + dims[:, 1], radii))
 
 

@@ -1,20 +1,57 @@
 """The fixed scenes the collision benchmarks share (``studies/collision_speed.py``,
-``studies/exact_distance.py``): one ball in front of the arm, or ten mixed obstacles."""
+``studies/exact_distance.py``): one ball in front of the arm, or ten mixed obstacles — as
+primitives, as meshes of the same shapes, or as a point cloud sampled from their surfaces."""
 
 from __future__ import annotations
 
 import numpy as np
 
-BENCHMARK_SCENES = ("1 sphere", "10 mixed")
+BENCHMARK_SCENES = ("1 sphere", "10 mixed", "10 mixed as meshes", "10 mixed as a point cloud")
+
+CLOUD_POINTS = 50_000
+"""Points of the cloud scene (sampled evenly over the ten surfaces by area)."""
+
+
+def primitive_mesh(shape, sections: int = 32):
+    """A ``trimesh.Trimesh`` of a primitive (cylinders and capsules with ``sections`` sides, so
+    slightly inside the true shape: a benchmark stand-in, not a cover)."""
+    import trimesh
+
+    from drake_mh.scene import Box, Capsule, Cylinder, Sphere
+
+    if isinstance(shape, Sphere):
+        return trimesh.creation.icosphere(subdivisions=2, radius=shape.radius)
+    if isinstance(shape, Box):
+        return trimesh.creation.box(extents=shape.size)
+    if isinstance(shape, Cylinder):
+        return trimesh.creation.cylinder(radius=shape.radius, height=shape.length, sections=sections)
+    if isinstance(shape, Capsule):
+        return trimesh.creation.capsule(radius=shape.radius, height=shape.length, count=[sections, sections])
+    raise TypeError(f"no mesh for {type(shape).__name__}")
+
+
+def _mixed(rng_seed: int = 1) -> list:
+    from drake_mh.scene import Box, Capsule, Cylinder, Sphere
+
+    shapes = [Sphere(0.08), Box((0.3, 0.2, 0.05)), Cylinder(0.05, 0.4), Capsule(0.04, 0.3)]
+    rng = np.random.default_rng(rng_seed)
+    return [(f"o{i}", shapes[i % 4], rng.uniform([-0.8, -0.8, 0.0], [0.8, 0.8, 1.0]), rng.uniform(-3, 3, 3))
+            for i in range(10)]
 
 
 def benchmark_scene(robot, kind: str):
     """A :class:`drake_mh.scene.Scene` of ``robot``: ``"1 sphere"`` (a 10 cm ball at
     (0.5, 0, 0.5) m) or ``"10 mixed"`` (spheres, boxes, cylinders and capsules drawn once from
     seed 1 in [-0.8, 0.8]² x [0, 1] m, tilted at random; about 18 % of random Panda
-    configurations collide)."""
+    configurations collide); ``"10 mixed as meshes"`` (the same shapes as triangle meshes,
+    written once to the cache), ``"10 mixed as a point cloud"`` (:data:`CLOUD_POINTS` points
+    sampled on their surfaces, radius 0)."""
+    import trimesh
+
+    from drake_mh._support.cache import atomic_write_bytes, cache_dir
     from drake_mh.errors import InvalidArgument
-    from drake_mh.scene import Box, Capsule, Cylinder, Scene, Sphere
+    from drake_mh.geometry.mesh import obj_bytes
+    from drake_mh.scene import Mesh, PointCloud, Scene, Sphere
 
     if kind not in BENCHMARK_SCENES:
         raise InvalidArgument(f"unknown benchmark scene {kind!r}; choose from {BENCHMARK_SCENES}")
@@ -22,8 +59,27 @@ def benchmark_scene(robot, kind: str):
     if kind == BENCHMARK_SCENES[0]:
         scene.add("ball", Sphere(0.1), [0.5, 0.0, 0.5])
         return scene
-    shapes = [Sphere(0.08), Box((0.3, 0.2, 0.05)), Cylinder(0.05, 0.4), Capsule(0.04, 0.3)]
-    rng = np.random.default_rng(1)
-    for i in range(10):
-        scene.add(f"o{i}", shapes[i % 4], rng.uniform([-0.8, -0.8, 0.0], [0.8, 0.8, 1.0]), rpy=rng.uniform(-3, 3, 3))
+    mixed = _mixed()
+    if kind == BENCHMARK_SCENES[1]:
+        for name, shape, p, rpy in mixed:
+            scene.add(name, shape, p, rpy=rpy)
+        return scene
+    from pydrake.math import RollPitchYaw
+
+    meshes = [primitive_mesh(shape) for _, shape, _, _ in mixed]
+    if kind == BENCHMARK_SCENES[2]:
+        for (name, _, p, rpy), mesh in zip(mixed, meshes):
+            path = cache_dir("benchmark_meshes") / f"{name}.obj"
+            data = obj_bytes(mesh.vertices, mesh.faces, f"benchmark obstacle {name}")
+            if not path.is_file() or path.read_bytes() != data:
+                atomic_write_bytes(path, data)
+            scene.add(name, Mesh(path), p, rpy=rpy)
+        return scene
+    areas = np.array([m.area for m in meshes])
+    counts = np.maximum(1, np.round(CLOUD_POINTS * areas / areas.sum()).astype(int))
+    points = []
+    for (name, _, p, rpy), mesh, n in zip(mixed, meshes, counts):
+        local, _ = trimesh.sample.sample_surface(mesh, int(n), seed=1)
+        points.append(np.asarray(local) @ RollPitchYaw(rpy).ToRotationMatrix().matrix().T + p)
+    scene.add("cloud", PointCloud(np.vstack(points), 0.0))
     return scene

@@ -25,7 +25,13 @@ How distances are computed (:class:`ExactDistances`, one per scene):
   a cheap lower bound (obstacle SDF at the link's bounding-sphere centre minus its radius),
   stopping when the bound reaches the smallest distance found.
 
-Guarantee: every value is the exact signed distance, or (certified GJK) at most
+Meshes and point clouds: a mesh is one row per convex piece, a ``HULL`` core grown by the
+pieces' cover excess (:mod:`drake_mh.geometry.convex_pieces`), for every link shape (spheres
+and capsules through their point and segment cores), the nearest piece reported per link
+geometry; a point cloud is computed by :mod:`drake_mh.scene.cloud_distance`.
+
+Guarantee: every value is the exact signed distance (to a mesh: to its pieces grown by the
+cover excess, which hold the mesh), or (certified GJK) at most
 :data:`drake_mh.scene.kernels.gjk.TOLERANCE` below it — never above it where Drake is optimistic.
 """
 
@@ -141,39 +147,73 @@ def _link_arrays(shape, kind, X_AG: np.ndarray, anchor: int, hull_start: int):
     return row_i, row_f, vertices
 
 
-def obstacle_rows(obstacles) -> tuple[np.ndarray, np.ndarray]:
-    """``(o_int (K, 2), o_float (K, 20))`` of the obstacles (layout in :mod:`.kernels.exact`)."""
+def obstacle_rows(obstacles, vertex_start: int = 0) -> tuple:
+    """``(o_int (K, 2), o_float (K, 20), owners (K,), vertices (V, 3))`` of the obstacles
+    (layout in :mod:`.kernels.exact`): one row per primitive and per convex piece of a mesh
+    (a ``HULL`` core about the piece's centre, its vertices at ``vertex_start ..`` of the
+    kernel's vertex array, its margin the pieces' cover excess; the SDF of the lower bound its
+    bounding ball), none for a point cloud (:mod:`drake_mh.scene.cloud_distance`); ``owners``
+    the index of each row's obstacle."""
+    from drake_mh.geometry.cloud import PointCloud
+    from drake_mh.geometry.convex_pieces import convex_pieces
+    from drake_mh.geometry.mesh import Mesh
     from drake_mh.geometry.shapes import Capsule, Sphere
 
-    obstacles = list(obstacles)
-    o_int = np.zeros((len(obstacles), 2), np.int64)
-    o_float = np.zeros((len(obstacles), 20))
-    for k, obstacle in enumerate(obstacles):
-        sdf_kind, dims = primitive_code(obstacle.shape)
-        o_float[k, :9] = obstacle.X_WO[:3, :3].reshape(-1)
-        o_float[k, 9:12] = obstacle.X_WO[:3, 3]
-        o_float[k, 12:15] = dims
-        o_int[k, 0] = sdf_kind
-        shape = obstacle.shape
+    o_int, o_float, owners, hulls = [], [], [], []
+    for j, obstacle in enumerate(obstacles):
+        shape, R_WO, p_WO = obstacle.shape, obstacle.X_WO[:3, :3], obstacle.X_WO[:3, 3]
+        if isinstance(shape, PointCloud):
+            continue
+        if isinstance(shape, Mesh):
+            pieces = convex_pieces(shape)
+            for V, (centre, radius, _, _) in zip(pieces.vertices, pieces.kernel_planes):
+                row_f = np.zeros(20)
+                row_f[:9], row_f[9:12] = R_WO.reshape(-1), R_WO @ centre + p_WO
+                row_f[12] = radius  # the bounding ball's SDF: the cheap lower bound
+                row_f[15:17] = vertex_start, len(V)
+                row_f[18] = pieces.excess
+                o_int.append((0, gjk.HULL))
+                o_float.append(row_f)
+                owners.append(j)
+                hulls.append(V - centre)
+                vertex_start += len(V)
+            continue
+        sdf_kind, dims = primitive_code(shape)
+        row_f = np.zeros(20)
+        row_f[:9], row_f[9:12], row_f[12:15] = R_WO.reshape(-1), p_WO, dims
         if isinstance(shape, Sphere):
-            o_int[k, 1], o_float[k, 18] = gjk.POINT, shape.radius
+            row_i, row_f[18] = (sdf_kind, gjk.POINT), shape.radius
         elif isinstance(shape, Capsule):
-            o_int[k, 1], o_float[k, 15], o_float[k, 18] = gjk.SEGMENT, 0.5 * shape.length, shape.radius
+            row_i, row_f[15], row_f[18] = (sdf_kind, gjk.SEGMENT), 0.5 * shape.length, shape.radius
         else:  # box: half sizes; cylinder: radius, half length (as the SDF dims)
-            o_int[k, 1] = gjk.BOX if sdf_kind == 1 else gjk.CYLINDER
-            o_float[k, 15:18] = dims
-    return o_int, o_float
+            row_i, row_f[15:18] = (sdf_kind, gjk.BOX if sdf_kind == 1 else gjk.CYLINDER), dims
+        o_int.append(row_i)
+        o_float.append(row_f)
+        owners.append(j)
+    return (np.array(o_int, np.int64).reshape(-1, 2), np.array(o_float, dtype=float).reshape(-1, 20),
+            np.array(owners, np.int64), np.concatenate(hulls) if hulls else np.zeros((0, 3)))
 
 
 class _ObstacleState:
     """What depends on the obstacles: their arrays, names, the output buffers."""
 
     def __init__(self, exact: ExactDistances, scene):
+        from drake_mh.geometry.cloud import PointCloud
+
         self.key = tuple(scene._ids.values())
-        names = list(scene._obstacles)
+        obstacles = list(scene._obstacles.values())
+        self.o_int, self.o_float, owners, hulls = obstacle_rows(obstacles, len(exact.vertices))
+        self.vertices = np.ascontiguousarray(np.concatenate([exact.vertices, hulls]))
+        names = [obstacles[j].name for j in owners]
+        self.gids, seen = [], {}  # a mesh's rows: its pieces' geometry ids, in order
+        for name in names:
+            seen[name] = seen.get(name, -1) + 1
+            self.gids.append(scene._ids[name][seen[name]])
         self.names = names
-        self.index = {gid: k for k, gid in enumerate(scene._ids.values())}
-        self.o_int, self.o_float = obstacle_rows(scene._obstacles.values())
+        self.index = {gid: k for k, gid in enumerate(self.gids)}
+        self.margin = np.where(self.o_int[:, 1] == gjk.HULL, self.o_float[:, 18], 0.0)  # a piece's cover excess
+        self.many_rows = len(set(owners.tolist())) != len(owners)  # a mesh: several rows per obstacle
+        self.clouds = [o for o in obstacles if isinstance(o.shape, PointCloud)]
         G, K, S = len(exact.gids), len(names), len(exact.self_pairs)
         n = G * K + S
         self.K = K
@@ -256,7 +296,7 @@ class ExactDistances:
     def _run(self, q, max_distance: float, min_only: bool):
         state = self.state()
         best, n_need, n_rows = X.exact_pairs(
-            q, *self._chain, self.g_int, self.g_float, self.vertices, state.o_int, state.o_float, self.self_pairs,
+            q, *self._chain, self.g_int, self.g_float, state.vertices, state.o_int, state.o_float, self.self_pairs,
             max_distance, min_only, gjk.TOLERANCE, self.R_WG, self.p_WG, state.out, state.status, state.need,
             state.order)
         if n_need < 0:
@@ -272,13 +312,15 @@ class ExactDistances:
         """Drake's answer for kernel row i (a link geometry vs an obstacle): ``(distance, p_W_link,
         p_W_other, nhat_W)``."""
         g, k = divmod(i, state.K)
-        gid_link, gid_other = self.gids[g], self.scene._ids[state.names[k]]
+        gid_link, gid_other = self.gids[g], state.gids[k]
         pair = query.ComputeSignedDistancePairClosestPoints(gid_link, gid_other)
         p_A, p_B, nhat = np.asarray(pair.p_ACa), np.asarray(pair.p_BCb), np.asarray(pair.nhat_BA_W)
         if pair.id_A != gid_link:
             p_A, p_B, nhat = p_B, p_A, -nhat
         R_WO, p_WO = state.o_float[k, :9].reshape(3, 3), state.o_float[k, 9:12]
-        return (float(pair.distance), self.R_WG[g] @ p_A + self.p_WG[g], R_WO @ p_B + p_WO, nhat)
+        margin = state.margin[k]  # a piece grown by its cover excess
+        return (float(pair.distance) - margin, self.R_WG[g] @ p_A + self.p_WG[g], R_WO @ p_B + p_WO + margin * nhat,
+                nhat)
 
     def min_distance(self, q) -> float:
         """Smallest exact signed distance [m] of ``q (nq,)`` over all pairs (``inf``: no pair)."""
@@ -287,19 +329,27 @@ class ExactDistances:
         if n_need or state.query_needed:
             query = self._query(q)
             for i in state.need[:n_need]:
+                k = i % state.K
                 best = min(best, query.ComputeSignedDistancePairClosestPoints(
-                    self.gids[i // state.K], self.scene._ids[state.names[i % state.K]]).distance)
+                    self.gids[i // state.K], state.gids[k]).distance - state.margin[k])
             if state.query_needed:
                 for pair in query.ComputeSignedDistancePairwiseClosestPoints():
-                    if pair.distance < best:
-                        best = pair.distance
+                    k = state.index.get(pair.id_B, state.index.get(pair.id_A))
+                    best = min(best, pair.distance - (state.margin[k] if k is not None else 0.0))
+        if state.clouds:
+            from drake_mh.scene.cloud_distance import cloud_rows
+
+            for obstacle in state.clouds:
+                rows = cloud_rows(self, state, q, obstacle, best)
+                if len(rows):
+                    best = min(best, float(rows[:, 1].min()))  # column 0: the geometry
         return float(best)
 
     def distances(self, q, max_distance: float) -> list[DistancePair]:
         """Every pair within ``max_distance`` [m], closest first (see ``Scene.distances``)."""
         q = self._q(q)
         state, _, n_need, n_rows = self._run(q, max_distance, False)
-        if n_need or state.query_needed:
+        if n_need or state.query_needed or state.clouds or state.many_rows:
             return self._distances_with_drake(q, state, n_need, max_distance)
         rows = state.order[:n_rows]
         return _pairs(state.out[rows], state.row_link[rows], state.row_other[rows], state.row_self[rows])
@@ -316,14 +366,27 @@ class ExactDistances:
         rows = np.flatnonzero((state.status == X.EXACT) & (out[:, 0] <= max_distance))
         values = out[rows]
         links, others, selfs = state.row_link[rows], state.row_other[rows], state.row_self[rows]
-        if state.query_needed:
-            extra = self._drake_query_pairs(query, state, max_distance)
-            if extra:
-                values = np.concatenate([values, np.array([e[0] for e in extra])])
-                links = np.concatenate([links, np.array([e[1] for e in extra], dtype=object)])
-                others = np.concatenate([others, np.array([e[2] for e in extra], dtype=object)])
-                selfs = np.concatenate([selfs, np.array([e[3] for e in extra], dtype=bool)])
+        extra = self._drake_query_pairs(query, state, max_distance) if state.query_needed else []
+        if state.clouds:
+            from drake_mh.scene.cloud_distance import cloud_rows
+
+            for obstacle in state.clouds:
+                found = cloud_rows(self, state, q, obstacle, max_distance, per_geometry=True)
+                extra += [(row[1:], self.links[int(row[0])], obstacle.name, False) for row in found]
+        if extra:
+            values = np.concatenate([values, np.array([e[0] for e in extra])])
+            links = np.concatenate([links, np.array([e[1] for e in extra], dtype=object)])
+            others = np.concatenate([others, np.array([e[2] for e in extra], dtype=object)])
+            selfs = np.concatenate([selfs, np.array([e[3] for e in extra], dtype=bool)])
         order = np.argsort(values[:, 0], kind="stable")
+        if state.many_rows:  # a mesh's pieces: the nearest per (link geometry, obstacle)
+            seen, keep = set(), []
+            for j in order:
+                key = (rows[j] // state.K, others[j]) if j < len(rows) and not selfs[j] else j
+                if key not in seen:
+                    seen.add(key)
+                    keep.append(j)
+            order = np.asarray(keep, np.int64)
         return _pairs(values[order], links[order], others[order], selfs[order])
 
     def _drake_query_pairs(self, query, state, max_distance: float) -> list:
@@ -342,6 +405,10 @@ class ExactDistances:
             for j, (gid, p) in enumerate(zip(ids, points)):
                 row[1 + 3 * j:4 + 3 * j] = self._to_world(query, state, gid, p)
             row[7:] = nhat
+            k = state.index.get(ids[1])
+            if k is not None and state.margin[k]:  # a mesh's piece grown by its cover excess
+                row[0] -= state.margin[k]
+                row[4:7] += state.margin[k] * nhat
             is_self = ids[1] in self.row
             other = self.links[self.row[ids[1]]] if is_self else state.names[state.index[ids[1]]]
             out.append((row, self.links[self.row[ids[0]]], other, is_self))
@@ -374,7 +441,9 @@ def drake_reference(scene):
     user would: a fresh context of the robot's diagram with the obstacles registered in it,
     robot-robot pairs filtered out unless ``scene.self_collision`` (then Drake's default filter
     of adjacent links), and capsule-capsule pairs filtered out (Drake 1.51's query never returns
-    on collinear touching axes). The reference for benchmarks and tests: the scene's own context
+    on collinear touching axes). A mesh is registered as its convex pieces (Drake ``Convex``
+    shapes, not grown by their cover excess); a point cloud is left out (Drake has no such
+    shape). The reference for benchmarks and tests: the scene's own context
     no longer asks Drake for the pairs :class:`ExactDistances` computes.
 
     Returns:
@@ -385,6 +454,9 @@ def drake_reference(scene):
     from pydrake.geometry import CollisionFilterDeclaration, GeometryInstance, GeometrySet, ProximityProperties
     from pydrake.math import RigidTransform, RotationMatrix
 
+    from drake_mh.geometry.cloud import PointCloud
+    from drake_mh.geometry.convex_pieces import convex_pieces
+    from drake_mh.geometry.mesh import Mesh
     from drake_mh.geometry.shapes import Capsule
 
     robot = scene.robot
@@ -401,13 +473,19 @@ def drake_reference(scene):
     elif capsule_links:
         manager.Apply(CollisionFilterDeclaration().ExcludeWithin(GeometrySet(capsule_links)))
     for name, obstacle in scene.obstacles.items():
-        instance = GeometryInstance(RigidTransform(RotationMatrix(obstacle.X_WO[:3, :3]), obstacle.X_WO[:3, 3]),
-                                    obstacle.shape.to_drake(), f"obstacle::{name}")
-        instance.set_proximity_properties(ProximityProperties())
-        gid = sg.RegisterGeometry(sg_context, robot.obstacle_source_id, sg.world_frame_id(), instance)
-        names[gid] = name
-        if isinstance(obstacle.shape, Capsule) and capsule_links:
-            manager.Apply(CollisionFilterDeclaration().ExcludeBetween(GeometrySet([gid]), GeometrySet(capsule_links)))
+        X_WO = RigidTransform(RotationMatrix(obstacle.X_WO[:3, :3]), obstacle.X_WO[:3, 3])
+        if isinstance(obstacle.shape, PointCloud):
+            continue  # Drake has no point-cloud shape
+        shapes = convex_pieces(obstacle.shape).drake_shapes if isinstance(obstacle.shape, Mesh) else (
+            (np.zeros(3), obstacle.shape.to_drake()),)
+        for centre, shape in shapes:
+            instance = GeometryInstance(X_WO @ RigidTransform(centre), shape, f"obstacle::{name}")
+            instance.set_proximity_properties(ProximityProperties())
+            gid = sg.RegisterGeometry(sg_context, robot.obstacle_source_id, sg.world_frame_id(), instance)
+            names[gid] = name
+            if isinstance(obstacle.shape, Capsule) and capsule_links:
+                manager.Apply(CollisionFilterDeclaration().ExcludeBetween(GeometrySet([gid]),
+                                                                          GeometrySet(capsule_links)))
     port = sg.get_query_output_port()
 
     def query(q, max_distance: float = np.inf):

@@ -27,6 +27,11 @@ than ``d``:
   and every edge x edge direction (complete: exact depth when they overlap, a positive
   separation when they do not, so it is applied only where negative).
 
+A convex piece of a mesh and a point cloud get a cruder bound: a convex geometry of bounding
+radius ``r_H`` cannot reach deeper than ``2 (r_H + r_O)`` into a convex piece of bounding radius
+``r_O`` (translating it by the two widths along any direction separates them), nor into a ball of
+a cloud of radius ``r_O``, so where a geometry's spheres report penetration its value becomes at most ``-2 (r_H + r_O)``.
+
 A cylinder obstacle is replaced by its circumscribed 16-gon prism (it contains the cylinder,
 so ``v`` stays a lower bound, up to 2 % of the radius low).
 
@@ -42,9 +47,10 @@ import functools
 import numba
 import numpy as np
 
+from drake_mh.scene.kernels.collision import point_distance
 from drake_mh.scene.kernels.exact import closest_segments
 from drake_mh.scene.segment_distance import CAPSULE, SPHERE, _sdf, primitive_code, segment_min_sdf
-from drake_mh.geometry.shapes import Box, Cylinder
+from drake_mh.geometry.shapes import Box, Cylinder, Sphere
 
 _PRISM_SIDES = 16
 
@@ -227,6 +233,13 @@ def _sdf_at(kind, d, R, p, x, y, z):
 
 
 @numba.njit(cache=True)
+def _centre(p, R, c):
+    """``p + R c`` as three numbers (a sphere centre in W from its geometry's pose)."""
+    return (p[0] + R[0, 0] * c[0] + R[0, 1] * c[1] + R[0, 2] * c[2], p[1] + R[1, 0] * c[0] + R[1, 1] * c[1]
+            + R[1, 2] * c[2], p[2] + R[2, 0] * c[0] + R[2, 1] * c[1] + R[2, 2] * c[2])
+
+
+@numba.njit(cache=True)
 def correct_clearances(values, points_W, radii, c_G, g_bound, g_start, g_kind, half_length, radius, VH, v_start, NH,
                        OH, f_start, EH, e_start, excess, kinds, R_WO, p_WO, dims, corners, n_corners, normals,
                        n_normals, edges, n_edges):
@@ -255,6 +268,18 @@ def correct_clearances(values, points_W, radii, c_G, g_bound, g_start, g_kind, h
         for k in range(K):
             if not values[r, k] < 0.0:
                 continue
+            if kinds[k] > CAPSULE:  # a convex piece or a cloud: the depth bound of the module docstring
+                r_O = dims[k, 2] if kinds[k] == 4 else dims[int(dims[k, 0]), 0]
+                best = np.inf
+                for g in range(G):
+                    s_g = np.inf
+                    for s in range(g_start[g], g_start[g + 1]):
+                        x, y, z = _centre(p_WG[g], R_WG[g], c_G[s])
+                        s_g = min(s_g, point_distance(k, kinds, R_WO, p_WO, dims, x, y, z) - radii[s])
+                    if s_g < 0.0:
+                        best = min(best, s_g, -2.0 * (g_bound[g] + r_O))
+                values[r, k] = best
+                continue
             kind, d, R, p = kinds[k], dims[k], R_WO[k], p_WO[k]
             ck, nk, ek = corners[k, :n_corners[k]], normals[k, :n_normals[k]], edges[k, :n_edges[k]]
             best = np.inf
@@ -263,9 +288,7 @@ def correct_clearances(values, points_W, radii, c_G, g_bound, g_start, g_kind, h
                     continue
                 s_g = np.inf
                 for s in range(g_start[g], g_start[g + 1]):
-                    x = p_WG[g, 0] + R_WG[g, 0, 0] * c_G[s, 0] + R_WG[g, 0, 1] * c_G[s, 1] + R_WG[g, 0, 2] * c_G[s, 2]
-                    y = p_WG[g, 1] + R_WG[g, 1, 0] * c_G[s, 0] + R_WG[g, 1, 1] * c_G[s, 1] + R_WG[g, 1, 2] * c_G[s, 2]
-                    z = p_WG[g, 2] + R_WG[g, 2, 0] * c_G[s, 0] + R_WG[g, 2, 1] * c_G[s, 1] + R_WG[g, 2, 2] * c_G[s, 2]
+                    x, y, z = _centre(p_WG[g], R_WG[g], c_G[s])
                     s_g = min(s_g, _sdf_at(kind, d, R, p, x, y, z) - radii[s])
                 if not s_g < 0.0:
                     continue
@@ -306,7 +329,12 @@ def _obstacle_polytope(shape):
 def obstacle_polytopes(obstacles) -> tuple:
     """``(corners (K, V, 3), n_corners (K,), normals (K, F, 3), n_normals, edges (K, E, 3),
     n_edges)``: each obstacle's :func:`_obstacle_polytope` in its frame, zero-padded."""
-    polys = [_obstacle_polytope(o.shape) for o in obstacles]
+    from drake_mh.geometry.convex_pieces import convex_pieces
+    from drake_mh.geometry.mesh import Mesh
+
+    none = _obstacle_polytope(Sphere(1.0))  # a mesh's pieces and a cloud: bounded without polytopes
+    polys = [p for o in obstacles for p in ([none] * len(convex_pieces(o.shape)) if isinstance(o.shape, Mesh)
+                                            else [_obstacle_polytope(o.shape)])]
     out = []
     for i in range(3):
         counts = np.array([len(p[i]) for p in polys], dtype=np.int64)

@@ -30,10 +30,13 @@ import numpy as np
 
 from drake_mh.errors import SceneError, UnknownObstacle
 from drake_mh.scene.exact import DistancePair, ExactDistances, exclude_from_drake, link_kinds
+from drake_mh.geometry.cloud import PointCloud
+from drake_mh.geometry.convex_pieces import convex_pieces
+from drake_mh.geometry.mesh import Mesh
 from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere, as_shape
 from drake_mh.geometry.spheres import DEFAULT_TOLERANCE, SphereModel
 
-__all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule"]
+__all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule", "Mesh", "PointCloud"]
 
 _F8, _NDARRAY, _INF = np.dtype(np.float64), np.ndarray, float("inf")  # Scene.collision_free's fast paths
 
@@ -78,7 +81,7 @@ class Obstacle:
     """An obstacle: a shape at pose ``X_WO`` moving with linear ``velocity_W`` [m/s]."""
 
     name: str
-    shape: Sphere | Box | Cylinder | Capsule
+    shape: Sphere | Box | Cylinder | Capsule | Mesh | PointCloud
     X_WO: np.ndarray
     velocity_W: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
@@ -127,6 +130,7 @@ class Scene:
         self._clearance_function = None  # batch_obstacle_distances' (batch.CollisionModel.obstacle_clearance_function)
         self._planner_bindings: dict = {}  # what planners bound to these obstacles (planner_binding)
         self._polytopes = None  # the obstacles' polytopes for its penetration correction (penetration.py)
+        self._owners = None  # the obstacle of each kernel obstacle (a mesh has one per piece)
         self._q_shape, self._nq = (robot.nq,), robot.nq
         self._self_capsule_pairs: list = []
         self._always_close: tuple = ()
@@ -199,25 +203,34 @@ class Scene:
         """The obstacles by name (a copy)."""
         return dict(self._obstacles)
 
-    def add(self, name: str, shape, position, rpy=(0.0, 0.0, 0.0), velocity=(0.0, 0.0, 0.0)) -> Obstacle:
+    def add(self, name: str, shape, position=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0),
+            velocity=(0.0, 0.0, 0.0)) -> Obstacle:
         """Add an obstacle.
 
         Args:
             name: unique name.
-            shape: :class:`Sphere`, :class:`Box`, :class:`Cylinder` or :class:`Capsule`.
-            position: ``p_WO (3,)`` [m].
+            shape: :class:`Sphere`, :class:`Box`, :class:`Cylinder`, :class:`Capsule`,
+                :class:`Mesh` (checked as its convex pieces grown by their cover excess:
+                :mod:`drake_mh.geometry.convex_pieces`; a new non-convex mesh is decomposed
+                here, seconds to a minute, then cached) or :class:`PointCloud` (the union of
+                its balls), or a ``pydrake.geometry`` primitive.
+            position: ``p_WO (3,)`` [m] of the obstacle's frame (a mesh's and a cloud's
+                coordinates are in that frame).
             rpy: roll-pitch-yaw of the obstacle frame [rad].
             velocity: linear velocity ``(3,)`` [m/s] used by :meth:`step` and by velocity-aware
                 planners (ESM).
 
         Raises:
-            SceneError: duplicate name, bad shape or numbers.
+            SceneError: duplicate name, bad shape or numbers (nothing is changed).
         """
         if not isinstance(name, str) or not name:
             raise SceneError(f"obstacle name must be a non-empty string, got {name!r}")
         if name in self._obstacles:
             raise SceneError(f"an obstacle named {name!r} already exists; use move() or another name")
-        shape = as_shape(shape)
+        if isinstance(shape, Mesh):
+            convex_pieces(shape)  # decomposed (or read from the cache) before anything is registered
+        elif not isinstance(shape, PointCloud):
+            shape = as_shape(shape)
         X_WO = np.eye(4)
         X_WO[:3, :3] = _rotation(rpy)
         X_WO[:3, 3] = _vector3(position, "position [m]")
@@ -228,22 +241,42 @@ class Scene:
         self._obstacles_changed()
         return obstacle
 
-    def _register(self, name: str, shape, X_WO: np.ndarray):
-        """Register ``shape`` at ``X_WO`` as anchored proximity geometry in this scene's context."""
+    def _register(self, name: str, shape, X_WO: np.ndarray) -> tuple:
+        """Register ``shape`` at ``X_WO`` as anchored proximity geometry in this scene's context:
+        the geometry ids, one per primitive, one per convex piece of a mesh (Drake ``Convex``
+        shapes posed at the piece's centre, not grown by the cover excess), none for a point
+        cloud (Drake has no such shape: :mod:`drake_mh.scene.cloud_distance` computes its
+        distances)."""
         from pydrake.geometry import GeometryInstance, ProximityProperties
         from pydrake.math import RigidTransform, RotationMatrix
 
-        instance = GeometryInstance(RigidTransform(RotationMatrix(X_WO[:3, :3]), X_WO[:3, 3]),
-                                    shape.to_drake(), f"obstacle::{name}")
-        instance.set_proximity_properties(ProximityProperties())
+        X = RigidTransform(RotationMatrix(X_WO[:3, :3]), X_WO[:3, 3])
+        if isinstance(shape, PointCloud):
+            return ()
+        drake_shapes = convex_pieces(shape).drake_shapes if isinstance(shape, Mesh) else (
+            (np.zeros(3), shape.to_drake()),)
         sg = self.robot.scene_graph
-        gid = sg.RegisterGeometry(self._sg_context, self.robot.obstacle_source_id, sg.world_frame_id(), instance)
-        # the link geometries drake_mh.scene.exact computes (sphere, capsule, box, cylinder,
-        # ellipsoid, convex mesh) leave Drake's query against obstacles: Drake 1.51's GJK is
-        # optimistic there (up to 16 mm), its capsule-capsule query never returns on collinear
-        # touching axes, and its Python pair objects cost more than the compiled kernel
-        exclude_from_drake(self, gid)
-        return gid
+        gids = []
+        try:
+            for i, (centre, drake_shape) in enumerate(drake_shapes):
+                label = f"obstacle::{name}" + (f"::piece{i}" if isinstance(shape, Mesh) else "")
+                instance = GeometryInstance(X @ RigidTransform(centre), drake_shape, label)
+                instance.set_proximity_properties(ProximityProperties())
+                gids.append(sg.RegisterGeometry(self._sg_context, self.robot.obstacle_source_id, sg.world_frame_id(),
+                                                instance))
+                # the link geometries drake_mh.scene.exact computes (sphere, capsule, box, cylinder,
+                # ellipsoid, convex mesh) leave Drake's query against obstacles: Drake 1.51's GJK is
+                # optimistic there (up to 16 mm), its capsule-capsule query never returns on collinear
+                # touching axes, and its Python pair objects cost more than the compiled kernel
+                exclude_from_drake(self, gids[-1])
+        except BaseException:
+            self._unregister(tuple(gids))
+            raise
+        return tuple(gids)
+
+    def _unregister(self, gids: tuple) -> None:
+        for gid in gids:
+            self.robot.scene_graph.RemoveGeometry(self._sg_context, self.robot.obstacle_source_id, gid)
 
     @functools.cached_property
     def _capsule_links(self) -> dict:
@@ -284,8 +317,7 @@ class Scene:
         vel = old.velocity_W if velocity is None else _vector3(velocity, "velocity [m/s]")
         # SceneGraph.ChangeShape(context, ..., X_FG) keeps the old pose for queries (Drake 1.51),
         # so the anchored geometry is re-registered at the new pose instead.
-        sg = self.robot.scene_graph
-        sg.RemoveGeometry(self._sg_context, self.robot.obstacle_source_id, self._ids[name])
+        self._unregister(self._ids[name])
         self._ids[name] = self._register(name, old.shape, X_WO)
         new = Obstacle(name, old.shape, X_WO, vel)
         self._obstacles[name] = new
@@ -295,7 +327,7 @@ class Scene:
     def remove(self, name: str) -> None:
         """Remove an obstacle."""
         self._get(name)
-        self.robot.scene_graph.RemoveGeometry(self._sg_context, self.robot.obstacle_source_id, self._ids[name])
+        self._unregister(self._ids[name])
         del self._obstacles[name]
         del self._ids[name]
         self._obstacles_changed()
@@ -454,6 +486,9 @@ class Scene:
             deep = out[deep_rows]
             self._correct_penetrations(Q[deep_rows], deep)
             out[deep_rows] = deep
+        owners = self.obstacle_owners
+        if len(owners) != len(self._obstacles):  # a mesh's pieces: the smallest value per mesh
+            out = np.minimum.reduceat(out, np.flatnonzero(np.r_[True, owners[1:] != owners[:-1]]), axis=1)
         return out
 
     # --- batched boolean queries and certified segments (sphere model, compiled) ---------------
@@ -469,7 +504,7 @@ class Scene:
     def _obstacles_changed(self) -> None:
         """Drop what was bound to the obstacles (rebuilt on the next query)."""
         self._obstacle_arrays = self._free_function = self._free_one = self._clearance_function = None
-        self._polytopes = None
+        self._polytopes = self._owners = None
         self._planner_bindings = {}
 
     @property
@@ -495,6 +530,16 @@ class Scene:
         if value is None:
             value = self._planner_bindings[key] = build(self)
         return value
+
+    @property
+    def obstacle_owners(self) -> np.ndarray:
+        """``(K,)`` for each obstacle of :attr:`obstacle_arrays` (a mesh has one per convex
+        piece) the index of its obstacle in :attr:`obstacles`' order."""
+        if self._owners is None:
+            from drake_mh.scene.batch import obstacle_owners
+
+            self._owners = obstacle_owners(self._obstacles.values())
+        return self._owners
 
     def _free(self):
         """The compiled boolean query bound to the current obstacles (rebuilt when they change)."""
@@ -588,7 +633,7 @@ class Scene:
         out = out[:, 0]
         deep = np.flatnonzero(out < 0)  # a sphere penetrates: per obstacle, corrected
         if len(deep):
-            values = np.full((len(deep), len(self._obstacles)), -1.0)  # all obstacles: the negative ones count
+            values = np.full((len(deep), len(self.obstacle_owners)), -1.0)  # all obstacles: the negative ones count
             self._correct_penetrations(Q[deep], values)
             out[deep] = values.min(axis=1)
         return out

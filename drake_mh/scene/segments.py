@@ -159,6 +159,7 @@ def certify_segments(scene, QA, QB, clearance: float = 0.0, self_clearance: floa
                 or not np.isfinite(duration) or duration < 0:
             raise SceneError(f"duration must be a finite number of seconds >= 0, got {duration!r}")
         v_WO = np.array([o.velocity_W * float(duration) for o in scene.obstacles.values()]).reshape(-1, 3)
+        v_WO = v_WO[scene.obstacle_owners]  # per kernel obstacle (a mesh's pieces move with it)
         speed = float(np.max(np.linalg.norm(v_WO, axis=1), initial=0.0))
     M = QA.shape[0]
     status, t_stop = np.empty(M, np.int64), np.empty(M)

@@ -191,7 +191,7 @@ class View:
         self.meshcat.Delete(f"{self.prefix}/obstacles")
         for name, obstacle in scene.obstacles.items():
             path = self.obstacle_path(name)
-            self.meshcat.SetObject(path, obstacle.shape.to_drake(), c)
+            self._draw_shape(path, obstacle.shape, c)
             self.meshcat.SetTransform(path, _transform(obstacle.X_WO, f"obstacle {name!r} pose"))
         self._scene, self._scene_names = scene, set(scene.obstacles)
         return list(scene.obstacles)
@@ -214,9 +214,23 @@ class View:
             self.meshcat.Delete(self.obstacle_path(name))
         for name, obstacle in current.items():
             if name not in drawn:
-                self.meshcat.SetObject(self.obstacle_path(name), obstacle.shape.to_drake(), rgba(colour, "colour"))
+                self._draw_shape(self.obstacle_path(name), obstacle.shape, rgba(colour, "colour"))
             self.meshcat.SetTransform(self.obstacle_path(name), _transform(obstacle.X_WO, f"obstacle {name!r} pose"))
         self._scene, self._scene_names = scene, set(current)
+
+    def _draw_shape(self, path: str, shape, colour) -> None:
+        """An obstacle's shape at ``path``: a primitive or a mesh (its surface, not its convex
+        pieces) as Drake's shape, a point cloud as Meshcat points of its balls' diameter."""
+        from drake_mh.geometry.cloud import PointCloud
+
+        if isinstance(shape, PointCloud):
+            from pydrake.perception import BaseField, PointCloud as DrakeCloud
+
+            cloud = DrakeCloud(len(shape.points), BaseField.kXYZs)
+            cloud.mutable_xyzs()[:] = shape.points.T
+            self.meshcat.SetObject(path, cloud, point_size=max(2.0 * shape.radius, 0.002), rgba=colour)
+        else:
+            self.meshcat.SetObject(path, shape.to_drake(), colour)
 
     def obstacle_path(self, name: str) -> str:
         """Meshcat path of an obstacle."""

@@ -330,7 +330,7 @@ def test_penetration_takes_drakes_depth():
     searched = capsule_distance(X_WG, capsule.radius, capsule.length, slab.X_WO, slab.shape)[0]
     PANDA.plant.SetPositions(scene._plant_context, q)
     query = PANDA.scene_graph.get_query_output_port().Eval(scene._sg_context)
-    drakes = query.ComputeSignedDistancePairClosestPoints(exact.gids[g], scene._ids["slab"]).distance
+    drakes = query.ComputeSignedDistancePairClosestPoints(exact.gids[g], scene._ids["slab"][0]).distance
     assert searched < 0 and drakes < searched - 1e-3  # the case is real: Drake's depth is deeper
     assert pair.distance == pytest.approx(min(searched, drakes), abs=1e-12)
     assert scene.min_distance(q) <= pair.distance

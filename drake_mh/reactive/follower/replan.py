@@ -133,14 +133,16 @@ def obstacle_circumradius(shape) -> float:
         return float(np.hypot(shape.radius, 0.5 * shape.length))
     if isinstance(shape, Capsule):
         return float(shape.radius + 0.5 * shape.length)
+    if hasattr(shape, "circumradius"):  # a mesh, a point cloud
+        return float(shape.circumradius)
     raise InvalidArgument(f"unsupported obstacle shape {type(shape).__name__}")
 
 
 def path_point_clearance(points_W, scene) -> np.ndarray:
     """Signed distance ``(N,)`` [m] of each point ``points_W (N, 3)`` to the nearest obstacle.
 
-    Closed-form point-to-shape distances (exact for the scene's primitive shapes); ``inf``
-    without obstacles.
+    Closed-form point-to-shape distances (exact for the scene's primitive shapes and point
+    clouds, a lower bound for meshes: their convex pieces' planes); ``inf`` without obstacles.
     """
     P = np.asarray(points_W, dtype=float).reshape(-1, 3)
     out = np.full(len(P), np.inf)

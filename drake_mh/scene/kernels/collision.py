@@ -18,7 +18,9 @@ The *constraint values* of one configuration are, in this order,
 
 Obstacle kinds: 0 sphere (radius), 1 box (half sizes), 2 cylinder (radius, half length),
 3 capsule (radius, half length); axes along z of the obstacle frame, as in
-:mod:`drake_mh.geometry.shapes`. An obstacle may move: at lane parameter ``tau`` it is at
+:mod:`drake_mh.geometry.shapes`; 4 a convex piece of a mesh and 5 a point cloud, whose values
+are lower bounds of the signed distance (exact inside a piece, exact for a cloud), their data in
+the rows of ``dims`` after the obstacles' own (:mod:`.pieces`). An obstacle may move: at lane parameter ``tau`` it is at
 ``p_WO + tau * v_WO`` (``v_WO`` a displacement [m] per unit of ``tau``).
 """
 
@@ -32,6 +34,8 @@ import numpy as np
 from drake_mh._support.compilation import stable_calls
 from drake_mh.kinematics.kernels import frames_block
 from drake_mh.scene.kernels.pairs import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
+from drake_mh.scene.kernels.pieces import (CLOUD, CONVEX, cloud_free, cloud_nearest2, cloud_radius, convex_free,
+                                           convex_value)
 
 LANES = 128
 """Configurations per block (measured: 32 / 64 / 128 lanes gave 164 / 137 / 123 ns per Panda
@@ -98,7 +102,7 @@ def _obstacle_sd(m, k, kinds, R_WO, p_WO, v_WO, dims, tau, cx, cy, cz, out):
             qa = abs(z) - d1
             orr, oa = max(qr, 0.0), max(qa, 0.0)
             out[b] = math.sqrt(orr * orr + oa * oa) + min(max(qr, qa), 0.0)
-    else:  # CAPSULE
+    elif kind == CAPSULE:
         for b in range(m):
             dx = cx[b] - px - vx * tau[b]
             dy = cy[b] - py - vy * tau[b]
@@ -108,6 +112,14 @@ def _obstacle_sd(m, k, kinds, R_WO, p_WO, v_WO, dims, tau, cx, cy, cz, out):
             z = r02 * dx + r12 * dy + r22 * dz
             z = z - min(max(z, -d1), d1)
             out[b] = math.sqrt(x * x + y * y + z * z) - d0
+    elif kind == CONVEX:
+        for b in range(m):
+            out[b] = convex_value(k, dims, cx[b] - px - vx * tau[b], cy[b] - py - vy * tau[b], cz[b] - pz - vz * tau[b])
+    else:  # CLOUD (points in W)
+        rho = cloud_radius(k, dims)
+        for b in range(m):
+            out[b] = math.sqrt(cloud_nearest2(k, dims, cx[b] - vx * tau[b], cy[b] - vy * tau[b], cz[b] - vz * tau[b],
+                                              np.inf)) - rho
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -143,7 +155,7 @@ def _obstacle_free(m, k, kinds, R_WO, p_WO, dims, reach, cx, cy, cz, alive):
             orr = max(math.sqrt(x * x + y * y) - d0, 0.0)
             oa = max(abs(z) - d1, 0.0)
             alive[b] &= orr * orr + oa * oa >= lim
-    else:  # CAPSULE
+    elif kind == CAPSULE:
         lim = (reach + d0) * (reach + d0)
         for b in range(m):
             dx, dy, dz = cx[b] - px, cy[b] - py, cz[b] - pz
@@ -152,6 +164,15 @@ def _obstacle_free(m, k, kinds, R_WO, p_WO, dims, reach, cx, cy, cz, alive):
             z = r02 * dx + r12 * dy + r22 * dz
             z = z - min(max(z, -d1), d1)
             alive[b] &= x * x + y * y + z * z >= lim
+    elif kind == CONVEX:
+        for b in range(m):
+            if alive[b]:
+                alive[b] = convex_free(k, dims, cx[b] - px, cy[b] - py, cz[b] - pz, reach)
+    else:  # CLOUD
+        lim = reach + cloud_radius(k, dims)
+        for b in range(m):
+            if alive[b]:
+                alive[b] = cloud_free(k, dims, cx[b], cy[b], cz[b], lim)
 
 
 
@@ -176,6 +197,10 @@ def _point_free(k, kinds, R_WO, p_WO, dims, reach, x, y, z):
     d0 = dims[k, 0]
     if kind == SPHERE:
         return dx * dx + dy * dy + dz * dz >= (reach + d0) * (reach + d0)
+    if kind == CONVEX:
+        return convex_free(k, dims, dx, dy, dz, reach)
+    if kind == CLOUD:
+        return cloud_free(k, dims, x, y, z, reach + cloud_radius(k, dims))
     u = R_WO[k, 0, 0] * dx + R_WO[k, 1, 0] * dy + R_WO[k, 2, 0] * dz
     v = R_WO[k, 0, 1] * dx + R_WO[k, 1, 1] * dy + R_WO[k, 2, 1] * dz
     w = R_WO[k, 0, 2] * dx + R_WO[k, 1, 2] * dy + R_WO[k, 2, 2] * dz
@@ -190,7 +215,7 @@ def _point_free(k, kinds, R_WO, p_WO, dims, reach, x, y, z):
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")
-def _point_distance(k, kinds, R_WO, p_WO, dims, x, y, z):
+def point_distance(k, kinds, R_WO, p_WO, dims, x, y, z):
     """Distance [m] of point ``(x, y, z)`` outside obstacle k (0 or less inside: the value
     :func:`_point_free` compares with its reach, with a square root)."""
     kind = kinds[k]
@@ -198,6 +223,10 @@ def _point_distance(k, kinds, R_WO, p_WO, dims, x, y, z):
     d0 = dims[k, 0]
     if kind == SPHERE:
         return math.sqrt(dx * dx + dy * dy + dz * dz) - d0
+    if kind == CONVEX:
+        return convex_value(k, dims, dx, dy, dz)
+    if kind == CLOUD:
+        return math.sqrt(cloud_nearest2(k, dims, x, y, z, np.inf)) - cloud_radius(k, dims)
     u = R_WO[k, 0, 0] * dx + R_WO[k, 1, 0] * dy + R_WO[k, 2, 0] * dz
     v = R_WO[k, 0, 1] * dx + R_WO[k, 1, 1] * dy + R_WO[k, 2, 1] * dz
     w = R_WO[k, 0, 2] * dx + R_WO[k, 1, 2] * dy + R_WO[k, 2, 2] * dz

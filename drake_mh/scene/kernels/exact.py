@@ -13,7 +13,8 @@ obstacle, the exact signed distance:
   :mod:`drake_mh.scene.segment_distance` along the capsule's axis; exact while the axis stays
   outside the obstacle, otherwise the pair is marked ``NEEDS_DRAKE`` (the axis's deepest point
   is not the penetration depth);
-* box, cylinder, ellipsoid and convex-hull links vs any obstacle: the certified GJK of
+* any link vs a convex piece of a mesh (a ``HULL`` core, grown by the pieces' cover excess), and
+  box, cylinder, ellipsoid and convex-hull links vs any obstacle: the certified GJK of
   :mod:`drake_mh.scene.kernels.gjk`; ``NEEDS_DRAKE`` when the cores overlap (or the search stops
   without a positive lower bound: its bound inside is no penetration depth). A search that
   stops short with a positive bound keeps that bound (never above the truth; not seen in tests).
@@ -30,7 +31,8 @@ Array layouts (built by :class:`drake_mh.scene.exact.ExactDistances`):
 * ``g_float (G, 20)``: ``R_AG`` (9, row-major), ``p_AG`` (3), core dims (3), margin (radius of a
   sphere/capsule, else 0), bounding-sphere centre in G (3), bounding radius;
 * ``o_int (K, 2)``: SDF kind (:mod:`drake_mh.scene.segment_distance`), GJK core kind;
-* ``o_float (K, 20)``: ``R_WO`` (9), ``p_WO`` (3), SDF dims (3), core dims (3), margin, 0;
+* ``o_float (K, 20)``: ``R_WO`` (9), ``p_WO`` (3), SDF dims (3), core dims (3; a ``HULL``'s
+  first vertex and count in ``vertices``), margin, 0;
 * outputs per pair ``i = g * K + k`` then self pair ``G * K + s``: ``out (n, 10)`` = distance,
   point on the link (3), point on the other (3), unit normal from the other towards the link
   (3), all in W; ``status (n,)``.
@@ -250,7 +252,7 @@ def pair_distance(g, k, g_int, g_float, vertices, o_int, o_float, R_WG, p_WG, ou
     r_link = g_float[g, 15]
     a, b, c_link, c_other, n = work[0], work[1], work[2], work[3], work[4]
     a_O, b_O, p_O, n_O = work[5], work[6], work[7], work[8]
-    if kind == LINK_POINT or kind == LINK_SEGMENT:
+    if (kind == LINK_POINT or kind == LINK_SEGMENT) and o_int[k, 1] != gjk.HULL:
         _segment_ends(g, g_float, R_WG, p_WG, a, b)
         if sdf_kind == BOX or sdf_kind == CYLINDER:
             _to_obstacle(o_float, k, a, a_O)
@@ -279,7 +281,10 @@ def pair_distance(g, k, g_int, g_float, vertices, o_int, o_float, R_WG, p_WG, ou
         r_other = o_float[k, 18]
         _write(out, i, core - r_link - r_other, c_link, r_link, c_other, r_other, n)
         return EXACT
-    # certified GJK in the obstacle frame
+    # certified GJK in the obstacle frame (a sphere or capsule link against a convex piece too:
+    # its core is a point or a segment, its radius the margin r_link)
+    if kind != LINK_POINT and kind != LINK_SEGMENT:
+        r_link = 0.0
     R_OG = np.empty((3, 3))
     for r in range(3):
         for s in range(3):
@@ -298,7 +303,7 @@ def pair_distance(g, k, g_int, g_float, vertices, o_int, o_float, R_WG, p_WG, ou
     _to_world(o_float, k, res[2:5], c_link)
     _to_world(o_float, k, res[5:8], c_other)
     _unit(c_link, c_other, n)
-    _write(out, i, res[0] - r_other, c_link, 0.0, c_other, r_other, n)
+    _write(out, i, res[0] - r_other - r_link, c_link, r_link, c_other, r_other, n)
     return EXACT
 
 
@@ -343,7 +348,8 @@ def exact_pairs(q, parent, KR, Kp, perm, kind, qidx, g_int, g_float, vertices, o
             status[i] = SKIPPED
             if link == LINK_DRAKE:
                 continue
-            cheap = link == LINK_POINT or (link == LINK_SEGMENT and o_int[k, 1] <= gjk.SEGMENT)
+            cheap = (link == LINK_POINT and o_int[k, 1] != gjk.HULL) or (link == LINK_SEGMENT
+                                                                       and o_int[k, 1] <= gjk.SEGMENT)
             if cheap:
                 status[i] = pair_distance(g, k, g_int, g_float, vertices, o_int, o_float, R_WG, p_WG, out, i,
                                           work, tol)

@@ -26,7 +26,8 @@ all positive (the nearest point lies in the relative interior of exactly one fac
 
 Core kinds and ``dims``: ``POINT`` (-); ``SEGMENT`` (half length along z); ``BOX`` (half sizes);
 ``CYLINDER`` (radius, half length along z); ``ELLIPSOID`` (semi-axes a, b, c); ``HULL``
-(vertices ``vertices[start:start + count]`` in the shape frame).
+(vertices ``vertices[start:start + count]`` in the shape frame; for core B, ``start`` and
+``count`` are ``dims_b[0]`` and ``dims_b[1]``, in the same vertex array).
 """
 
 from __future__ import annotations
@@ -213,12 +214,12 @@ def gjk(kind_a, dims_a, R_BA, p_BA, vertices, start, count, kind_b, dims_b, tol,
     a = np.empty(3)
     b = np.empty(3)
     local = np.empty(3)
-    no_vertices = vertices
+    start_b, count_b = (int(dims_b[0]), int(dims_b[1])) if kind_b == HULL else (0, 0)
     dx, dy, dz = p_BA[0], p_BA[1], p_BA[2]
     if dx * dx + dy * dy + dz * dz < 1e-30:
         dx, dy, dz = 1.0, 0.0, 0.0
     _support_a(kind_a, dims_a, R_BA, p_BA, vertices, start, count, -dx, -dy, -dz, local, a)
-    support(kind_b, dims_b, no_vertices, 0, 0, dx, dy, dz, b)
+    support(kind_b, dims_b, vertices, start_b, count_b, dx, dy, dz, b)
     n = 1
     for i in range(3):
         WA[0, i] = a[i]
@@ -236,7 +237,7 @@ def gjk(kind_a, dims_a, R_BA, p_BA, vertices, start, count, kind_b, dims_b, tol,
             status = INTERSECTING if lb < -tol else SEPARATED
             break
         _support_a(kind_a, dims_a, R_BA, p_BA, vertices, start, count, -v0, -v1, -v2, local, a)
-        support(kind_b, dims_b, no_vertices, 0, 0, v0, v1, v2, b)
+        support(kind_b, dims_b, vertices, start_b, count_b, v0, v1, v2, b)
         w0, w1, w2 = a[0] - b[0], a[1] - b[1], a[2] - b[2]
         lower = (v0 * w0 + v1 * w1 + v2 * w2) / vn
         if lower > lb:

@@ -48,7 +48,7 @@ import numpy as np
 
 from drake_mh._support.compilation import stable_calls
 from drake_mh.kinematics.kernels import frames_block
-from drake_mh.scene.kernels.collision import _centre_block, _obstacle_free, _point_distance, _point_free
+from drake_mh.scene.kernels.collision import _centre_block, _obstacle_free, point_distance, _point_free
 from drake_mh.scene.kernels.pairs import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
 
 CLEAR, NEAR, COLLISION = 0, 1, 2
@@ -84,7 +84,7 @@ def _spheres_state(b, a, s0, s1, s_offset, s_radius, margin, plain, R, p, k, kin
             if not _point_free(k, kinds, R_WO, p_WO, dims, plain + s_radius[s], x, y, z):
                 return COLLISION, low
             answer = NEAR
-            low = min(low, _point_distance(k, kinds, R_WO, p_WO, dims, x, y, z) - s_radius[s])
+            low = min(low, point_distance(k, kinds, R_WO, p_WO, dims, x, y, z) - s_radius[s])
     return answer, low
 
 

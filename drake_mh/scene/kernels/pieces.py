@@ -1,0 +1,244 @@
+"""Numba kernels of the obstacle kinds whose data live in the shape table: convex pieces (of a
+mesh) and point clouds.
+
+The collision kernels (:mod:`.collision`) read each obstacle k from ``kinds[k]``, ``R_WO[k]``,
+``p_WO[k]`` and the row ``dims[k]`` of the *shape table* ``dims (D, 3)``. For a primitive the
+row holds its sizes; for these two kinds it says where the obstacle's data start in the rows
+after the obstacles' own (built by :func:`drake_mh.scene.batch.obstacle_arrays`):
+
+* **convex piece** (``CONVEX``), ``dims[k] = (s, M, radius)`` (``radius``: of a ball about
+  ``p_WO[k]`` that holds the piece): rows ``s .. s+M-1`` are unit normals
+  ``n_i`` in W, and the offsets ``h_i`` follow, three to a row (``h_i = dims[s + M + i // 3, i % 3]``),
+  of supporting planes of the piece relative to ``p_WO[k]``: every point x of the piece has
+  ``n_i · (x - p_WO) <= h_i``. So for any point x,
+
+      ``v(x) = max_i (n_i · (x - p_WO) - h_i) <= sd(x)``,
+
+  the piece's signed distance: outside, each plane bounds the distance from below (the piece
+  lies in its half space); inside, the ball of radius ``-sd(x)`` about x lies in the piece, so
+  in every half space, and ``v(x) <= sd(x)`` again, with equality when the planes include the
+  piece's facets. The planes are the facets and, to tighten ``v`` near edges and corners, the
+  normalised sums of the facet normals that meet at each edge and at each vertex (each with its
+  support value ``h = max_vertices n · v``): :mod:`drake_mh.geometry.convex_pieces`.
+* **point cloud** (``CLOUD``), ``dims[k] = (s, N, radius)``: row ``s`` holds the points'
+  radius ``rho``, the grid's cell size ``h`` and where the points start, ``f - s``; row ``s+1``
+  the grid's corner in W, row ``s+2`` its cell counts; from row ``s+3`` one value per cell,
+  three to a row (cell ``(i, j, l)`` is number ``(i ny + j) nz + l``); rows ``f .. f+N-1`` the
+  points in W as an implicit k-d tree (the median of a range ``[lo, hi)`` at
+  ``mid = (lo + hi) // 2``, its split axis at ``dims[f + N + mid // 3, mid % 3]``, the lower
+  half before it, the upper half after it: :func:`kd_build`). The obstacle is the union of
+  balls of radius ``rho`` around the points, its signed distance ``min_j |x - p_j| - rho``:
+  :func:`cloud_nearest2` computes it exactly (a k-d tree search: Friedman, Bentley, Finkel,
+  ACM TOMS 3(3), 1977). The grid answers most "free" questions in O(1)
+  (:func:`cloud_free`): a cell's value is ``h`` times the Euclidean distance transform, in
+  cells, of the occupied cells dilated by one cell, that is the least box-to-box distance
+  ``h |max(|Δ| - 1, 0)|`` from the cell to an occupied cell, so no point of the cell is nearer
+  to any cloud point (:func:`drake_mh.scene.batch.obstacle_arrays` builds it); outside the grid
+  the distance to its box bounds it.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from drake_mh.scene.kernels.pairs import FASTMATH
+
+CONVEX, CLOUD = 4, 5
+"""The kinds after the primitives' 0-3 (:mod:`.collision`)."""
+
+_LEAF = 8
+"""Ranges of at most this many points are scanned, not split further."""
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def convex_value(k, dims, x, y, z):
+    """``max_i (n_i · (x, y, z) - h_i)`` of convex piece k, the point relative to ``p_WO[k]``:
+    a lower bound of its signed distance, exact inside (module docstring)."""
+    s, M = int(dims[k, 0]), int(dims[k, 1])
+    best = -np.inf
+    for i in range(M):
+        v = dims[s + i, 0] * x + dims[s + i, 1] * y + dims[s + i, 2] * z - dims[s + M + i // 3, i % 3]
+        best = max(best, v)
+    return best
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def convex_free(k, dims, x, y, z, reach):
+    """Whether some plane of convex piece k keeps the point (relative to ``p_WO[k]``) at least
+    ``reach`` away: a certificate that the piece is at least that far; stops at the first."""
+    s, M = int(dims[k, 0]), int(dims[k, 1])
+    for i in range(M):
+        if dims[s + i, 0] * x + dims[s + i, 1] * y + dims[s + i, 2] * z - dims[s + M + i // 3, i % 3] >= reach:
+            return True
+    return False
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def _nearest2(dims, s, a0, N, x, y, z, best, stop):
+    """The smaller of ``best`` and the smallest squared distance from (x, y, z) to the points of
+    the tree at rows ``s .. s+N-1`` (axes from row ``a0``), returning as soon as it is below
+    ``stop``. Depth first, the near side first, the far side of a split only while the split
+    plane is nearer than the best so far; no stack and no recursion (numba's cache does not
+    reload recursive functions): bit ``d`` of ``path`` is the side taken at depth ``d``, of
+    ``pending`` whether its far side is still to be tried, and a range is found again from the
+    root by its path."""
+    lo, hi, depth, path, pending = 0, N, 0, 0, 0
+    while True:
+        while hi - lo > _LEAF:  # down to a leaf, the near side first
+            mid = (lo + hi) >> 1
+            dx, dy, dz = x - dims[s + mid, 0], y - dims[s + mid, 1], z - dims[s + mid, 2]
+            best = min(best, dx * dx + dy * dy + dz * dz)
+            if best < stop:
+                return best
+            axis = int(dims[a0 + mid // 3, mid % 3])
+            diff = dx if axis == 0 else dy if axis == 1 else dz
+            if diff < 0.0:
+                hi = mid
+            else:
+                lo = mid + 1
+                path |= 1 << depth
+            pending |= 1 << depth
+            depth += 1
+        for j in range(lo, hi):
+            dx, dy, dz = x - dims[s + j, 0], y - dims[s + j, 1], z - dims[s + j, 2]
+            best = min(best, dx * dx + dy * dy + dz * dz)
+        if best < stop:
+            return best
+        while True:  # back to the deepest split whose far side can still hold a nearer point
+            if pending == 0:
+                return best
+            d = depth - 1
+            while not (pending >> d) & 1:
+                d -= 1
+            pending &= ~(1 << d)
+            lo, hi = 0, N
+            for e in range(d):
+                mid = (lo + hi) >> 1
+                if (path >> e) & 1:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            mid = (lo + hi) >> 1
+            axis = int(dims[a0 + mid // 3, mid % 3])
+            diff = (x if axis == 0 else y if axis == 1 else z) - dims[s + mid, axis]
+            if diff * diff < best:
+                far = 1 - ((path >> d) & 1)
+                if far:
+                    lo = mid + 1
+                else:
+                    hi = mid
+                path = (path & ((1 << d) - 1)) | (far << d)
+                depth = d + 1
+                break
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def _points(k, dims):
+    """``(first point row, N, first axis row)`` of cloud k."""
+    s, N = int(dims[k, 0]), int(dims[k, 1])
+    first = s + int(dims[s, 2])
+    return first, N, first + N
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def cloud_nearest2(k, dims, x, y, z, bound2):
+    """The smallest squared distance [m^2] from (x, y, z) (in W) to a point of cloud k, or
+    ``bound2`` if none is nearer (the search skips what cannot be: pass the square of the
+    largest distance that matters, ``inf`` for the exact value)."""
+    first, N, axes = _points(k, dims)
+    return _nearest2(dims, first, axes, N, x, y, z, bound2, -1.0)
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def cloud_floor(k, dims, x, y, z):
+    """A lower bound [m] of the distance from (x, y, z) (in W) to every point of cloud k: its
+    grid cell's value, or the distance to the grid's box outside it (module docstring)."""
+    s = int(dims[k, 0])
+    h = dims[s, 1]
+    ox, oy, oz = dims[s + 1, 0], dims[s + 1, 1], dims[s + 1, 2]
+    nx, ny, nz = int(dims[s + 2, 0]), int(dims[s + 2, 1]), int(dims[s + 2, 2])
+    fx, fy, fz = (x - ox) / h, (y - oy) / h, (z - oz) / h
+    if fx < 0.0 or fy < 0.0 or fz < 0.0 or fx >= nx or fy >= ny or fz >= nz:
+        gx = max(ox - x, 0.0, x - ox - nx * h)
+        gy = max(oy - y, 0.0, y - oy - ny * h)
+        gz = max(oz - z, 0.0, z - oz - nz * h)
+        return np.sqrt(gx * gx + gy * gy + gz * gz)
+    c = (int(fx) * ny + int(fy)) * nz + int(fz)
+    return dims[s + 3 + c // 3, c % 3]
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def cloud_free(k, dims, x, y, z, reach):
+    """Whether every point of cloud k is at least ``reach`` [m] (> 0) from (x, y, z) (in W):
+    the grid's bound first, the k-d tree (stopping at the first point nearer) where it cannot
+    tell."""
+    if cloud_floor(k, dims, x, y, z) >= reach:
+        return True
+    first, N, axes = _points(k, dims)
+    lim = reach * reach
+    return _nearest2(dims, first, axes, N, x, y, z, lim, lim) >= lim
+
+
+@numba.njit(cache=True)
+def cloud_radius(k, dims):
+    """The radius [m] of cloud k's balls."""
+    return dims[int(dims[k, 0]), 0]
+
+
+@numba.njit(cache=True)
+def _select(P, idx, lo, hi, nth, axis):
+    """Reorder ``idx[lo:hi]`` so that ``idx[nth]`` holds the point with the ``nth``-smallest
+    coordinate ``axis``, the smaller before it and the larger after it (Hoare's selection)."""
+    while hi - lo > 1:
+        a, b, c = P[idx[lo], axis], P[idx[(lo + hi) >> 1], axis], P[idx[hi - 1], axis]
+        pivot = max(min(a, b), min(max(a, b), c))  # median of three
+        i, j = lo, hi - 1
+        while i <= j:
+            while P[idx[i], axis] < pivot:
+                i += 1
+            while P[idx[j], axis] > pivot:
+                j -= 1
+            if i <= j:
+                idx[i], idx[j] = idx[j], idx[i]
+                i += 1
+                j -= 1
+        if nth <= j:
+            hi = j + 1
+        elif nth >= i:
+            lo = i
+        else:
+            return
+
+
+@numba.njit(cache=True)
+def kd_build(P):
+    """``(order (N,), axes (N,))``: the implicit k-d tree of points ``P (N, 3)`` (module
+    docstring): ``P[order]`` in tree order, ``axes[mid]`` the split axis of the range whose
+    median is at ``mid`` (the axis of the range's widest extent)."""
+    N = P.shape[0]
+    idx = np.arange(N)
+    axes = np.zeros(N, np.int64)
+    stack = np.empty((64, 2), np.int64)
+    stack[0, 0], stack[0, 1] = 0, N
+    top = 1
+    while top > 0:
+        top -= 1
+        lo, hi = stack[top, 0], stack[top, 1]
+        if hi - lo <= _LEAF:
+            continue
+        axis, widest = 0, -1.0
+        for a in range(3):
+            low, high = np.inf, -np.inf
+            for j in range(lo, hi):
+                v = P[idx[j], a]
+                low, high = min(low, v), max(high, v)
+            if high - low > widest:
+                axis, widest = a, high - low
+        mid = (lo + hi) >> 1
+        _select(P, idx, lo, hi, mid, axis)
+        axes[mid] = axis
+        stack[top, 0], stack[top, 1] = lo, mid
+        stack[top + 1, 0], stack[top + 1, 1] = mid + 1, hi
+        top += 2
+    return idx, axes

@@ -1,0 +1,125 @@
+"""Point-cloud obstacles in a Scene: the batched checks and segment certificates never call
+free what the brute-force distance of the robot's geometry to every point shows closer; the
+exact distances equal it; the k-d tree in the kernels finds the nearest point."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import drake_mh
+from drake_mh.errors import SceneError
+from drake_mh.scene import PointCloud, Scene
+from obstacle_reference import PointDistance, check_certified_segments, near_configurations
+
+PANDA = drake_mh.load_robot("panda")
+REFERENCE = PointDistance(PANDA)
+
+
+def box_surface(rng, count, size, centre):
+    """``count`` points on the faces of a box of full ``size`` at ``centre``."""
+    points = rng.uniform(-0.5, 0.5, (count, 3)) * size
+    axis = rng.integers(0, 3, count)
+    points[np.arange(count), axis] = np.sign(rng.uniform(-1, 1, count)) * 0.5 * np.asarray(size)[axis]
+    return points + centre
+
+
+def cloud_scene(seed: int, radius: float = 0.01):
+    rng = np.random.default_rng(seed)
+    points = np.vstack([box_surface(rng, 3000, (0.6, 0.8, 0.04), (0.5, 0.0, 0.2)),   # a table top
+                        box_surface(rng, 1500, (0.2, 0.2, 0.3), rng.uniform([0.3, -0.4, 0.4], [0.6, 0.4, 0.6]))])
+    scene = Scene(PANDA)
+    scene.add("cloud", PointCloud(points, radius), rpy=(0, 0, rng.uniform(-0.3, 0.3)))
+    X = scene.obstacles["cloud"].X_WO
+    return scene, points @ X[:3, :3].T + X[:3, 3], radius
+
+
+def test_kd_tree_finds_the_nearest_point_and_the_grid_bounds_it():
+    from drake_mh.scene.kernels.pieces import cloud_floor, cloud_free, cloud_nearest2
+
+    rng = np.random.default_rng(0)
+    for n in (1, 7, 9, 1000, 20000):
+        points = rng.normal(size=(n, 3)) * [1.0, 0.3, 0.01]  # flat: one grid layer, splits on every axis
+        points[: n // 3] = points[0]  # repeated points
+        scene = Scene(PANDA)
+        scene.add("c", PointCloud(points, 0.0))
+        dims = scene.obstacle_arrays[4]
+        for x in np.vstack([rng.normal(size=(150, 3)), points[rng.integers(0, n, 50)] + rng.normal(0, 0.03, (50, 3))]):
+            exact = np.min(np.sum((points - x) ** 2, axis=1))
+            assert cloud_nearest2(0, dims, *x, np.inf) == pytest.approx(exact, rel=1e-12, abs=1e-15)
+            assert cloud_nearest2(0, dims, *x, exact * 0.5) == exact * 0.5  # nothing nearer than the bound
+            assert cloud_floor(0, dims, *x) <= np.sqrt(exact)  # the grid's value is a lower bound
+            for reach in (0.5 * np.sqrt(exact), 2.0 * np.sqrt(exact) + 1e-9):
+                assert cloud_free(0, dims, *x, reach) == (np.sqrt(exact) >= reach)
+
+
+@settings(max_examples=4, deadline=None)
+@given(seed=st.integers(0, 10_000), radius=st.sampled_from([0.0, 0.01, 0.03]))
+def test_batched_check_never_calls_a_touching_configuration_free(seed, radius):
+    scene, points, rho = cloud_scene(seed, radius)
+    Q = near_configurations(scene, seed)
+    for clearance in (0.0, 0.02):
+        free = scene.collision_free(Q, clearance)
+        for q in Q[free]:
+            assert REFERENCE(q, points) - rho >= clearance - 1e-9
+    model = scene.batch_min_distance(Q)
+    bound = scene.sphere_model.bound
+    for q, m in zip(Q[:40], model[:40]):
+        exact = REFERENCE(q, points) - rho
+        assert m <= exact + 1e-9
+        if exact >= 0:
+            assert m >= exact - bound - 1e-9
+        assert scene.min_distance(q) == pytest.approx(exact, abs=1e-9)
+
+
+@settings(max_examples=3, deadline=None)
+@given(seed=st.integers(0, 10_000))
+def test_certified_segments_hold_under_dense_sampling(seed):
+    scene, points, rho = cloud_scene(seed)
+    check_certified_segments(scene, points, rho, seed)
+
+
+def test_distances_and_drake_point_query():
+    scene, points, rho = cloud_scene(2)
+    q = near_configurations(scene, 2, 2)[0]
+    pairs = [p for p in scene.distances(q) if p.other == "cloud"]
+    assert pairs and pairs[0].distance == pytest.approx(scene.min_distance(q), abs=1e-12)
+    # the link's witness lies on the link: Drake's own point query agrees there
+    context = PANDA.diagram.CreateDefaultContext()
+    PANDA.plant.SetPositions(PANDA.plant.GetMyMutableContextFromRoot(context), q)
+    query = PANDA.scene_graph.get_query_output_port().Eval(PANDA.scene_graph.GetMyContextFromRoot(context))
+    for pair in pairs[:5]:
+        on_surface = min(abs(d.distance) for d in query.ComputeSignedDistanceToPoint(pair.p_W_link, 1.0))
+        assert on_surface < 1e-6  # on the surface of a geometry (links overlap: maybe inside another)
+        assert np.linalg.norm(pair.p_W_link - pair.p_W_other) == pytest.approx(max(pair.distance, 0), abs=1e-6)
+
+
+def test_robot_points_removed_and_crop():
+    scene = Scene(PANDA)
+    q = np.zeros(PANDA.nq)
+    q[3], q[5] = -1.5, 1.5
+    rng = np.random.default_rng(1)
+    centres = scene.sphere_centres(q.reshape(1, -1))[0]
+    on_robot = centres[rng.integers(0, len(centres), 300)] + rng.normal(0, 0.01, (300, 3))
+    far = rng.uniform([-1, -1, 0], [1, 1, 1], (2000, 3))
+    cloud = PointCloud(np.vstack([on_robot, far]), 0.005)
+    cleaned = cloud.without_robot(PANDA, q, margin=0.01)
+    assert len(cleaned) < len(cloud)
+    assert REFERENCE(q, cleaned.points) >= 0.01 - 1e-9  # no point left within the margin
+    kept_far = far[[REFERENCE(q, x.reshape(1, 3)) >= 0.01 for x in far]]
+    assert len(cleaned) >= len(kept_far)  # a point off the robot is never removed
+    cropped = cloud.cropped_to_reach(scene, margin=0.05)
+    assert len(cropped) <= len(cloud)
+    dropped = np.array([x for x in cloud.points if not (cropped.points == x).all(axis=1).any()]).reshape(-1, 3)
+    if len(dropped):  # no configuration brings the robot within 5 cm of a dropped point
+        Q = rng.uniform(PANDA.lower, PANDA.upper, (50, PANDA.nq))
+        assert min(REFERENCE(qq, dropped) for qq in Q) >= 0.05
+
+
+def test_failed_add_changes_nothing():
+    scene = Scene(PANDA)
+    with pytest.raises(SceneError):
+        scene.add("c", PointCloud(np.zeros((3, 3)), 0.01), [np.inf, 0, 0])
+    assert not scene.obstacles and len(scene.obstacle_arrays[0]) == 0
