@@ -72,3 +72,23 @@ def test_retime_ruckig_limits_the_jerk_toppra_says_it_does_not():
     assert ruckig.returncode == 0, ruckig.stderr
     data = json.loads(ruckig.stdout)
     assert data["jerk_limited"] is True and 0 < data["max_jerk"] <= 10000 * (1 + 1e-6)
+
+
+def test_scene_file_obstacles_join_the_problem(tmp_path):
+    """--scene FILE adds the file's obstacles (with --sphere); a bad file or --scene with --set exits 2
+    with one line naming the file and the entry."""
+    from pathlib import Path
+
+    cell = Path(__file__).resolve().parents[1] / "data" / "scenes" / "cell.yaml"
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--scene", str(cell), "--sphere", "2", "2", "2", "0.1",
+                "--method", "rrt_connect", "--json")
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert data["success"] and data["obstacles"] == ["table", "ball", "post", "rail", "sphere0"]
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("obstacles:\n  - {name: lamp, shape: sphere, radius: 0.1}\n")
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--scene", str(bad))
+    assert out.returncode == 2 and f"scene file {bad}, obstacle 1 ('lamp'): a sphere needs position" in out.stderr
+    assert "Traceback" not in out.stderr
+    out = _plan("--set", "cage", "--scene", str(cell))
+    assert out.returncode == 2 and "--scene does not combine with --set" in out.stderr

@@ -309,3 +309,31 @@ def test_converter_errors(tmp_path):
     with pytest.raises(UnknownMethod):
         motionbenchmaker_set(empty, "kitchen")
     assert "bookshelf_thin" in MBM_SETS
+
+
+# --- scene files ------------------------------------------------------------------------------------
+
+
+def test_scene_file_sets_draw_certified_pairs_in_the_files_cell():
+    """Start and goal certified free in the file's cell, and clear by Drake's exact distance too;
+    the straight line's flag recomputed; problem i independent of count; the same seed, the same set."""
+    from pathlib import Path
+
+    from drake_mh.planning.problems import scene_problem_set
+
+    cell = Path(__file__).resolve().parents[1] / "data" / "scenes" / "cell.sdf"
+    problems = scene_problem_set(cell, PANDA, count=3, seed=4)
+    assert problems.name == "file/cell.sdf" and len(problems) == 3
+    assert list(problems[0].scene.obstacles) == ["table::board", "ball::sphere", "post::cylinder", "rail::capsule"]
+    for problem, info in zip(problems, problems.info):
+        ends = np.array([problem.q_start, problem.goal_configurations[0]])
+        assert problem.scene.collision_free(ends, MARGIN, MARGIN).all()
+        assert (problem.scene.exact_min_distance(ends) > MARGIN).all()
+        assert info["straight_free"] == problem.scene.segment_free(*ends)
+    assert not all(i["straight_free"] for i in problems.info)  # a planner has work to do
+    again = scene_problem_set(cell, PANDA, count=1, seed=4, first=2)
+    np.testing.assert_array_equal(again[0].goal_configurations[0], problems[2].goal_configurations[0])
+    other = scene_problem_set(cell, PANDA, count=1, seed=5)
+    assert not np.array_equal(other[0].goal_configurations[0], problems[0].goal_configurations[0])
+    with pytest.raises(SceneFileError, match="no such file"):
+        scene_problem_set(cell.with_name("missing.sdf"), PANDA, count=1)
