@@ -11,9 +11,9 @@ Example::
 The problem is a :class:`drake_mh.planning.MotionProblem`: the robot (``--robot`` and its model
 options), obstacles (``--scene FILE``, any scene file :meth:`drake_mh.scene.Scene.load` reads,
 its ``package://`` names resolved with ``--package``; ``--sphere`` / ``--box``, repeatable), the
-start (``--start-q``, default
-home) and the goal: a configuration (``--goal-q``) or an end-effector position (``--position``,
-with ``--rpy`` or else the start's orientation, goal configurations from collision-free IK);
+start (``--start-q``, default home) and the goal: a configuration (``--goal-q``) or an
+end-effector position (``--position``, with ``--rpy`` or else the start's orientation, goal
+configurations from collision-free IK);
 or one problem of a generated set (``--set NAME --index K``, :mod:`drake_mh.planning.problems`).
 :func:`drake_mh.planning.solve_motion` plans and verifies it. ``--html`` writes the animation
 with its certified clearance (:func:`drake_mh.viz.motion_html`), ``--show`` plays it in Meshcat

@@ -69,13 +69,9 @@ def scene_problem_set(path, robot="panda", count: int = 10, seed: int = 0, clear
         rng = np.random.default_rng([int(seed), SCENE_CODE, index])
         Q = robot.random_configurations(GOAL_DRAWS, rng)
         free = np.flatnonzero(scene.collision_free(Q, *margin))
-        ready = ready_configuration(robot)
-        if scene.collision_free(ready, *margin):
-            start = ready
-        elif len(free):
-            start, free = Q[free[0]], free[1:]
-        else:
-            free = []
+        start = ready_configuration(robot)
+        if not scene.collision_free(start, *margin) and len(free):
+            start, free = Q[free[0]], free[1:]  # the ready configuration collides: the first free draw
         if not len(free):
             raise InvalidMotionProblem(f"{scene_file.path}: none of {GOAL_DRAWS} configurations drawn for problem "
                                        f"{index} is certified free with {MARGIN * 1e3:.0f} mm to spare; does the cell "

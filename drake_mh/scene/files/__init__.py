@@ -131,9 +131,9 @@ def read_scene(path, format: str | None = None, packages=None, movable: str = "e
         format, data = _detect(path)
     elif format not in SCENE_FORMATS:
         raise SceneFileError(path, f"unknown format {format!r}; formats: {', '.join(SCENE_FORMATS)}")
-    else:
-        data = read_yaml(path) if format in _YAML_FORMATS and format != "directives" else None
-        if data is not None and not isinstance(data, dict):
+    elif format in _YAML_FORMATS and format != "directives":
+        data = read_yaml(path)
+        if not isinstance(data, dict):
             raise SceneFileError(path, f"a {format} file is a YAML mapping, got {type(data).__name__}")
     if format == "drake_mh":
         from drake_mh.scene.files.native import read_native

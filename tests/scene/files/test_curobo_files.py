@@ -9,10 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drake_mh.errors import SceneFileError
 from drake_mh.geometry import Capsule, Mesh
 from drake_mh.scene.files import read_scene
-from test_scene_yaml import CELL, _rz, assert_obstacle
+from test_scene_yaml import CELL, rot_z, assert_obstacle, assert_refused
 
 DATA = Path(__file__).resolve().parents[2] / "data"
 SCENES = DATA / "scenes"
@@ -39,7 +38,7 @@ def test_capsule_between_any_two_points(tmp_path):
     bar = read_scene(path)["bar"]
     assert bar.shape == Capsule(0.05, 0.5)
     X_WP = np.eye(4)
-    X_WP[:3, :3], X_WP[:3, 3] = _rz(0.3), [1, 0, 0]
+    X_WP[:3, :3], X_WP[:3, 3] = rot_z(0.3), [1, 0, 0]
     ends = [bar.X_WO[:3, 3] + s * 0.25 * bar.X_WO[:3, 2] for s in (-1, 1)]
     expected = [X_WP[:3, :3] @ p + X_WP[:3, 3] for p in ([0.1, 0.2, 0.3], [0.4, -0.2, 0.3])]
     np.testing.assert_allclose(ends, expected, atol=1e-12)
@@ -90,10 +89,6 @@ BAD = {
 @pytest.mark.parametrize("case", list(BAD))
 def test_malformed_worlds_name_the_file_and_the_obstacle(tmp_path, case):
     text, message = BAD[case]
-    path = tmp_path / "world.yml"
-    path.write_text(text)
-    with pytest.raises(SceneFileError, match=message) as err:
-        read_scene(path)
-    assert err.value.path == str(path)
-    with pytest.raises(SceneFileError, match=message if case != "type" else r"cone: unknown obstacle type 'cone'"):
-        read_scene(path, format="curobo")
+    assert_refused(tmp_path / "world.yml", text, message)
+    assert_refused(tmp_path / "world.yml", text, message if case != "type" else r"cone: unknown obstacle type 'cone'",
+                   format="curobo")

@@ -11,11 +11,11 @@ import pytest
 
 import drake_mh
 from drake_mh.errors import SceneFileError
-from drake_mh.geometry import Box, Capsule, Cylinder, Mesh, Sphere
+from drake_mh.geometry import Box, Mesh, Sphere
 from drake_mh.scene import Scene
 from drake_mh.scene.files import read_scene
 from drake_mh.scene.files.drake_files import HALFSPACE_DEPTH, HALFSPACE_SIDE
-from test_scene_yaml import CELL, _rz, assert_obstacle
+from test_scene_yaml import CELL, rot_z, assert_obstacle
 
 DATA = Path(__file__).resolve().parents[2] / "data"
 SCENES = DATA / "scenes"
@@ -43,7 +43,7 @@ def test_directives_weld_models_found_by_package():
     package.xml) and welds the table at 30 degrees."""
     cell = read_scene(SCENES / "cell.dmd.yaml")
     assert cell.format == "directives" and cell.names == ["table::board", "ball::sphere"]
-    assert_obstacle(cell["table::board"], Box(0.6, 1.0, 0.05), [0.7, 0.0, 0.3], _rz(np.pi / 6))
+    assert_obstacle(cell["table::board"], Box(0.6, 1.0, 0.05), [0.7, 0.0, 0.3], rot_z(np.pi / 6))
     assert_obstacle(cell["ball::sphere"], Sphere(0.08), [0.3, 0.4, 0.6], np.eye(3))
 
 
@@ -58,7 +58,7 @@ def test_meshes_keep_their_own_file_and_scale_and_planes_become_boxes():
     bin_ = cell["bin::shell"]
     assert bin_.shape == Mesh(DATA / "bin.obj", scale=(1, 1, 0.5))  # the file itself, not Drake's hull
     np.testing.assert_allclose(bin_.X_WO[:3, 3], [0.6, -0.2, 0.1])
-    np.testing.assert_allclose(bin_.X_WO[:3, :3], _rz(1.0), atol=1e-12)
+    np.testing.assert_allclose(bin_.X_WO[:3, :3], rot_z(1.0), atol=1e-12)
     bracket = cell["bracket::part"].shape  # an .stl Drake's proximity engine does not read
     assert bracket == Mesh(DATA / "bracket_mm.stl", scale=0.001) and bracket.path.suffix == ".stl"
 
@@ -67,7 +67,7 @@ def test_package_meshes_resolve_through_the_packages_given(tmp_path):
     cell = read_scene(SCENES / "cell_mesh.urdf", packages={"cell_meshes": str(DATA)})
     assert cell.names == ["mesh_fixture::bracket", "mesh_fixture::plinth"]
     assert_obstacle(cell["mesh_fixture::bracket"], Mesh(DATA / "bracket.obj", scale=2), [0.5, -0.3, 0.1],
-                    _rz(np.pi / 2))
+                    rot_z(np.pi / 2))
     assert_obstacle(cell["mesh_fixture::plinth"], Box(0.2, 0.2, 0.1), [0.5, -0.3, 0.0], np.eye(3))
     elsewhere = tmp_path / "cell_mesh.urdf"  # away from tests/data, where the resolver would find bracket.obj
     elsewhere.write_text((SCENES / "cell_mesh.urdf").read_text())
@@ -145,7 +145,6 @@ are closed forms, so Drake on a fresh plant is an exact, independent reference."
 def drake_reference(file: str, Q: np.ndarray) -> list[dict]:
     """``[{scene geometry name: smallest signed distance to the arm}]`` for each row of ``Q``,
     from a fresh plant holding the arm and the scene file, both parsed by Drake itself."""
-    from pydrake.geometry import SceneGraph  # noqa: F401 - registers the types below
     from pydrake.multibody.parsing import LoadModelDirectives, Parser, ProcessModelDirectives
     from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
     from pydrake.systems.framework import DiagramBuilder

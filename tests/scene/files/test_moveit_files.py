@@ -12,7 +12,7 @@ import drake_mh
 from drake_mh.errors import SceneFileError
 from drake_mh.geometry import Box, Cylinder, Mesh, Sphere
 from drake_mh.scene.files import read_scene
-from test_scene_yaml import CELL, _rx, _rz, assert_obstacle
+from test_scene_yaml import CELL, assert_obstacle, assert_refused, rot_z
 
 DATA = Path(__file__).resolve().parents[2] / "data"
 SCENES = DATA / "scenes"
@@ -27,8 +27,8 @@ def test_scene_text_newer_format():
     for name in ("table", "ball", "post"):
         assert_obstacle(cell[name], *CELL[name])
     # the rack's pose turns its shapes by 90 degrees about z: (0.2, 0, 0) -> (0, 0.2, 0)
-    assert_obstacle(cell["rack_0"], Box(0.1, 0.2, 0.3), [0.0, -0.3, 0.7], _rz(np.pi / 2))
-    assert_obstacle(cell["rack_1"], Sphere(0.05), [-0.3, -0.5, 0.7], _rz(np.pi / 2))
+    assert_obstacle(cell["rack_0"], Box(0.1, 0.2, 0.3), [0.0, -0.3, 0.7], rot_z(np.pi / 2))
+    assert_obstacle(cell["rack_1"], Sphere(0.05), [-0.3, -0.5, 0.7], rot_z(np.pi / 2))
 
 
 def test_scene_text_older_format_and_written_meshes():
@@ -40,12 +40,6 @@ def test_scene_text_older_format_and_written_meshes():
     assert isinstance(wedge.shape, Mesh) and len(wedge.shape.faces) == 4
     np.testing.assert_allclose(wedge.shape.bounds, [[0, 0, 0], [0.2, 0.2, 0.2]])
     np.testing.assert_allclose(wedge.position, [0.5, 0.0, 0.2])
-
-
-def _scene_text(tmp_path, body: str) -> Path:
-    path = tmp_path / "bad.scene"
-    path.write_text(body)
-    return path
 
 
 SCENE_BAD = {
@@ -71,11 +65,7 @@ SCENE_BAD = {
 
 @pytest.mark.parametrize("case", list(SCENE_BAD))
 def test_malformed_scene_text_names_the_file_and_the_line(tmp_path, case):
-    text, message = SCENE_BAD[case]
-    path = _scene_text(tmp_path, text)
-    with pytest.raises(SceneFileError, match=message) as err:
-        read_scene(path)
-    assert err.value.path == str(path) and str(path) in str(err.value)
+    assert_refused(tmp_path / "bad.scene", *SCENE_BAD[case])
 
 
 def test_planning_scene_yaml():
@@ -86,16 +76,16 @@ def test_planning_scene_yaml():
     assert scene.robot_state == dict(zip([f"panda_joint{k}" for k in range(1, 8)],
                                          [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]))
     # object pose (0.7, 0, 0) turned 0.3 rad about z, composed with the primitives' poses
-    assert_obstacle(scene["shelf_0"], Box(0.6, 1.0, 0.05), [0.7, 0.0, 0.3], _rz(0.3))
+    assert_obstacle(scene["shelf_0"], Box(0.6, 1.0, 0.05), [0.7, 0.0, 0.3], rot_z(0.3))
     assert_obstacle(scene["shelf_1"], Cylinder(0.05, 0.8), [0.7 + 0.2 * np.cos(0.3), 0.2 * np.sin(0.3), 0.4],
-                    _rz(0.3))
+                    rot_z(0.3))
     assert_obstacle(scene["can"], Sphere(0.08), [0.3, 0.4, 0.6], np.eye(3))
 
 
 def test_planning_scene_frames_are_placed_by_the_robot():
     scene = read_scene(SCENES / "planning_scene.yaml")
     world = {o.name: o for o in scene.resolved(PANDA)}  # panda_link0 is welded at the origin
-    assert_obstacle(world["shelf_0"], Box(0.6, 1.0, 0.05), [0.7, 0.0, 0.3], _rz(0.3))
+    assert_obstacle(world["shelf_0"], Box(0.6, 1.0, 0.05), [0.7, 0.0, 0.3], rot_z(0.3))
     moved = type(scene)(scene.path, scene.format, scene.obstacles, {"can": "panda_link0_sc"})
     with pytest.raises(SceneFileError, match=r"obstacle 'can': its pose is given in frame 'panda_link0_sc', which "
                                              r"is neither the world .* nor a frame of robot 'panda'"):
@@ -145,12 +135,7 @@ YAML_BAD = {
 
 @pytest.mark.parametrize("case", list(YAML_BAD))
 def test_malformed_planning_scenes_name_the_file_and_the_object(tmp_path, case):
-    text, message = YAML_BAD[case]
-    path = tmp_path / "bad.yaml"
-    path.write_text(text)
-    with pytest.raises(SceneFileError, match=message) as err:
-        read_scene(path)
-    assert err.value.path == str(path)
+    assert_refused(tmp_path / "bad.yaml", *YAML_BAD[case])
 
 
 def test_numeric_primitive_types_and_bare_worlds(tmp_path):
@@ -162,4 +147,3 @@ def test_numeric_primitive_types_and_bare_worlds(tmp_path):
     scene = read_scene(path)
     assert scene.format == "planning_scene"
     assert_obstacle(scene["a"], Cylinder(0.05, 0.8), [1, 2, 3], np.eye(3))
-    assert np.allclose(_rx(0.0), np.eye(3))

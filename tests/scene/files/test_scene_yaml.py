@@ -15,12 +15,12 @@ DATA = Path(__file__).resolve().parents[2] / "data"
 SCENES = DATA / "scenes"
 
 
-def _rz(angle):
+def rot_z(angle):
     c, s = np.cos(angle), np.sin(angle)
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
 
-def _rx(angle):
+def rot_x(angle):
     c, s = np.cos(angle), np.sin(angle)
     return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
 
@@ -28,11 +28,21 @@ def _rx(angle):
 #: the test cell as written in tests/data/scenes/cell.yaml (and the other formats' cell files):
 #: name -> (shape, p_WO, R_WO)
 CELL = {
-    "table": (Box(0.6, 1.0, 0.05), [0.7, 0.0, 0.3], _rz(0.3)),
+    "table": (Box(0.6, 1.0, 0.05), [0.7, 0.0, 0.3], rot_z(0.3)),
     "ball": (Sphere(0.08), [0.3, 0.4, 0.6], np.eye(3)),
-    "post": (Cylinder(0.05, 0.8), [-0.4, 0.3, 0.4], _rx(0.2)),
-    "rail": (Capsule(0.04, 0.5), [0.0, -0.5, 0.7], _rx(np.pi / 2)),
+    "post": (Cylinder(0.05, 0.8), [-0.4, 0.3, 0.4], rot_x(0.2)),
+    "rail": (Capsule(0.04, 0.5), [0.0, -0.5, 0.7], rot_x(np.pi / 2)),
 }
+
+
+def assert_refused(path: Path, text: str, message: str, **options) -> SceneFileError:
+    """Write ``text`` to ``path``: reading it raises a SceneFileError that names the file and
+    matches ``message`` (the entry and what is expected)."""
+    path.write_text(text)
+    with pytest.raises(SceneFileError, match=message) as err:
+        read_scene(path, **options)
+    assert err.value.path == str(path) and str(path) in str(err.value)
+    return err.value
 
 
 def assert_obstacle(obstacle, shape, p_WO, R_WO):
@@ -58,7 +68,7 @@ def test_mesh_and_point_cloud_entries():
     bin_ = cell["bin"].shape
     assert isinstance(bin_, Mesh) and bin_ == Mesh(DATA / "bin.obj", scale=(1.0, 1.0, 0.5))
     assert bin_.path == (DATA / "bin.obj").resolve()  # relative to the YAML file's folder
-    np.testing.assert_allclose(cell["bin"].X_WO[:3, :3], _rz(1.0), atol=1e-12)
+    np.testing.assert_allclose(cell["bin"].X_WO[:3, :3], rot_z(1.0), atol=1e-12)
     scan = cell["scan"].shape
     assert isinstance(scan, PointCloud) and scan.radius == 0.01
     np.testing.assert_array_equal(scan.points, PointCloud.from_file(DATA / "cloud.xyz", 0.01).points)
@@ -157,12 +167,7 @@ BAD = {
 
 @pytest.mark.parametrize("case", list(BAD))
 def test_malformed_files_name_the_file_and_the_entry(tmp_path, case):
-    text, message = BAD[case]
-    path = tmp_path / "bad.yaml"
-    path.write_text(text)
-    with pytest.raises(SceneFileError, match=message) as err:
-        read_scene(path, format="drake_mh")
-    assert str(path) in str(err.value) and err.value.path == str(path)
+    assert_refused(tmp_path / "bad.yaml", *BAD[case], format="drake_mh")
 
 
 def test_format_detection_and_missing_files(tmp_path):
@@ -174,6 +179,8 @@ def test_format_detection_and_missing_files(tmp_path):
     (tmp_path / "empty.yaml").write_text("")
     with pytest.raises(SceneFileError, match="empty"):
         read_scene(tmp_path / "empty.yaml")
+    with pytest.raises(SceneFileError, match="a curobo file is a YAML mapping, got NoneType"):
+        read_scene(tmp_path / "empty.yaml", format="curobo")
     (tmp_path / "cell.txt").write_text("x")
     with pytest.raises(SceneFileError, match="unknown scene file suffix '.txt'"):
         read_scene(tmp_path / "cell.txt")
