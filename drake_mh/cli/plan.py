@@ -6,7 +6,7 @@ Example::
     drake-mh plan --robot panda --position 0.4 0.3 0.4 --box 0.5 0 0.2 0.2 0.6 0.02 --json
     drake-mh plan --set cage --index 2 --method rrt_connect --html motion.html
     drake-mh plan --robot seed000_6dof --goal-q 1.6 0.3 0 0 0 0 --show --max-seconds 30
-    drake-mh plan --robot panda --scene cell.sdf --goal-q 1.2 -0.3 0 -2.0 0 1.9 0.8
+    drake-mh plan --robot panda --scene tests/data/scenes/cell.sdf --goal-q -0.35 -1.44 -1.13 -2.97 2.33 1.52 1.89
 
 The problem is a :class:`drake_mh.planning.MotionProblem`: the robot (``--robot`` and its model
 options), obstacles (``--scene FILE``, any scene file :meth:`drake_mh.scene.Scene.load` reads,
