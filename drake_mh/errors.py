@@ -215,6 +215,31 @@ class UnsupportedGeometry(DrakeMhError, ValueError):
     """A collision shape cannot be handled by the requested computation."""
 
 
+class SceneFileError(SceneError):
+    """A scene file (drake_mh scene YAML, SDFormat, URDF, model directives, MoveIt ``.scene``,
+    MoveIt planning-scene YAML, cuRobo world YAML) is malformed, of a format drake_mh does not
+    read, or holds an entry it does not support; or a scene cannot be saved.
+
+    Attributes:
+        path: the file.
+        entry: where in the file (``"obstacle 'table'"``, ``"line 12"``; ``""``: the whole file).
+        reason: what was wrong and what is expected.
+    """
+
+    def __init__(self, path, reason: str, entry: str = ""):
+        self.path = str(path)
+        self.entry = entry
+        self.reason = reason
+        super().__init__(f"scene file {self.path}{', ' + entry if entry else ''}: {reason}")
+
+
+class SceneFileNotFound(SceneFileError, FileNotFoundError):
+    """A scene file does not exist (or is not a file)."""
+
+    def __str__(self) -> str:  # FileNotFoundError would format its own message otherwise
+        return self.args[0]
+
+
 # --- optimizers and methods -------------------------------------------------------------
 
 

@@ -27,7 +27,11 @@ A method that is not registered here (an optional peer such as OMPL without its 
 listed as unavailable, not run. ``DRAKE_MH_MOTION_METHODS=a,b,...`` restricts the methods and
 ``DRAKE_MH_MOTION_ROBOTS=panda,panda_hand,panda_hand_mbm`` restricts the robots,
 ``DRAKE_MH_MOTION_PROBLEMS=N`` sets N problems per set and robot (one replicate) for a shorter
-full run. Full run: 7 sets × 8 problems × 2 seeds on the capsule Panda and
+full run. ``DRAKE_MH_MOTION_SCENES=cell.sdf,other.yaml`` adds the cell of each scene file
+(any format :meth:`drake_mh.scene.Scene.load` reads) as set ``file/<file name>``: start/goal pairs
+drawn in joint space and certified free there
+(:func:`drake_mh.planning.problems.scene_problem_set`), for every robot, in the full grid and
+(problem 0 of the first file) in the quick one. Full run: 7 sets × 8 problems × 2 seeds on the capsule Panda and
 7 × 2 × 1 on the Panda with its hand, every registered method (about twenty), 10 s per plan:
 a few hours on two loaded cores. ``--quick``: one table problem, a handful of methods, 1 s each.
 
@@ -115,14 +119,21 @@ def _robots() -> dict:
     return robots
 
 
+def _scene_files() -> dict[str, str]:
+    """``{"file/<file name>": path}`` of ``DRAKE_MH_MOTION_SCENES`` (comma-separated scene files)."""
+    paths = [p.strip() for p in os.environ.get("DRAKE_MH_MOTION_SCENES", "").split(",") if p.strip()]
+    return {f"file/{os.path.basename(p)}": p for p in paths}
+
+
 def _grid(quick: bool) -> list[dict]:
     methods = _methods()
     if quick:
         chosen = [m for m in QUICK_METHODS if m in methods]
-        return [{"robot": "panda", "set": "table_pick", "problem": 0, "rep": 0, "method": m} for m in chosen]
+        names = ["table_pick", *list(_scene_files())[:1]]
+        return [{"robot": "panda", "set": name, "problem": 0, "rep": 0, "method": m} for name in names for m in chosen]
     cases = []
     for robot, (count, seeds) in _robots().items():
-        for name in SETS:
+        for name in (*SETS, *_scene_files()):
             for problem in range(count):
                 for rep in range(seeds):
                     cases += [{"robot": robot, "set": name, "problem": problem, "rep": rep, "method": m}
@@ -144,9 +155,12 @@ def _problem(robot: str, name: str, index: int):
     """``(MotionProblem, straight_free)`` of one grid problem, generated once per process."""
     key = (robot, name, index)
     if key not in _CACHE["problems"]:
-        from drake_mh.planning.problems import motionbenchmaker_set, problem_set
+        from drake_mh.planning.problems import motionbenchmaker_set, problem_set, scene_problem_set
 
-        if name.startswith("mbm/"):
+        if name.startswith("file/"):
+            found = scene_problem_set(_scene_files()[name], robot, count=1, seed=SET_SEED, first=index)
+            _CACHE["problems"][key] = (found[0], found.info[0]["straight_free"])
+        elif name.startswith("mbm/"):
             if _CACHE["mbm"] is None:
                 _CACHE["mbm"] = {}
             sets = _CACHE["mbm"]

@@ -6,6 +6,7 @@ Example::
     drake-mh app --method pso --n-points 80 --generate --run
     drake-mh app --max-seconds 60 --status-file app.json    # headless / scripted use
     drake-mh app --robot panda --goal 0.5 0.3 0.4 --plan pose --plan-method rrt_connect
+    drake-mh app --robot panda --scene cell.sdf --no-obstacle   # a cell from a file
 
 Prints the Meshcat URL (localhost only) and runs until Ctrl-C or ``--max-seconds``. Exit code
 0 on a normal end, 2 for bad input (unknown robot or method: one line naming the choices).
@@ -51,6 +52,10 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
                    help="obstacle position [m] (default 0.2 0.2 0.6, the paper's)")
     p.add_argument("--obstacle-radius", type=float, default=0.2, help="sphere radius [m] (default 0.2)")
     p.add_argument("--no-obstacle", action="store_true", help="no obstacle")
+    p.add_argument("--scene", default=None, metavar="FILE",
+                   help="fixed obstacles from a scene file beside the movable one: drake_mh scene YAML, SDFormat, "
+                        "URDF, model directives, MoveIt .scene or planning-scene YAML, cuRobo world YAML "
+                        "(docs/scene_files.md)")
     p.add_argument("--seed", type=int, default=0, help="seed of generation and regeneration (default 0)")
     p.add_argument("--budget", type=int, default=None, help="per IK solve (default: the method's)")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate of the loop [Hz] (default 30)")
@@ -87,6 +92,7 @@ def cmd_app(args: argparse.Namespace) -> int:
     """``drake-mh app``: returns 0 when the app ends (``--max-seconds`` or Ctrl-C: "app stopped")."""
     from drake_mh.cli.options import register_robot_options
     from drake_mh.errors import InvalidArgument
+    from drake_mh.robot.packages import parse_package_option
     from drake_mh.viz.app import AppConfig
 
     robots = tuple(args.robot) if args.robot else AppConfig.robots
@@ -106,7 +112,8 @@ def cmd_app(args: argparse.Namespace) -> int:
                        speed=args.speed, port=args.port, status_file=args.status_file,
                        plan_method=args.plan_method, plan_timeout=args.plan_timeout,
                        goal=None if args.goal is None else tuple(args.goal),
-                       goal_q=None if args.goal_q is None else tuple(args.goal_q), plan_clearance=args.plan_clearance)
+                       goal_q=None if args.goal_q is None else tuple(args.goal_q), plan_clearance=args.plan_clearance,
+                       scene=args.scene, scene_packages=parse_package_option(args.package) or None)
     return run_app(config, generate=args.generate, run=args.run, plan=args.plan, max_seconds=args.max_seconds)
 
 

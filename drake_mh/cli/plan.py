@@ -7,11 +7,14 @@ Example::
     drake-mh plan --set cage --index 2 --method rrt_connect --html motion.html
     drake-mh plan --robot seed000_6dof --goal-q 1.6 0.3 0 0 0 0 --show --max-seconds 30
     drake-mh plan --robot arm.urdf --goal-q ... --limits joint_limits.yaml --out motion.json
+    drake-mh plan --robot panda --scene tests/data/scenes/cell.sdf --goal-q -0.35 -1.44 -1.13 -2.97 2.33 1.52 1.89
 
 The problem is a :class:`drake_mh.planning.MotionProblem`: the robot (``--robot`` and its model
-options), obstacles (``--sphere`` / ``--box``, repeatable), the start (``--start-q``, default
-home) and the goal: a configuration (``--goal-q``) or an end-effector position (``--position``,
-with ``--rpy`` or else the start's orientation, goal configurations from collision-free IK);
+options), obstacles (``--scene FILE``, any scene file :meth:`drake_mh.scene.Scene.load` reads,
+its ``package://`` names resolved with ``--package``; ``--sphere`` / ``--box``, repeatable), the
+start (``--start-q``, default home) and the goal: a configuration (``--goal-q``) or an
+end-effector position (``--position``, with ``--rpy`` or else the start's orientation, goal
+configurations from collision-free IK);
 or one problem of a generated set (``--set NAME --index K``, :mod:`drake_mh.planning.problems`).
 :func:`drake_mh.planning.solve_motion` plans and verifies it. ``--html`` writes the animation
 with its certified clearance (:func:`drake_mh.viz.motion_html`), ``--show`` plays it in Meshcat
@@ -42,10 +45,10 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
         parents=[common],
         help="plan one collision-free motion (any planner; verified, retimed, certified clearance)",
         description="Plan a point-to-point motion with any method of drake_mh.planning.available_motion_methods() "
-        "among sphere and box obstacles (or one problem of a generated set), verified the same way for every "
-        "method: the whole motion certified collision-free, retimed and certified. Prints the result (--json: "
-        "one object); --html / --show animate it with its certified clearance. Exit code 0: verified; 1: no "
-        "verified motion; 2: bad input.",
+        "among sphere and box obstacles and those of a scene file (or one problem of a generated set), verified the "
+        "same way for every method: the whole motion certified collision-free, retimed and certified. Prints the "
+        "result (--json: one object); --html / --show animate it with its certified clearance. Exit code 0: "
+        "verified; 1: no verified motion; 2: bad input.",
     )
     p.add_argument("--robot", default="panda", help="bundled robot name or model file (default panda)")
     from drake_mh.cli.options import add_robot_options
@@ -66,6 +69,10 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
                    help="a spherical obstacle [m] (repeatable)")
     p.add_argument("--box", nargs=6, type=float, action="append", default=[], metavar=("X", "Y", "Z", "LX", "LY", "LZ"),
                    help="an axis-aligned box obstacle: centre and side lengths [m] (repeatable)")
+    p.add_argument("--scene", default=None, metavar="FILE",
+                   help="obstacles of a scene file: drake_mh scene YAML, SDFormat (.sdf, .world), URDF, model "
+                        "directives (.dmd.yaml), MoveIt .scene or planning-scene YAML, cuRobo world YAML "
+                        "(docs/scene_files.md); with --sphere / --box")
     p.add_argument("--self-collision", action="store_true", help="check the robot's links against each other too")
     p.add_argument("--clearance", type=float, default=0.0, help="required distance to obstacles [m] (default 0)")
     p.add_argument("--method", default=None, help="planner (default rrt_connect_smooth)")
@@ -98,6 +105,8 @@ def _problem(args):
     if args.set is not None:
         from drake_mh.planning.problems import problem_set
 
+        if args.scene is not None:
+            raise InvalidArgument("--scene does not combine with --set: a generated problem brings its own scene")
         if args.index < 0:
             raise InvalidArgument(f"--index must be >= 0, got {args.index}")
         robot = args.robot
@@ -116,6 +125,10 @@ def _problem(args):
 
     robot = load_robot_from_args(args)
     scene = drake_mh.Scene(robot, self_collision=args.self_collision)
+    if args.scene is not None:
+        from drake_mh.robot.packages import parse_package_option
+
+        scene.load(args.scene, packages=parse_package_option(args.package) or None)
     for i, (x, y, z, r) in enumerate(args.sphere):
         scene.add(f"sphere{i}", drake_mh.Sphere(r), [x, y, z])
     for i, (x, y, z, lx, ly, lz) in enumerate(args.box):

@@ -8,6 +8,8 @@
   (compiled kernels :mod:`~drake_mh.scene.kernels.exact`, certified GJK :mod:`~drake_mh.scene.kernels.gjk`).
 * :mod:`drake_mh.scene.segment_distance` — exact capsule vs box/cylinder/capsule distances (the
   pairs where Drake's GJK is optimistic).
+* :mod:`drake_mh.scene.files` — scene files (SDFormat, URDF, model directives, MoveIt, cuRobo,
+  drake_mh's own YAML) behind ``Scene.from_file``, ``Scene.load`` and ``Scene.save``.
 """
 
 from drake_mh.scene.scene import Box, Capsule, Cylinder, DistancePair, Mesh, Obstacle, PointCloud, Scene, Sphere

@@ -638,6 +638,44 @@ class Scene:
             out[deep] = values.min(axis=1)
         return out
 
+    # --- scene files (drake_mh.scene.files, docs/scene_files.md) --------------------------------
+
+    @classmethod
+    def from_file(cls, path, robot, format: str | None = None, packages=None, movable: str = "error",
+                  **options) -> Scene:
+        """A new scene of ``robot`` (``**options``: :class:`Scene`'s) with the obstacles of a scene
+        file: any of :data:`drake_mh.scene.files.SCENE_FORMATS`; the file is read first. Arguments
+        and errors: :meth:`load`."""
+        from drake_mh.scene.files import read_scene
+
+        scene_file = read_scene(path, format, packages, movable)
+        scene = cls(robot, **options)
+        scene.load(scene_file)
+        return scene
+
+    def load(self, path, format: str | None = None, packages=None, movable: str = "error") -> list[str]:
+        """Add the obstacles of a scene file (or of a :class:`drake_mh.scene.files.SceneFile`),
+        all or nothing; ``format``, ``packages``, ``movable``: as
+        :func:`drake_mh.scene.files.read_scene` takes them. Returns the names added.
+
+        Raises:
+            SceneFileNotFound: no such file.
+            SceneFileError: a malformed or unsupported file (naming the file, the entry and what
+                is expected), a name the scene has, or an obstacle it refuses: nothing is added.
+        """
+        from drake_mh.scene.files import SceneFile, add_to_scene, read_scene
+
+        scene_file = path if isinstance(path, SceneFile) else read_scene(path, format, packages, movable)
+        return add_to_scene(self, scene_file)
+
+    def save(self, path, name: str = "") -> list:
+        """Write the obstacles as drake_mh scene YAML (``.yaml`` / ``.yml``), which :meth:`load`
+        reads back the same to float precision; returns the files written (point clouds go
+        beside it as ``.npy``). Raises SceneFileError for another suffix or a missing folder."""
+        from drake_mh.scene.files import write_scene
+
+        return write_scene(path, self._obstacles.values(), name)
+
     def __repr__(self) -> str:
         return f"Scene({self.robot.name!r}, obstacles={list(self._obstacles)})"
 

@@ -86,6 +86,9 @@ class AppConfig:
         plan_timeout: [s] planning limit (the slider "Plan timeout [s]"); goal: ``(x, y, z)`` [m]
             of the goal point (``None``: via point 1); goal_q: goal configuration of the first robot
             (``None``: its home); plan_clearance: [m] required along motions.
+        scene: a scene file whose obstacles stay put beside the movable one (``None``: none;
+            :meth:`drake_mh.scene.Scene.load`); scene_packages: ``{name: folder}`` for its
+            ``package://`` names.
     """
 
     robots: tuple = ("seed000_6dof", "panda")
@@ -105,6 +108,8 @@ class AppConfig:
     goal: tuple | None = None
     goal_q: tuple | None = None
     plan_clearance: float = 0.0
+    scene: str | None = None
+    scene_packages: dict | None = None
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -175,6 +180,11 @@ class PlannerApp:
         self.started = time.monotonic()
         self.clicks: dict[str, int] = {}
         self.controls, self.planner = None, AppPlanner(self)
+        self.scene_file = None  # the --scene file's obstacles, read once, added to each robot's scene
+        if config.scene is not None:
+            from drake_mh.scene.files import read_scene
+
+            self.scene_file = read_scene(config.scene, packages=config.scene_packages)
         self._load_robot()
         P = self.points
         o = config.obstacle if config.obstacle is not None else (0.5, 0.5, 0.5)
@@ -228,6 +238,8 @@ class PlannerApp:
 
         self.robot = drake_mh.load_robot(self.robot_name)
         self.scene = Scene(self.robot)
+        if self.scene_file is not None:
+            self.scene.load(self.scene_file)
         if self.config.obstacle is not None:
             radius = getattr(self, "_radius", self.config.obstacle_radius)
             position = getattr(self, "_obstacle_p", self.config.obstacle)
@@ -522,6 +534,7 @@ class PlannerApp:
             "n_points": len(self.path.points),
             "obstacle": None if obstacle is None else obstacle.position.tolist(),
             "obstacle_radius": None if obstacle is None else float(obstacle.shape.radius),
+            "scene_obstacles": [] if self.scene_file is None else self.scene_file.names,
             "solutions": f is not None, "index": None if f is None else int(f.index),
             "plan_hash": None if f is None else hashlib.sha256(f.Q.tobytes() + f.points.tobytes()).hexdigest()[:16],
             "events": self.events, "regenerated_total": self.regenerated_total, "last_event": self.last_event,

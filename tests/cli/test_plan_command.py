@@ -101,3 +101,23 @@ def test_unwritable_outputs_exit_2_before_planning(tmp_path):
         assert out.stdout == "" and len(out.stderr.strip().splitlines()) == 1 and option in out.stderr, out.stderr
     out = _plan("--goal-q", *map(str, GOAL_Q), "--acceleration-scaling", "0")
     assert out.returncode == 2 and "acceleration_scaling must be a number in (0, 1]" in out.stderr
+
+
+def test_scene_file_obstacles_join_the_problem(tmp_path):
+    """--scene FILE adds the file's obstacles (with --sphere); a bad file or --scene with --set exits 2
+    with one line naming the file and the entry."""
+    from pathlib import Path
+
+    cell = Path(__file__).resolve().parents[1] / "data" / "scenes" / "cell.yaml"
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--scene", str(cell), "--sphere", "2", "2", "2", "0.1",
+                "--method", "rrt_connect", "--json")
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert data["success"] and data["obstacles"] == ["table", "ball", "post", "rail", "sphere0"]
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("obstacles:\n  - {name: lamp, shape: sphere, radius: 0.1}\n")
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--scene", str(bad))
+    assert out.returncode == 2 and f"scene file {bad}, obstacle 1 ('lamp'): a sphere needs position" in out.stderr
+    assert "Traceback" not in out.stderr
+    out = _plan("--set", "cage", "--scene", str(cell))
+    assert out.returncode == 2 and "--scene does not combine with --set" in out.stderr

@@ -61,3 +61,15 @@ def test_summary_tables_ranks_and_anchors():
     assert "VAMP" in text and "cuRobo" in text
     assert module.summarize([]) == "no finished case"
     assert np.isnan(module._median([float("nan")]))
+
+
+def test_scene_files_join_the_grids(monkeypatch):
+    _, module = _module()
+    cell = Path(__file__).resolve().parents[1] / "data" / "scenes" / "cell.sdf"
+    monkeypatch.setenv("DRAKE_MH_MOTION_SCENES", f"{cell}, {cell.with_name('cell.yaml')}")
+    monkeypatch.setenv("DRAKE_MH_MOTION_METHODS", "straight")
+    monkeypatch.setenv("DRAKE_MH_MOTION_PROBLEMS", "1")
+    full = module._grid(quick=False)
+    assert {c["set"] for c in full} >= {"file/cell.sdf", "file/cell.yaml", "table_pick"}
+    assert module._scene_files()["file/cell.yaml"] == str(cell.with_name("cell.yaml"))
+    assert {c["set"] for c in module._grid(quick=True)} == {"table_pick", "file/cell.sdf"}

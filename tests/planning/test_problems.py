@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import drake_mh
-from drake_mh.errors import InvalidArgument, UnknownMethod
+from drake_mh.errors import InvalidArgument, SceneFileError, UnknownMethod
 from drake_mh.planning import MotionProblem
 from drake_mh.planning.problems import (
     MBM_SETS, ProblemSet, available_problem_sets, load_problem_robot, motionbenchmaker_set, problem_set,
@@ -199,15 +199,14 @@ def test_converter_reads_the_motionbenchmaker_format(tmp_path):
     data = read_motionbenchmaker(_archive(tmp_path / "problems.tar.bz2"))
     assert sorted(data) == ["box", "cage"] and [p.index for p in data["cage"]] == [1, 2]
     problem = data["cage"][0]
-    names = [o[0] for o in problem.obstacles]
-    assert names == ["shelf", "Can1_0", "Can1_1"]  # every primitive of an object
-    shelf, can, ball = problem.obstacles
-    assert shelf[1] == Box(0.2, 0.4, 0.04) and np.allclose(shelf[2], [0.0, 0.5, 0.3])
+    assert problem.scene.names == ["shelf", "Can1_0", "Can1_1"]  # every primitive of an object
+    shelf, can, ball = problem.scene.obstacles
+    assert shelf.shape == Box(0.2, 0.4, 0.04) and np.allclose(shelf.position, [0.0, 0.5, 0.3])
     c, s = np.cos(np.pi / 4), np.sin(np.pi / 4)
-    assert np.allclose(shelf[3], [[c, -s, 0], [s, c, 0], [0, 0, 1]], atol=1e-6)  # quaternion [x, y, z, w]
-    assert can[1] == Cylinder(0.03, 0.14)  # MoveIt cylinders: [height, radius]
-    assert np.allclose(can[2], [0.1, -0.6, 0.2])  # the object's pose composed with the primitive's
-    assert ball[1] == Sphere(0.05) and np.allclose(ball[2], [0.1, -0.6, 0.5])
+    assert np.allclose(shelf.X_WO[:3, :3], [[c, -s, 0], [s, c, 0], [0, 0, 1]], atol=1e-6)  # quaternion [x, y, z, w]
+    assert can.shape == Cylinder(0.03, 0.14)  # MoveIt cylinders: [height, radius]
+    assert np.allclose(can.position, [0.1, -0.6, 0.2])  # the object's pose composed with the primitive's
+    assert ball.shape == Sphere(0.05) and np.allclose(ball.position, [0.1, -0.6, 0.5])
     assert problem.start["panda_joint4"] == -2.356 and problem.start["panda_finger_joint1"] == 0.065
     assert [problem.goal[f"panda_joint{j + 1}"] for j in range(7)] == GOAL
     assert list(read_motionbenchmaker(tmp_path / "problems.tar.bz2", sets=["box"])) == ["box"]
@@ -277,8 +276,36 @@ def test_converter_errors(tmp_path):
     with tarfile.open(cone, "w:bz2") as tar:
         _add(tar, "problems/cage_panda/scene0001.yaml", SCENE.format(x=0.0).replace("type: box", "type: cone"))
         _add(tar, "problems/cage_panda/request0001.yaml", _request(READY, GOAL))
-    with pytest.raises(InvalidArgument, match="cone"):
+    with pytest.raises(SceneFileError, match=r"scene0001\.yaml, collision object 1 \('shelf'\): a cone"):
         read_motionbenchmaker(cone)
     with pytest.raises(UnknownMethod):
         motionbenchmaker_set(empty, "kitchen")
     assert "bookshelf_thin" in MBM_SETS
+
+
+# --- scene files ------------------------------------------------------------------------------------
+
+
+def test_scene_file_sets_draw_certified_pairs_in_the_files_cell():
+    """Start and goal certified free in the file's cell, and clear by Drake's exact distance too;
+    the straight line's flag recomputed; problem i independent of count; the same seed, the same set."""
+    from pathlib import Path
+
+    from drake_mh.planning.problems import scene_problem_set
+
+    cell = Path(__file__).resolve().parents[1] / "data" / "scenes" / "cell.sdf"
+    problems = scene_problem_set(cell, PANDA, count=3, seed=4)
+    assert problems.name == "file/cell.sdf" and len(problems) == 3
+    assert list(problems[0].scene.obstacles) == ["table::board", "ball::sphere", "post::cylinder", "rail::capsule"]
+    for problem, info in zip(problems, problems.info):
+        ends = np.array([problem.q_start, problem.goal_configurations[0]])
+        assert problem.scene.collision_free(ends, MARGIN, MARGIN).all()
+        assert (problem.scene.exact_min_distance(ends) > MARGIN).all()
+        assert info["straight_free"] == problem.scene.segment_free(*ends)
+    assert not all(i["straight_free"] for i in problems.info)  # a planner has work to do
+    again = scene_problem_set(cell, PANDA, count=1, seed=4, first=2)
+    np.testing.assert_array_equal(again[0].goal_configurations[0], problems[2].goal_configurations[0])
+    other = scene_problem_set(cell, PANDA, count=1, seed=5)
+    assert not np.array_equal(other[0].goal_configurations[0], problems[0].goal_configurations[0])
+    with pytest.raises(SceneFileError, match="no such file"):
+        scene_problem_set(cell.with_name("missing.sdf"), PANDA, count=1)

@@ -197,3 +197,26 @@ def test_the_robot_stops_where_no_certified_motion_exists(app):
     state = app.state()
     assert app.mode == "idle" and state["index"] == index and "halted at point" in state["message"]
     assert state["halted"] and state["detours_failed"] >= 1
+
+
+def test_scene_file_obstacles_stay_beside_the_movable_one(meshcat):
+    """--scene: the file's obstacles are in every robot's scene, fixed while the obstacle moves."""
+    from pathlib import Path
+
+    from drake_mh.errors import SceneFileNotFound
+
+    cell = Path(__file__).resolve().parents[1] / "data" / "scenes" / "cell.yaml"
+    app = PlannerApp(AppConfig(robots=("panda", "seed000_6dof"), scene=str(cell), obstacle=(0.2, 0.2, 1.2), **FAST),
+                     meshcat=meshcat, page=False)
+    try:
+        names = ["table", "ball", "post", "rail"]
+        assert list(app.scene.obstacles) == names + ["obstacle"] and app.state()["scene_obstacles"] == names
+        table = app.scene.obstacles["table"].X_WO.copy()
+        app.move_obstacle(position=(0.3, 0.3, 1.3))
+        np.testing.assert_array_equal(app.scene.obstacles["table"].X_WO, table)
+        app.next_robot()
+        assert app.robot.name == "seed000_6dof" and list(app.scene.obstacles) == names + ["obstacle"]
+    finally:
+        app.close()
+    with pytest.raises(SceneFileNotFound, match="missing.yaml"):
+        PlannerApp(AppConfig(scene=str(cell.with_name("missing.yaml")), **FAST), meshcat=meshcat, page=False)

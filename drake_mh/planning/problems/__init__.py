@@ -8,6 +8,8 @@
 * :func:`available_problem_sets` — the sets' names and one line each.
 * :func:`motionbenchmaker_set` — the *original* MotionBenchMaker Panda problems from a
   downloaded ``vamp-planner`` source distribution (:mod:`.mbm`; never downloaded here).
+* :func:`scene_problem_set` — start/goal pairs drawn in the cell of a scene file
+  (:mod:`.scene_file`).
 
 Robots: a :class:`drake_mh.robot.Robot`, or a name of :data:`PROBLEM_ROBOTS` — ``"panda"``
 (bundled, capsules, no hand), ``"panda_hand"`` (example-robot-data's Panda with its hand,
@@ -29,11 +31,13 @@ from drake_mh.planning.problems.fixtures import FIXTURES
 from drake_mh.planning.problems.generate import (check_sphere_tolerance, generate_problem, ready_configuration,
                                                   tool_transform)
 from drake_mh.planning.problems.mbm import MBM_SETS, read_motionbenchmaker, to_motion_problem
+from drake_mh.planning.problems.scene_file import scene_problem_set
 from drake_mh.geometry.spheres import DEFAULT_TOLERANCE
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["ProblemSet", "problem_set", "available_problem_sets", "motionbenchmaker_set", "load_problem_robot",
+__all__ = ["ProblemSet", "problem_set", "available_problem_sets", "motionbenchmaker_set", "scene_problem_set",
+           "load_problem_robot",
            "read_motionbenchmaker", "PROBLEM_ROBOTS", "MBM_SETS", "ready_configuration", "tool_transform",
            "UR5_ACCELERATION"]
 

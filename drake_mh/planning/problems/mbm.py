@@ -13,10 +13,9 @@ the path of ``problems.tar.bz2`` — or of the ``.tar.gz`` itself — to
 
 **Format** (what VAMP's converter reads, and so do we, without VAMP): members
 ``<top>/<set>_<robot>/sceneNNNN.yaml`` and ``requestNNNN.yaml``, MoveIt messages in YAML. A
-scene's ``world.collision_objects`` are primitives (``box``: full sides ``[x, y, z]``;
-``sphere``: ``[radius]``; ``cylinder``: ``[height, radius]``) at ``primitive_poses``
-(position, quaternion ``[x, y, z, w]``) composed with the object's optional ``pose``; a
-request's ``start_state.joint_state`` (names and positions) and
+scene is a planning scene, read by :func:`drake_mh.scene.files.moveit.read_planning_scene`
+(the reader of planning-scene files: primitives, meshes, object poses, ``header.frame_id``);
+a request's ``start_state.joint_state`` (names and positions) and
 ``goal_constraints[0].joint_constraints`` give start and goal by joint name. Unlike VAMP's
 converter we read every primitive of an object (it reads the first).
 
@@ -41,6 +40,7 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument
 from drake_mh.geometry.spheres import DEFAULT_TOLERANCE
+from drake_mh.scene.files import SceneFile
 
 MBM_SETS = ("table_pick", "table_under_pick", "box", "bookshelf_small", "bookshelf_tall", "bookshelf_thin", "cage")
 """MotionBenchMaker's Panda sets, as named in the archive (without the ``_panda`` suffix)."""
@@ -55,69 +55,17 @@ class MBMProblem:
     Attributes:
         set: the set's name (e.g. ``bookshelf_small``, the robot suffix removed).
         index: the problem's number in its set.
-        obstacles: ``[(name, shape, p_WO (3,), R_WO (3, 3))]``, shapes of :mod:`drake_mh.geometry.shapes`.
+        scene: the obstacles, a :class:`drake_mh.scene.files.SceneFile` (poses in their
+            ``header.frame_id``: :meth:`~drake_mh.scene.files.SceneFile.resolved` places them).
         start: ``{joint name: position}`` of the start state.
         goal: ``{joint name: position}`` of the goal's joint constraints.
     """
 
     set: str
     index: int
-    obstacles: tuple
+    scene: SceneFile
     start: dict
     goal: dict
-
-
-def _quaternion_matrix(q) -> np.ndarray:
-    if isinstance(q, dict):
-        q = [q["x"], q["y"], q["z"], q["w"]]
-    x, y, z, w = (float(v) for v in q)
-    n = np.sqrt(x * x + y * y + z * z + w * w)
-    if not np.isfinite(n) or n < 1e-9:
-        raise InvalidArgument(f"MotionBenchMaker archive: a quaternion {q!r} is not a rotation")
-    x, y, z, w = x / n, y / n, z / n, w / n
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
-def _pose(pose) -> np.ndarray:
-    X = np.eye(4)
-    if pose:
-        position = pose.get("position", [0.0, 0.0, 0.0])
-        if isinstance(position, dict):
-            position = [position["x"], position["y"], position["z"]]
-        X[:3, 3] = np.asarray(position, float)
-        X[:3, :3] = _quaternion_matrix(pose.get("orientation", [0.0, 0.0, 0.0, 1.0]))
-    return X
-
-
-def _shape(primitive: dict, where: str):
-    from drake_mh.geometry.shapes import Box, Cylinder, Sphere
-
-    kind, dims = primitive.get("type"), [float(d) for d in primitive.get("dimensions", [])]
-    if kind == "box" and len(dims) == 3:
-        return Box(*dims)
-    if kind == "sphere" and len(dims) >= 1:
-        return Sphere(dims[0])
-    if kind == "cylinder" and len(dims) == 2:
-        return Cylinder(dims[1], dims[0])  # MoveIt: [height, radius]
-    raise InvalidArgument(f"MotionBenchMaker archive, {where}: unsupported primitive {kind!r} with dimensions {dims}")
-
-
-def parse_scene(data: dict, where: str = "scene") -> tuple:
-    """A MoveIt planning scene's collision objects -> ``((name, shape, p_WO, R_WO), ...)``."""
-    out = []
-    for obj in (data.get("world") or {}).get("collision_objects") or []:
-        X_WB = _pose(obj.get("pose"))
-        primitives, poses = obj.get("primitives") or [], obj.get("primitive_poses") or []
-        if len(primitives) != len(poses):
-            raise InvalidArgument(f"MotionBenchMaker archive, {where}: object {obj.get('id')!r} has "
-                                  f"{len(primitives)} primitives but {len(poses)} poses")
-        for k, (primitive, pose) in enumerate(zip(primitives, poses)):
-            X_WO = X_WB @ _pose(pose)
-            name = str(obj.get("id", "object")) + (f"_{k}" if len(primitives) > 1 else "")
-            out.append((name, _shape(primitive, where), X_WO[:3, 3].copy(), X_WO[:3, :3].copy()))
-    return tuple(out)
 
 
 def parse_request(data: dict, where: str = "request") -> tuple[dict, dict]:
@@ -144,10 +92,13 @@ def read_motionbenchmaker(path, sets=None) -> dict[str, list[MBMProblem]]:
         ``{set: [MBMProblem, ...]}`` sorted by index (pairs of scene and request files).
 
     Raises:
-        InvalidArgument: no such file, nothing in MotionBenchMaker's layout in it, a scene
-            without its request, or an unsupported primitive.
+        InvalidArgument: no such file, nothing in MotionBenchMaker's layout in it, or a scene
+            without its request.
+        SceneFileError: a scene entry that is malformed or not supported (a cone ...).
     """
     import yaml
+
+    from drake_mh.scene.files.moveit import read_planning_scene
 
     loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
     path = Path(path).expanduser()
@@ -202,7 +153,7 @@ def read_motionbenchmaker(path, sets=None) -> dict[str, list[MBMProblem]]:
                 raise InvalidArgument(f"{path}: {set_name} problem {index} has no {missing} file")
             scene_name, scene_bytes = pair["scene"]
             request_name, request_bytes = pair["request"]
-            scene = parse_scene(yaml.load(scene_bytes, Loader=loader) or {}, scene_name)
+            scene = read_planning_scene(yaml.load(scene_bytes, Loader=loader) or {}, f"{path}:{scene_name}", None)
             start, goal = parse_request(yaml.load(request_bytes, Loader=loader) or {}, request_name)
             problems.append(MBMProblem(set_name, index, scene, start, goal))
         out[set_name] = problems
@@ -232,9 +183,9 @@ def to_motion_problem(problem: MBMProblem, robot, clearance: float = 0.0, self_c
             :data:`~drake_mh.planning.problems.generate.MARGIN`).
         InvalidArgument: a joint of the robot has no value in the request, or a non-positive
             ``sphere_tolerance``.
+        SceneFileError: an obstacle posed in a frame the robot cannot place
+            (:meth:`~drake_mh.scene.files.SceneFile.resolved`).
     """
-    from pydrake.math import RollPitchYaw, RotationMatrix
-
     from drake_mh.planning import MotionProblem
 
     from drake_mh.errors import InvalidMotionProblem
@@ -242,8 +193,7 @@ def to_motion_problem(problem: MBMProblem, robot, clearance: float = 0.0, self_c
 
     where = f"MotionBenchMaker {problem.set} {problem.index}"
     scene = new_scene(robot, self_collision, sphere_tolerance)
-    for name, shape, p_WO, R_WO in problem.obstacles:
-        scene.add(name, shape, p_WO, RollPitchYaw(RotationMatrix(R_WO)).vector())
+    scene.load(problem.scene)
     q_start = _configuration(robot, problem.start, "start state", where)
     q_goal = _configuration(robot, problem.goal, "goal", where)
     motion = MotionProblem(robot, scene, q_start, q_goal, clearance=clearance, self_clearance=self_clearance,
