@@ -114,7 +114,7 @@ class ConvexPieces:
         from pydrake.common import MemoryFile
         from pydrake.geometry import Convex, InMemoryMesh
 
-        from drake_mh.geometry.mesh import obj_bytes
+        from drake_mh.geometry.obj_files import obj_bytes
 
         out = []
         for i, (V, (centre, *_)) in enumerate(zip(self.vertices, self.kernel_planes)):

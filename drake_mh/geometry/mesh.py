@@ -25,8 +25,9 @@ import numpy as np
 
 from drake_mh._support.cache import content_hash
 from drake_mh.errors import ObstacleFileError, ObstacleFileNotFound
+from drake_mh.geometry.obj_files import obj_bytes
 
-__all__ = ["Mesh", "MESH_SUFFIXES", "collada_unit", "read_surface", "obj_bytes"]
+__all__ = ["Mesh", "MESH_SUFFIXES", "collada_unit", "read_surface"]
 
 MESH_SUFFIXES = (".stl", ".obj", ".dae", ".ply", ".off", ".gltf", ".glb", ".vtk")
 """File suffixes :class:`Mesh` reads (case-insensitive)."""
@@ -45,14 +46,6 @@ def collada_unit(path: Path) -> float:
     except ValueError:
         return 1.0
     return value if np.isfinite(value) and value > 0 else 1.0
-
-
-def obj_bytes(vertices: np.ndarray, faces: np.ndarray, comment: str) -> bytes:
-    """A Wavefront ``.obj`` file of the triangles ``vertices[faces]`` (full precision)."""
-    lines = [f"# {comment}"]
-    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in np.asarray(vertices, dtype=float).tolist()]
-    lines += [f"f {i} {j} {k}" for i, j, k in (np.asarray(faces, dtype=np.int64) + 1).tolist()]
-    return ("\n".join(lines) + "\n").encode()
 
 
 def _scale3(scale, path) -> tuple:

@@ -22,7 +22,8 @@ import numpy as np
 
 from drake_mh._support.cache import atomic_write_bytes, cache_dir, content_hash
 from drake_mh.errors import MeshConversionError
-from drake_mh.geometry.mesh import collada_unit, obj_bytes
+from drake_mh.geometry.mesh import collada_unit
+from drake_mh.geometry.obj_files import obj_bytes
 
 logger = logging.getLogger(__name__)
 

@@ -50,7 +50,7 @@ def benchmark_scene(robot, kind: str):
 
     from drake_mh._support.cache import atomic_write_bytes, cache_dir
     from drake_mh.errors import InvalidArgument
-    from drake_mh.geometry.mesh import obj_bytes
+    from drake_mh.geometry.obj_files import obj_bytes
     from drake_mh.scene import Mesh, PointCloud, Scene, Sphere
 
     if kind not in BENCHMARK_SCENES:

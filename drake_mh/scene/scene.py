@@ -24,7 +24,6 @@ A robot without collision geometry has no clearance: every query that needs one 
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -35,6 +34,7 @@ from drake_mh.geometry.convex_pieces import convex_pieces
 from drake_mh.geometry.mesh import Mesh
 from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere, as_shape
 from drake_mh.geometry.spheres import DEFAULT_TOLERANCE, SphereModel
+from drake_mh.scene.obstacle import Obstacle
 
 __all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule", "Mesh", "PointCloud"]
 
@@ -74,21 +74,6 @@ def _rotation(rpy) -> np.ndarray:
     from pydrake.math import RollPitchYaw
 
     return RollPitchYaw(_vector3(rpy, "rpy [rad]")).ToRotationMatrix().matrix()
-
-
-@dataclass(frozen=True, eq=False)
-class Obstacle:
-    """An obstacle: a shape at pose ``X_WO`` moving with linear ``velocity_W`` [m/s]."""
-
-    name: str
-    shape: Sphere | Box | Cylinder | Capsule | Mesh | PointCloud
-    X_WO: np.ndarray
-    velocity_W: np.ndarray = field(default_factory=lambda: np.zeros(3))
-
-    @property
-    def position(self) -> np.ndarray:
-        """``p_WO (3,)`` [m]."""
-        return self.X_WO[:3, 3].copy()
 
 
 class Scene:

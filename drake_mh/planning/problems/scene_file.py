@@ -52,12 +52,12 @@ def scene_problem_set(path, robot="panda", count: int = 10, seed: int = 0, clear
         InvalidArgument: a negative ``count`` or a non-positive ``sphere_tolerance``.
     """
     from drake_mh.planning import MotionProblem
-    from drake_mh.planning.problems import ProblemSet, _check_count, load_problem_robot
+    from drake_mh.planning.problems.sets import ProblemSet, check_count, load_problem_robot
     from drake_mh.planning.problems.generate import (MARGIN, check_sphere_tolerance, new_scene,
                                                      ready_configuration)
     from drake_mh.scene.files import read_scene
 
-    count = _check_count(count)
+    count = check_count(count)
     scene_file = read_scene(path, packages=packages)
     robot = load_problem_robot(robot)
     scene = new_scene(robot, self_collision, check_sphere_tolerance(sphere_tolerance))

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_mh.errors import DrakeMhError, SceneFileError
-from drake_mh.scene.scene import Obstacle
+from drake_mh.scene.obstacle import Obstacle
 
 __all__ = ["SceneFile", "SceneFileBuilder", "WORLD_FRAMES", "quaternion_matrix", "pose", "read_yaml", "read_text"]
 
