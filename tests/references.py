@@ -125,6 +125,33 @@ class FreshDrake:
         names = [self.plant.GetBodyFromFrameId(inspector.GetFrameId(g)).name() for g in (pair.id_A, pair.id_B)]
         return tuple(sorted(names))
 
+    def capsules(self, q) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+        """``[(link, axis end a (3,), axis end b (3,), radius)]`` of every capsule and sphere
+        (an axis of length 0) of the robot at ``q``: poses from this plant's query, sizes from
+        its shapes."""
+        from pydrake.geometry import Role
+
+        self.set(q)
+        query = self._port.Eval(self.sg_context)
+        inspector = query.inspector()
+        out = []
+        for gid in inspector.GetAllGeometryIds(Role.kProximity):
+            if inspector.GetFrameId(gid) == inspector.world_frame_id():
+                continue
+            shape, X = inspector.GetShape(gid), query.GetPoseInWorld(gid).GetAsMatrix4()
+            kind = type(shape).__name__
+            if kind not in ("Capsule", "Sphere"):
+                raise TypeError(f"no closed form for a {kind} link")
+            half = 0.5 * shape.length() * X[:3, 2] if kind == "Capsule" else np.zeros(3)
+            link = self.plant.GetBodyFromFrameId(inspector.GetFrameId(gid)).name()
+            out.append((link, X[:3, 3] - half, X[:3, 3] + half, shape.radius()))
+        return out
+
+    def ball_distance(self, q, centre, radius: float) -> float:
+        """Distance [m] of a ball to a robot of capsules and spheres, in closed form
+        (:func:`ball_to_capsule` of each)."""
+        return min(ball_to_capsule(centre, radius, capsule) for capsule in self.capsules(q))
+
     def has_collisions(self, q) -> bool:
         """Drake's ``HasCollisions`` at ``q``."""
         self.set(q)
@@ -163,6 +190,15 @@ class FreshDrake:
         return M @ a + bias - gravity
 
 
+def ball_to_capsule(centre, radius: float, capsule) -> float:
+    """Signed distance [m] of a ball to a capsule ``(name, axis end a, axis end b, radius)``:
+    the point-to-segment distance from its centre to the axis, minus both radii."""
+    _, a, b, r = capsule
+    centre, u = np.asarray(centre, dtype=float), b - a
+    t = 0.0 if not u.any() else float(np.clip((centre - a) @ u / (u @ u), 0.0, 1.0))
+    return float(np.linalg.norm(centre - (a + t * u))) - r - radius
+
+
 def dense_path(path, max_step: float = 0.005) -> np.ndarray:
     """The piecewise-linear joint-space motion through the rows of ``path (M, nq)``, sampled so
     that no joint moves more than ``max_step`` [rad] between two samples (ends included)."""
@@ -191,3 +227,56 @@ def finite_differences(position, t, h: float, order: int) -> np.ndarray:
         return (position(t + 1.5 * h) - 3.0 * position(t + 0.5 * h) + 3.0 * position(t - 0.5 * h)
                 - position(t - 1.5 * h)) / h ** 3
     raise ValueError(order)
+
+
+class PinocchioCoal:
+    """A robot's model file read by Pinocchio (its own URDF parser and mesh loader), collision
+    meshes turned into convex hulls by coal (qhull), placed by Pinocchio's FK; distances to
+    obstacles by coal's GJK. The reference for robots whose meshes Drake cannot read (STL).
+
+    Args:
+        robot: the drake_mh Robot (its ``source`` file, joint order and locked joints).
+        package_dirs: folders holding the packages of ``package://`` URIs.
+    """
+
+    def __init__(self, robot, package_dirs=()):
+        import coal
+        import pinocchio as pin
+
+        self._pin, self._coal = pin, coal
+        self.model, self.collision, _ = pin.buildModelsFromUrdf(str(robot.source), package_dirs=[str(d) for d in package_dirs])
+        self.data, self.collision_data = self.model.createData(), self.collision.createData()
+        self.geometries = []
+        for obj in self.collision.geometryObjects:
+            geometry = obj.geometry
+            if isinstance(geometry, coal.BVHModelBase):
+                geometry.buildConvexHull(True, "Qt")
+                geometry = geometry.convex
+            self.geometries.append(geometry)
+        self._q0 = pin.neutral(self.model)
+        for name, value in robot.locked_joints.items():
+            self._q0[self.model.idx_qs[self.model.getJointId(name)]] = value
+        self._index = [self.model.idx_qs[self.model.getJointId(name)] for name in robot.joint_names]
+
+    def _place(self, q) -> None:
+        q_full = self._q0.copy()
+        q_full[self._index] = q
+        self._pin.framesForwardKinematics(self.model, self.data, q_full)
+        self._pin.updateGeometryPlacements(self.model, self.data, self.collision, self.collision_data, q_full)
+
+    def fk(self, q, frame: str) -> np.ndarray:
+        """``X_WF (4, 4)`` of the frame named ``frame``."""
+        self._place(q)
+        return self.data.oMf[self.model.getFrameId(frame)].homogeneous
+
+    def ball_distance(self, q, centre, radius: float) -> float:
+        """Smallest distance [m] of the robot's collision geometry to a ball."""
+        coal = self._coal
+        self._place(q)
+        ball, X_WB = coal.Sphere(float(radius)), coal.Transform3s(np.eye(3), np.asarray(centre, dtype=float))
+        best = np.inf
+        for geometry, M in zip(self.geometries, self.collision_data.oMg):
+            result = coal.DistanceResult()
+            best = min(best, coal.distance(geometry, coal.Transform3s(M.rotation, M.translation), ball, X_WB,
+                                           coal.DistanceRequest(), result))
+        return float(best)
