@@ -11,7 +11,7 @@ import drake_mh
 from drake_mh.errors import FrameNotFound, InvalidConfiguration, InvalidIKProblem
 from drake_mh.ik import IKProblem, reach_bound
 from drake_mh.ik.problem import rotation_angle
-from drake_mh.scene import Box, Scene, Sphere
+from drake_mh.scene import Scene, Sphere
 
 
 def test_position_and_pose_targets(panda):
