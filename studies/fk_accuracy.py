@@ -3,9 +3,9 @@
 For each robot and replicate, random configurations uniformly within the joint limits
 (drawn from the case's instance stream) are evaluated by ``robot.batch.fk`` /
 ``robot.batch.jacobian`` and by Drake one configuration at a time (``robot.fk_drake`` /
-``robot.jacobian_drake``; ``robot.fk`` is a compiled kernel too). Records the largest absolute difference of the end-effector position
-[m], of the rotation matrix entries, and of the Jacobian entries; a case passes when all
-three are below 1e-9.
+``robot.jacobian_drake``; ``robot.fk`` is a compiled kernel too). Records the largest absolute
+difference of the end-effector position [m], of the rotation matrix entries, and of the
+Jacobian entries; a case passes when all three are below 1e-9.
 
 Run: ``drake-mh study fk_accuracy [--quick]`` or ``python studies/fk_accuracy.py [--quick]``.
 """

@@ -1,5 +1,5 @@
-"""Independent references for the tests: Drake's own queries on a fresh plant, dense sampling of
-joint-space motions, and finite differences of sampled positions.
+"""Independent references for the tests: Drake's own queries on a fresh plant, Pinocchio and coal
+for shipped meshes, dense sampling of joint-space motions, finite differences of positions.
 
 Nothing here calls drake_mh's kinematics, distances, certificates or dynamics: a robot's model
 file is parsed again into a new ``MultibodyPlant`` + ``SceneGraph``, a scene's obstacles are
@@ -12,7 +12,7 @@ Known limits of Drake as a reference (REFERENCES.md, drake_mh.scene.exact): its 
 optimistic by up to a few millimetres for capsule-box and capsule-cylinder pairs (never for
 sphere obstacles, which it computes in closed form), and its capsule-capsule query can hang on
 collinear touching axes. So a test compares with Drake one-sidedly where boxes or cylinders are
-involved ("claimed free => Drake finds it free"), and keeps capsule obstacles out.
+involved ("claimed free => Drake finds it free"), and uses no capsule obstacles with Drake.
 """
 
 from __future__ import annotations
@@ -48,10 +48,9 @@ class FreshDrake:
         self_collision: also report robot-robot pairs (Drake's default filter of adjacent links,
             plus ``ignore_link_pairs``); otherwise robot-robot pairs are filtered out.
         ignore_link_pairs: ``[(link_a, link_b)]`` left out of self-collision.
-        packages: ``{package name: folder}`` for ``package://`` URIs.
     """
 
-    def __init__(self, robot, obstacles=(), self_collision: bool = False, ignore_link_pairs=(), packages=None):
+    def __init__(self, robot, obstacles=(), self_collision: bool = False, ignore_link_pairs=()):
         from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, Role
         from pydrake.math import RigidTransform, RotationMatrix
         from pydrake.multibody.parsing import Parser
@@ -63,18 +62,16 @@ class FreshDrake:
         builder = DiagramBuilder()
         plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
         parser = Parser(plant)
-        for name, folder in (packages or {}).items():
-            parser.package_map().Add(name, str(folder))
         source = Path(str(robot.source))
         if robot.source != "<string>" and source.is_file():
             parser.AddModels(str(source))
         else:
             parser.AddModelsFromString(robot.urdf, "urdf")
         inspector = scene_graph.model_inspector()
-        self._obstacle_names = []
         for i, (shape, X_WO) in enumerate(obstacles):
             X_WO = np.asarray(X_WO, dtype=float)
-            plant.RegisterCollisionGeometry(plant.world_body(), RigidTransform(RotationMatrix(X_WO[:3, :3]), X_WO[:3, 3]),
+            plant.RegisterCollisionGeometry(plant.world_body(), RigidTransform(RotationMatrix(X_WO[:3, :3]),
+                                                                               X_WO[:3, 3]),
                                             _drake_shape(shape), f"reference_obstacle_{i}", CoulombFriction(0.5, 0.5))
         plant.Finalize()
         robot_ids = [g for g in inspector.GetAllGeometryIds(Role.kProximity)
@@ -98,7 +95,6 @@ class FreshDrake:
         for name, value in getattr(robot, "locked_joints", {}).items():
             self._q_full[plant.GetJointByName(name).position_start()] = value
         self._index = np.array([plant.GetJointByName(name).position_start() for name in robot.joint_names])
-        self.nq = len(self._index)
 
     def set(self, q) -> None:
         q_full = self._q_full.copy()
@@ -118,12 +114,6 @@ class FreshDrake:
     def min_distances(self, Q, max_distance: float = np.inf) -> np.ndarray:
         """:meth:`min_distance` for each row of ``Q (N, nq)``."""
         return np.array([self.min_distance(q, max_distance) for q in np.atleast_2d(Q)])
-
-    def pair_names(self, pair) -> tuple[str, str]:
-        """``(body or obstacle name, ...)`` of a Drake pair, sorted."""
-        inspector = self._port.Eval(self.sg_context).inspector()
-        names = [self.plant.GetBodyFromFrameId(inspector.GetFrameId(g)).name() for g in (pair.id_A, pair.id_B)]
-        return tuple(sorted(names))
 
     def capsules(self, q) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
         """``[(link, axis end a (3,), axis end b (3,), radius)]`` of every capsule and sphere
@@ -151,11 +141,6 @@ class FreshDrake:
         """Distance [m] of a ball to a robot of capsules and spheres, in closed form
         (:func:`ball_to_capsule` of each)."""
         return min(ball_to_capsule(centre, radius, capsule) for capsule in self.capsules(q))
-
-    def has_collisions(self, q) -> bool:
-        """Drake's ``HasCollisions`` at ``q``."""
-        self.set(q)
-        return self._port.Eval(self.sg_context).HasCollisions()
 
     def _frame(self, frame: str):
         return self.plant.GetFrameByName(frame)
@@ -213,7 +198,7 @@ def dense_path(path, max_step: float = 0.005) -> np.ndarray:
 def finite_differences(position, t, h: float, order: int) -> np.ndarray:
     """Central difference of ``order`` (1, 2 or 3) of ``position(times) -> (N, nq)`` at ``t (N,)``.
 
-    Each is a weighted *average* of that derivative over ``[t - 1.5 h, t + 1.5 h]`` with
+    Each is a weighted *average* of that derivative over (at most) ``[t - 1.5 h, t + 1.5 h]`` with
     non-negative weights summing to one (a B-spline kernel), so its magnitude never exceeds the
     derivative's largest magnitude there, even across a jump: a bound check on it is exact up to
     round-off (about ``1e-16 / h**order``), and it is only as close to the peak as ``h`` allows.
@@ -244,7 +229,8 @@ class PinocchioCoal:
         import pinocchio as pin
 
         self._pin, self._coal = pin, coal
-        self.model, self.collision, _ = pin.buildModelsFromUrdf(str(robot.source), package_dirs=[str(d) for d in package_dirs])
+        self.model, self.collision, _ = pin.buildModelsFromUrdf(str(robot.source),
+                                                                package_dirs=[str(d) for d in package_dirs])
         self.data, self.collision_data = self.model.createData(), self.collision.createData()
         self.geometries = []
         for obj in self.collision.geometryObjects:

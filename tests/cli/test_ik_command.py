@@ -25,7 +25,8 @@ def test_ik_json(capsys):
 
     X = FreshDrake(drake_mh.load_robot("panda")).fk(data["q"], "panda_link8")  # Drake on a fresh plant
     assert np.linalg.norm(X[:3, 3] - [0.5, 0.1, 0.4]) <= 1e-5
-    assert Rotation.from_matrix(X[:3, :3] @ Rotation.from_euler("xyz", [3.1416, 0, 0]).as_matrix().T).magnitude() <= 1e-5
+    R_WT = Rotation.from_euler("xyz", [3.1416, 0, 0]).as_matrix()  # --rpy: fixed axes x, y, z
+    assert Rotation.from_matrix(X[:3, :3] @ R_WT.T).magnitude() <= 1e-5
 
 
 def test_ik_text_position_only(capsys):

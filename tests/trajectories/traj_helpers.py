@@ -20,8 +20,8 @@ def sampled_ratios(traj, robot, quantities, *, samples: int = 3000, seed: int = 
     times (each an average of the derivative over a few microseconds or milliseconds, so never
     above its peak: a ratio above 1 is a real excess); torque is Drake's inverse dynamics with
     gravity on a fresh plant (``M a + C v - τ_g``) at those times, with the differenced velocity
-    and acceleration (an average too, up to the change of ``M(q)`` within microseconds). ``position`` is the largest excess over the joint
-    range [rad] (0 inside it).
+    and acceleration (an average too, up to the change of ``M(q)`` within microseconds).
+    ``position`` is the largest excess over the joint range [rad] (0 inside it).
     """
     from references import FreshDrake, finite_differences
 
