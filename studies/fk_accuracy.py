@@ -2,10 +2,10 @@
 
 For each robot and replicate, random configurations uniformly within the joint limits
 (drawn from the case's instance stream) are evaluated by ``robot.batch.fk`` /
-``robot.batch.jacobian`` and by Drake one configuration at a time (``robot.fk`` /
-``robot.jacobian``). Records the largest absolute difference of the end-effector position
-[m], of the rotation matrix entries, and of the Jacobian entries; a case passes when all
-three are below 1e-9.
+``robot.batch.jacobian`` and by Drake one configuration at a time (``robot.fk_drake`` /
+``robot.jacobian_drake``; ``robot.fk`` is a compiled kernel too). Records the largest absolute
+difference of the end-effector position [m], of the rotation matrix entries, and of the
+Jacobian entries; a case passes when all three are below 1e-9.
 
 Run: ``drake-mh study fk_accuracy [--quick]`` or ``python studies/fk_accuracy.py [--quick]``.
 """
@@ -36,8 +36,8 @@ def run(case: Case) -> dict:
     J_batch = robot.batch.jacobian(Q)  # (n, 6, nq)
     batch_time = time.perf_counter() - start
     start = time.perf_counter()
-    T_drake = np.stack([robot.fk(q) for q in Q])
-    J_drake = np.stack([robot.jacobian(q) for q in Q])
+    T_drake = np.stack([robot.fk_drake(q) for q in Q])
+    J_drake = np.stack([robot.jacobian_drake(q) for q in Q])
     drake_time = time.perf_counter() - start
     position_error = float(np.max(np.abs(T_batch[:, :3, 3] - T_drake[:, :3, 3])))
     rotation_error = float(np.max(np.abs(T_batch[:, :3, :3] - T_drake[:, :3, :3])))

@@ -140,16 +140,78 @@ def test_python_m_drake_mh_and_console_script(tmp_path):
         assert bad.returncode == 2 and bad.stderr.startswith("drake-mh: error: unknown study")
 
 
+def _records(folder: Path) -> list[dict]:
+    import json
+
+    return [json.loads(line) for line in (folder / "records.jsonl").read_text().splitlines() if line.strip()]
+
+
+def _section(markdown: str, name: str) -> str:
+    """The demo report's section of study ``name`` (from its heading to the next one)."""
+    return markdown.split(f"\n## {name}\n", 1)[1].split("\n## ", 1)[0]
+
+
+def check_demo_report(out: Path, took: float) -> None:
+    """The demo's report in ``out`` holds what it claims, read back from the files it wrote: a
+    section per demo study, in order, saying that all its cases ran and none raised (the counts
+    are those of the study's own records); fk_accuracy's table passes every bundled robot with
+    the largest differences its records hold, all below its tolerance; retime_benchmark reports
+    no limit violation; the wall time it prints is positive and at most ``took`` [s]; and every
+    file the report links to or shows exists."""
+    import re
+
+    import drake_mh
+    from drake_mh.study.demo import DEMO_STUDIES, demo_studies
+
+    markdown = (out / "report.md").read_text()
+    studies = demo_studies()
+    assert set(DEMO_STUDIES) <= set(studies)
+    assert [h for h in re.findall(r"^## (\S+)$", markdown, re.M) if h in studies] == studies
+    for name in studies:
+        section = _section(markdown, name)
+        line = re.search(r"^(\d+)/(\d+) cases.*$", section, re.M)
+        done, total = int(line.group(1)), int(line.group(2))
+        records = _records(out / name)
+        assert done == total == len(records) > 0 and all(r["status"] == "ok" for r in records), name
+        assert "raised" not in line.group(0), line.group(0)
+        assert f"]({name}/index.html)" in section and (out / name / "index.html").is_file()
+    rows = re.findall(r"^\| (\w+) \| (\d+) \| (\d+) \| (\S+) \| (\S+) \| (\S+) \| (\w+) \|$",
+                      _section(markdown, "fk_accuracy"), re.M)
+    assert sorted(r[0] for r in rows) == sorted(drake_mh.available_robots())
+    records = _records(out / "fk_accuracy")
+    for robot, nq, configurations, position, rotation, jacobian, passed in rows:
+        mine = [r for r in records if r["robot"] == robot]
+        assert int(nq) == drake_mh.load_robot(robot).nq
+        assert int(configurations) == sum(r["configurations"] for r in mine)
+        for text, field in ((position, "position_error"), (rotation, "rotation_error"), (jacobian, "jacobian_error")):
+            assert float(text) == pytest.approx(max(r[field] for r in mine), rel=1e-2)
+            assert 0.0 <= float(text) < 1e-9
+        assert passed == "yes"
+    assert re.search(r"violations \(> 1 \+ 1e-06\): 0\.", _section(markdown, "retime_benchmark"))
+    wall = float(re.search(r"^Demo wall time ([0-9.]+) s\.$", markdown, re.M).group(1))
+    assert 0.0 < wall <= took
+    targets = re.findall(r"\]\(([^)]+)\)", markdown)
+    assert any(t.startswith("figures/") for t in targets)
+    for target in targets:
+        assert (out / target).is_file(), target
+    for target in re.findall(r'(?:href|src)="([^"]+)"', (out / "index.html").read_text()):
+        if ":" not in target and not target.startswith("#"):
+            assert (out / target).is_file(), target
+
+
 @pytest.mark.slow
 def test_demo_runs_end_to_end(tmp_path):
-    result = _run_cli("demo", "--workers", "2", "--out", str(tmp_path / "demo"), cwd=tmp_path, timeout=300)
+    """``drake-mh demo`` exits 0, names its report, and the report holds what it claims
+    (:func:`check_demo_report`)."""
+    import time
+
+    out = tmp_path / "demo"
+    start = time.monotonic()
+    result = _run_cli("demo", "--workers", "2", "--out", str(out), cwd=tmp_path, timeout=600)
+    took = time.monotonic() - start
     assert result.returncode == 0, result.stderr
-    assert "demo report:" in result.stdout
-    index = tmp_path / "demo" / "index.html"
-    assert index.is_file()
-    for name in ("bench_kinematics", "fk_accuracy"):
-        assert (tmp_path / "demo" / name / "index.html").is_file()
-        assert f"{name}/index.html" in index.read_text()
+    assert f"demo report: {(out / 'index.html').resolve()}" in result.stdout
+    check_demo_report(out, took)
 
 
 def test_progress_only_on_an_interactive_terminal(monkeypatch):

@@ -20,9 +20,13 @@ def test_ik_json(capsys):
     assert data["position_error"] <= 1e-5 and data["orientation_error"] <= 1e-5
     assert len(data["q"]) == 7 and data["joint_names"][0] == "panda_joint1"
     import drake_mh
+    from references import FreshDrake
+    from scipy.spatial.transform import Rotation
 
-    robot = drake_mh.load_robot("panda")
-    assert np.allclose(robot.fk(data["q"])[:3, 3], [0.5, 0.1, 0.4], atol=1e-5)
+    X = FreshDrake(drake_mh.load_robot("panda")).fk(data["q"], "panda_link8")  # Drake on a fresh plant
+    assert np.linalg.norm(X[:3, 3] - [0.5, 0.1, 0.4]) <= 1e-5
+    R_WT = Rotation.from_euler("xyz", [3.1416, 0, 0]).as_matrix()  # --rpy: fixed axes x, y, z
+    assert Rotation.from_matrix(X[:3, :3] @ R_WT.T).magnitude() <= 1e-5
 
 
 def test_ik_text_position_only(capsys):

@@ -24,16 +24,39 @@ def _plan(*args):
                           capture_output=True, text=True, timeout=300)
 
 
+def _drake_clearance_along(robot, path, sphere) -> float:
+    """Smallest distance along the printed piecewise-linear motion (2 mrad of its fastest joint)
+    by Drake's own query on a fresh plant with the ball anchored in it (capsules and a sphere
+    against a ball: Drake's closed forms)."""
+    from references import FreshDrake, dense_path
+
+    from drake_mh.scene import Sphere
+
+    X_WO = np.eye(4)
+    X_WO[:3, 3] = sphere[:3]
+    drake = FreshDrake(robot, [(Sphere(sphere[3]), X_WO)])
+    return float(drake.min_distances(dense_path(np.asarray(path), 0.002)).min())
+
+
 def test_plans_around_the_obstacle_prints_json_and_writes_the_animation(tmp_path):
+    """The printed path starts at home, ends at the goal and, sampled densely, is clear of the
+    ball by Drake's own query (not the planner's). (Its certified clearance is not printed: the
+    printed one is the toppra motion's, a spline through the waypoints, measured 10 mm farther
+    from the ball than the polyline here.)"""
     page = tmp_path / "motion.html"
-    out = _plan("--goal-q", *map(str, GOAL_Q), "--sphere", *_blocking_sphere(), "--method", "rrt_connect",
+    sphere = _blocking_sphere()
+    out = _plan("--goal-q", *map(str, GOAL_Q), "--sphere", *sphere, "--method", "rrt_connect",
                 "--json", "--html", str(page))
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert data["success"] and data["method"] == "rrt_connect" and data["waypoints"] >= 3
     assert data["min_clearance"] > 0 and data["obstacles"] == ["sphere0"]
+    robot = drake_mh.load_robot("seed000_6dof")
     np.testing.assert_allclose(data["path"][-1], GOAL_Q, atol=1e-9)
     np.testing.assert_allclose(data["path"][0], data["q_start"])
+    np.testing.assert_allclose(data["q_start"], robot.home)
+    assert len(data["path"]) == data["waypoints"]
+    assert _drake_clearance_along(robot, data["path"], [float(v) for v in sphere]) > 0.0
     assert "certified clearance >=" in data["caption"] and "animation written" in out.stderr
     assert viz_html.animation(page.read_text()) is not None
 
@@ -72,6 +95,10 @@ def test_retime_ruckig_limits_the_jerk_toppra_says_it_does_not():
     assert ruckig.returncode == 0, ruckig.stderr
     data = json.loads(ruckig.stdout)
     assert data["jerk_limited"] is True and 0 < data["max_jerk"] <= 10000 * (1 + 1e-6)
+    panda = drake_mh.load_robot("panda")
+    np.testing.assert_allclose(data["path"][-1], [1, 0, 0, -2, 0, 2, 0.5], atol=1e-9)
+    # ruckig moves along the printed polyline itself: its certified clearance is the polyline's
+    assert _drake_clearance_along(panda, data["path"], [0.5, 0.3, 0.3, 0.1]) >= data["min_clearance"] - 1e-9
 
 
 def test_out_writes_the_trajectory_and_the_limits_are_printed(tmp_path):

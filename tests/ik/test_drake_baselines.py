@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
@@ -31,8 +33,10 @@ def test_attempts_and_timeout(panda):
     problem = IKProblem(panda, [0.3, 0.0, 0.6], position_tolerance=1e-300)  # never verified
     result = solve_ik(problem, "drake_snopt", seed=0, budget=3)
     assert not result.success and result.attempts == 3 and "attempts exhausted" in result.message
+    start = time.process_time()  # a bound on the work, not a timing (studies/timeout_overrun.py)
     result = solve_ik(problem, "drake_snopt", seed=0, timeout=0.02)
-    assert not result.success and "timeout" in result.message and result.time < 0.5
+    assert time.process_time() - start < 40 * 0.02
+    assert not result.success and "timeout" in result.message
 
 
 def test_reference_cost(panda):

@@ -11,7 +11,7 @@ import drake_mh
 from drake_mh.errors import FrameNotFound, InvalidConfiguration, InvalidIKProblem
 from drake_mh.ik import IKProblem, reach_bound
 from drake_mh.ik.problem import rotation_angle
-from drake_mh.scene import Box, Scene, Sphere
+from drake_mh.scene import Scene, Sphere
 
 
 def test_position_and_pose_targets(panda):
@@ -50,35 +50,67 @@ def test_other_input_errors(panda, six_dof):
         IKProblem(panda, [0.3, 0, 0.5], scene=Scene(six_dof))
 
 
+def _sphere_model_clearance(drake, model, p_WB, radius, q) -> float:
+    """The sphere model's clearance to a ball at ``p_WB`` by hand: its spheres (data: link,
+    centre in the link frame, radius) placed with Drake's link poses on a fresh plant."""
+    poses = {link: drake.fk(q, link) for link in set(model.links)}
+    centres = np.array([poses[link][:3, :3] @ c + poses[link][:3, 3] for link, c in zip(model.links, model.centres_B)])
+    return float(np.min(np.linalg.norm(centres - p_WB, axis=1) - model.radii) - radius)
+
+
 def test_objective_is_vectorized_and_matches_drake(panda):
+    """Each term by hand from Drake on a fresh plant: the position and rotation errors from its
+    FK (the angle from scipy), the collision penalty from the sphere model placed with its link
+    poses, the manipulability from its Jacobian."""
+    from scipy.spatial.transform import Rotation
+
+    from references import FreshDrake
+
     scene = Scene(panda)
     scene.add("ball", Sphere(0.1), [0.4, 0.0, 0.4])
     q_ref = panda.home
-    problem = IKProblem(panda, [0.4, 0.2, 0.5], rpy=[np.pi, 0, 0.3], scene=scene, clearance=0.02,
+    problem = IKProblem(panda, [0.4, 0.2, 0.5], rpy=[np.pi, 0, 0.3], scene=scene, clearance=0.15,
                         q_ref=q_ref, ref_weight=0.1, manipulability_weight=0.5)
+    drake = FreshDrake(panda)
     Q = panda.random_configurations(50, 3)
     f = problem.objective(Q)
     assert f.shape == (50,) and np.all(np.isfinite(f))
-    for q, fq in zip(Q[:10], f[:10]):  # the same terms computed one configuration at a time with Drake
-        X = panda.fk(q)
-        expected = np.linalg.norm(X[:3, 3] - problem.p_WT) + rotation_angle(X[:3, :3], problem.R_WT)
-        expected += 100 * max(0.0, 0.02 - scene.batch_min_distance(q[None])[0])
-        expected += 0.1 * np.linalg.norm(q - q_ref) - 0.5 * panda.manipulability(q)
+    compared = penalised = 0
+    for q, fq in zip(Q[:20], f[:20]):
+        d = _sphere_model_clearance(drake, panda.sphere_model, np.array([0.4, 0.0, 0.4]), 0.1, q)
+        if d < 0:
+            continue  # a sphere penetrates: the model's value is then corrected (tested in tests/scene)
+        X = drake.fk(q, "panda_link8")
+        Jv = drake.jacobian(q, "panda_link8")[3:]
+        angle = Rotation.from_matrix(X[:3, :3] @ problem.R_WT.T).magnitude()
+        expected = np.linalg.norm(X[:3, 3] - problem.p_WT) + angle + 100 * max(0.0, 0.15 - d)
+        expected += 0.1 * np.linalg.norm(q - q_ref) - 0.5 * np.sqrt(np.linalg.det(Jv @ Jv.T))
         assert fq == pytest.approx(expected, abs=1e-9)
+        compared += 1
+        penalised += d < 0.15
+    assert compared >= 10 and penalised >= 2  # the collision term was really compared
     e_p, e_o = problem.pose_errors(Q)
     assert e_p.shape == e_o.shape == (50,)
 
 
 def test_collision_penalty_only_when_clearance_missing(panda):
+    """The penalty is 100 x the missing clearance of the sphere model (by hand, fresh Drake
+    plant), where the model is clear of the ball; some configurations pay it, some do not."""
+    from references import FreshDrake
+
     scene = Scene(panda)
-    scene.add("box", Box((0.2, 0.2, 0.2)), [0.45, 0.0, 0.3])
+    scene.add("ball", Sphere(0.1), [0.45, 0.0, 0.3])
     free = IKProblem(panda, [0.4, 0.2, 0.5])
-    penalised = IKProblem(panda, [0.4, 0.2, 0.5], scene=scene)
+    penalised = IKProblem(panda, [0.4, 0.2, 0.5], scene=scene, clearance=0.05)
+    drake = FreshDrake(panda)
     Q = panda.random_configurations(200, 4)
-    d = scene.batch_min_distance(Q)
     diff = penalised.objective(Q) - free.objective(Q)
-    assert np.allclose(diff, 100 * np.maximum(-d, 0.0))
-    assert np.any(d < 0) and np.any(d > 0)
+    d = np.array([_sphere_model_clearance(drake, panda.sphere_model, np.array([0.45, 0.0, 0.3]), 0.1, q)
+                  for q in Q])
+    clear = d >= 0  # where no sphere penetrates (there the model's value is corrected)
+    np.testing.assert_allclose(diff[clear], 100 * np.maximum(0.05 - d[clear], 0.0), atol=1e-9)
+    assert np.all(diff[~clear] >= 100 * 0.05)  # in collision: at least the whole clearance is missing
+    assert np.any(clear & (d < 0.05)) and np.any(d > 0.05) and np.any(~clear)
 
 
 @pytest.mark.parametrize("name", drake_mh.available_robots())

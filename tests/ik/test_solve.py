@@ -23,16 +23,40 @@ def small_problem(six_dof):
     return IKProblem(six_dof, six_dof.fk(q)[:3, 3], position_tolerance=1e-2)
 
 
-@pytest.mark.parametrize("method", available_methods())
-def test_every_library_optimizer_solves_a_small_problem(small_problem, method):
-    result = solve_ik(small_problem, method, seed=1, budget=3000)
-    assert 0 < result.nfe <= 3000
-    assert result.within_limits
-    assert len(result.history_nfe) == len(result.history_best) > 0
-    assert np.all(np.diff(result.history_best) <= 1e-15)  # best-so-far never worsens
-    # the objective here is the paper's 3-D distance: the optimizer's best value is Drake's error
-    assert result.position_error == pytest.approx(result.history_best[-1], abs=1e-12)
-    assert result.success == (result.position_error <= 1e-2)
+#: successes required of seeds 1-10 at 10,000 evaluations on ``small_problem`` (measured: 10 of 10
+#: for pso, gsa, e3gsa, aro, cmaes, de; abc 7, bat 6, ga 3, woa_greedy 3, ao 1; woa and random
+#: none: they do not solve 1 cm position IK of six joints in this budget, and say so)
+REQUIRED_SUCCESSES = {"pso": 9, "gsa": 9, "e3gsa": 9, "aro": 9, "cmaes": 9, "de": 9, "abc": 5, "bat": 4,
+                      "ga": 1, "woa_greedy": 1, "ao": 0, "woa": 0, "random": 0}
+
+
+def test_every_library_optimizer_has_a_stated_success_rate():
+    assert set(REQUIRED_SUCCESSES) == set(available_methods())
+
+
+@pytest.mark.parametrize("method", [pytest.param(m, marks=pytest.mark.slow) if m == "cmaes" else m
+                                    for m in available_methods()])  # pycma: ~0.6 s of CPU a run
+def test_library_optimizers_solve_a_small_problem_at_their_stated_rate(small_problem, method):
+    """Seeds 1-10: each answer within the budget and the limits, its error Drake's (fresh plant),
+    success exactly when that error is within 1 cm, and at least the stated number of successes."""
+    from references import FreshDrake
+
+    robot = small_problem.robot
+    drake = FreshDrake(robot)
+    successes = 0
+    for seed in range(1, 11):
+        result = solve_ik(small_problem, method, seed=seed, budget=10_000)
+        assert 0 < result.nfe <= 10_000
+        assert np.all(result.q >= robot.lower) and np.all(result.q <= robot.upper)
+        assert len(result.history_nfe) == len(result.history_best) > 0
+        assert np.all(np.diff(result.history_best) <= 1e-15)  # best-so-far never worsens
+        error = np.linalg.norm(drake.fk(result.q, robot.ee_frame_name)[:3, 3] - small_problem.p_WT)
+        assert result.position_error == pytest.approx(error, abs=1e-12)
+        # the objective here is the paper's 3-D distance: the optimizer's best value is that error
+        assert result.history_best[-1] == pytest.approx(error, abs=1e-12)
+        assert result.success == (error <= 1e-2)
+        successes += result.success
+    assert successes >= REQUIRED_SUCCESSES[method], (method, successes)
 
 
 @pytest.mark.parametrize("method", ["pso", "de", "woa", "hybrid", "pinv", "dls"])
@@ -78,11 +102,19 @@ def test_reference_configuration_keeps_solutions_close(panda):
 
 
 def test_timeout_stops_the_search(panda):
+    """A search that cannot succeed (a tolerance below round-off) and has no budget ends by its
+    timeout and says so. Not timed here (studies/timeout_overrun.py measures the overrun): the
+    process's CPU time bounds the work, 40 times the timeout, which a search that ignored its
+    timeout would exceed, and which a loaded machine does not inflate."""
+    import time
+
     problem = IKProblem(panda, [0.3, 0.0, 0.6], position_tolerance=1e-300)  # below round-off
     for method in ("hybrid", "pso"):
+        solve_ik(problem, method, seed=0, budget=50)  # compiled and loaded before the count
+        start = time.process_time()
         result = solve_ik(problem, method, seed=0, timeout=0.05)
-        assert result.time < 0.5
-        assert "timeout" in result.message
+        assert time.process_time() - start < 40 * 0.05
+        assert not result.success and "timeout" in result.message and result.nfe > 0
 
 
 @pytest.mark.parametrize("kwargs, error, words", [

@@ -73,7 +73,6 @@ def test_unreachable_target_spends_no_budget(panda, method):
     assert "out of reach" in result.message
     distance = np.linalg.norm(problem.p_WT - problem.reach.p_WO)
     assert f"{distance:.4f} m" in result.message and f"{problem.reach.radius:.4f} m" in result.message
-    assert result.time < 0.1
 
 
 def test_just_inside_the_bound_is_attempted(six_dof):

@@ -5,13 +5,16 @@ and the box centre (``make(..., shift="random", seed=7)``): sphere, Rastrigin (m
 and Rosenbrock (curved valley). Budget 10 000 evaluations (CMA-ES 4 000: pycma costs ~2 ms
 per generation). Statistic: median error of seeds 0, 1, 2 (deterministic).
 
-The tolerances are honest, per method: weak methods get loose ones (AO and GSA do not
-converge on *shifted* problems at all - the centre bias of Kudela 2022 - and are only
-required to stay near random-search level there). Measured medians when the table was
-set are in the comments (error = f - f_opt).
+The tolerances are about three times the measured medians (in the comments; error =
+f - f_opt), so that a method that gets three times worse fails. Where a method stands against
+random search is stated separately for every method and function (``RELATIVE_TO_RANDOM``): AO
+is *worse* than random search on the shifted sphere and Rosenbrock (the centre bias of Kudela
+2022: it solves the unshifted sphere), which its tolerance alone would not show.
 """
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 import pytest
@@ -24,27 +27,35 @@ SEEDS = (0, 1, 2)
 
 # method: (sphere, rastrigin, rosenbrock) tolerance on the median error
 TOLERANCES = {
-    "pso": (1e-9, 5.0, 2.0),          # measured 3e-12, 1.0, 0.22
-    "bat": (1.0, 60.0, 5.0),          # 0.10, 19, 0.20
-    "gsa": (2e3, 60.0, 50.0),         # 1.9e2, 22, 10   (centre bias: unshifted sphere 2e-18)
-    "e3gsa": (1e-12, 25.0, 2.0),      # 4e-19, 5.0, 0.24
-    "woa": (5e2, 40.0, 30.0),         # 41, 10, 3.3     (centre bias: unshifted sphere 7e-59)
-    "woa_greedy": (1e-3, 40.0, 15.0), # 9.8e-6, 17, 1.6 (mealpy's variant; unshifted sphere 1e-67)
-    "ao": (1e4, 50.0, 200.0),         # 1.2e3, 8.0, 41  (centre bias: unshifted sphere 1e-5)
-    "ga": (0.1, 0.1, 10.0),           # 7.8e-3, 4.4e-3, 1.2
-    "abc": (1e-12, 1e-6, 0.2),        # 1.6e-18, 7e-15, 0.012
-    "aro": (1e-3, 0.1, 3.0),          # 1.5e-5, 1.3e-3, 0.42
-    "cmaes": (1e-10, 25.0, 1e-8),     # 3.8e-15, 7.0, 4e-15  (4 000 evaluations)
-    "de": (1e-10, 15.0, 1.0),         # 6e-15, 2.8, 0.085
-    "random": (2e3, 40.0, 50.0),      # 6.0e2, 19, 17
+    "pso": (1e-11, 3.0, 0.7),         # measured 3.3e-12, 1.0, 0.22
+    "bat": (0.5, 60.0, 0.7),          # 0.10, 19, 0.20
+    "gsa": (1e3, 50.0, 20.0),         # 3.4e2, 17, 5.3   (centre bias: unshifted sphere 2e-18)
+    "e3gsa": (1e-18, 10.0, 1.0),      # 1.6e-19, 3.0, 0.24
+    "woa": (100.0, 30.0, 10.0),       # 26, 9.3, 3.2     (centre bias: unshifted sphere 7e-59)
+    "woa_greedy": (5e-5, 50.0, 5.0),  # 9.8e-6, 17, 1.6 (mealpy's variant; unshifted sphere 1e-67)
+    "ao": (6e3, 35.0, 90.0),          # 2.0e3, 11, 29   (centre bias: unshifted sphere 1e-5)
+    "ga": (0.03, 0.015, 4.0),         # 7.8e-3, 4.4e-3, 1.2
+    "abc": (1e-17, 1e-13, 0.04),      # 1.6e-18, 7.1e-15, 0.012
+    "aro": (5e-6, 4e-3, 1.0),         # 1.3e-6, 1.1e-3, 0.31
+    "cmaes": (1e-14, 25.0, 1e-14),    # 1.8e-15, 7.0, 3.5e-15  (4 000 evaluations)
+    "de": (1e-14, 10.0, 0.1),         # 1.6e-15, 3.1, 0.030
+    "random": (2e3, 60.0, 60.0),      # 6.0e2, 19, 17
 }
 FUNCTIONS = ("sphere", "rastrigin", "rosenbrock")
+
+# method: against random search's median on (sphere, rastrigin, rosenbrock): "<" better, ">" worse,
+# "~" within a factor 2 either way (measured with the medians above)
+RELATIVE_TO_RANDOM = {
+    "pso": "<<<", "bat": "<~<", "gsa": "<~<", "e3gsa": "<<<", "woa": "<<<", "woa_greedy": "<~<", "ao": "><>",
+    "ga": "<<<", "abc": "<<<", "aro": "<<<", "cmaes": "<<<", "de": "<<<",
+}
 
 
 def budget_of(method: str) -> int:
     return 4000 if method == "cmaes" else 10000
 
 
+@functools.lru_cache(maxsize=None)
 def median_error(method: str, name: str, shift="random") -> float:
     f = make(name, D, shift=shift, seed=7)
     errs = [f.error(minimize(f, f.bounds, method=method, budget=budget_of(method), seed=s).f) for s in SEEDS]
@@ -68,11 +79,21 @@ def test_reaches_stated_tolerance(method, k, name):
     assert err <= TOLERANCES[method][k], f"{method} on shifted {name}: median error {err:.3g}"
 
 
-def test_metaheuristics_beat_random_search_where_they_should():
-    rnd = [median_error("random", n) for n in FUNCTIONS]
-    for method in ("pso", "e3gsa", "abc", "aro", "de", "ga"):
-        for name, r in zip(FUNCTIONS, rnd):
-            assert median_error(method, name) < r, (method, name)
+def test_every_method_has_a_stated_standing_against_random_search():
+    assert set(RELATIVE_TO_RANDOM) == set(available_methods()) - {"random"}
+
+
+@pytest.mark.parametrize("method", sorted(RELATIVE_TO_RANDOM))
+def test_standing_against_random_search(method):
+    """Better, worse, or within a factor 2 of random search's median, as stated per function."""
+    for name, relation in zip(FUNCTIONS, RELATIVE_TO_RANDOM[method]):
+        ratio = median_error(method, name) / median_error("random", name)
+        if relation == "<":
+            assert ratio < 1.0, (method, name, ratio)
+        elif relation == ">":
+            assert ratio > 1.0, (method, name, ratio)
+        else:
+            assert 0.5 <= ratio <= 2.0, (method, name, ratio)
 
 
 @pytest.mark.parametrize("method", ["woa", "woa_greedy", "ao", "gsa"])

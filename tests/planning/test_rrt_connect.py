@@ -1,8 +1,6 @@
 """rrt_connect: every returned motion verified and clear under Drake's exact distance, seeded,
 bounded by its budget and deadline, and its motion check never certifies a colliding motion."""
 
-import time
-
 import numpy as np
 import pytest
 
@@ -43,11 +41,13 @@ def goals_in(scene, lo, hi, count, seed=0, clearance=0.0):
     return Q[scene.collision_free(Q, clearance)][:count]
 
 
-def dense_exact(scene, path, per_segment=50):
-    """Drake's exact minimum distance at ``per_segment`` points of every segment (ends included)."""
-    t = np.linspace(0.0, 1.0, per_segment)[:, None]
-    Q = np.vstack([a + t * (b - a) for a, b in zip(path[:-1], path[1:])])
-    return scene.exact_min_distance(Q)
+def dense_exact(scene, path, max_step=0.005):
+    """The scene's exact distance (tested against Drake in tests/scene/test_exact.py; the
+    planner decides with its certified sphere-model checks) along the piecewise-linear motion,
+    sampled so that no joint moves more than ``max_step`` [rad] between samples."""
+    from references import dense_path
+
+    return scene.exact_min_distance(dense_path(path, max_step))
 
 
 @pytest.fixture(scope="module")
@@ -174,23 +174,21 @@ def blocked_planar(planar2r):
 
 
 def test_blocked_goal_fails_honestly_within_budget_and_deadline(planar2r):
+    """Budgets end the search by their counts; a timeout ends it and says so. Not timed here
+    (studies/timeout_overrun.py measures the overrun): the planning CPU time bounds the work, 40
+    times the timeout, which a search that ignored its deadline would exceed."""
     problem = MotionProblem(planar2r, blocked_planar(planar2r), [0.0, 0.0], [3.0, 0.0])
     prepare(problem)
-    start = time.perf_counter()
     result = solve_motion(problem, "rrt_connect", seed=0, budget=300, timeout=None, retime=False)
     assert not result.success and "budget" in result.message and result.path is None
     assert result.info["nodes"] <= 300
-    assert time.perf_counter() - start < 5.0
     # a tiny dynamic domain draws nearly every sample again (no node added): the budget still ends it
-    start = time.perf_counter()
     result = solve_motion(problem, "rrt_connect", seed=0, budget=20, timeout=None, retime=False, domain_radius=1e-3)
     assert not result.success and "budget" in result.message
     assert result.info["out_of_domain"] > 0 and result.info["iterations"] <= 20_000
-    assert time.perf_counter() - start < 5.0
-    start = time.perf_counter()
     result = solve_motion(problem, "rrt_connect", seed=0, timeout=0.2, retime=False)
     assert not result.success and "timeout" in result.message
-    assert time.perf_counter() - start < 1.5
+    assert result.cpu_time < 40 * 0.2
 
 
 def test_reachable_goal_among_unreachable_ones(planar2r):
@@ -216,12 +214,21 @@ def test_motion_check_never_certifies_what_dense_exact_sampling_finds_in_collisi
 
 
 def test_self_collision_scene():
+    """A motion planned with self-collision: Drake's own query on a fresh plant (the scene's
+    checked link pairs, the table's obstacles) finds no pair in contact anywhere along it,
+    sampled at 5 mrad of the fastest joint (one-sided for the boxes and cans, where Drake's
+    GJK may be optimistic)."""
+    from references import FreshDrake, dense_path
+
     scene = table_scene(self_collision=True)
     goal = goals_in(scene, [0.35, -0.45, 0.15], [0.8, 0.45, 0.35], 1, seed=2)[0]
     problem = MotionProblem(PANDA, scene, READY, goal)
     result = solve_motion(problem, "rrt_connect", seed=0, timeout=10.0, retime=False)
     assert result.success, result.message
-    assert scene.certify_path(result.path).certified
+    drake = FreshDrake(PANDA, scene, self_collision=True, ignore_link_pairs=scene.always_close_pairs)
+    Q = dense_path(result.path, 0.005)
+    assert len(Q) >= 100
+    assert drake.min_distances(Q, max_distance=0.05).min() >= 0.0
 
 
 def test_profile_and_options(table_problems):

@@ -146,14 +146,14 @@ def test_paper_arm_tips_at_zero():
         "planar5.urdf": [0.90, 0, 0],
         "planar12.urdf": [3.60, 0, 0],
         "planar2r.urdf": [0.6096, 0, 0],
-        # Table 2 at q = 0 (standard DH, metres)
-        "seed000_6dof.urdf": None,
+        # Table 2 at q = 0 (standard DH, metres): the product of TransZ(d) TransX(a) RotX(α) of
+        # d = [0.1, 0, 0, 0, 0, 0.05], a = [0.05, 0.4, 0.3, 0.4, 0.2, 0], α = [90, -90, 90, 0, 90, 0]°
+        "seed000_6dof.urdf": [1.35, 0, 0.05],
     }
     for fname, expected in cases.items():
         plant, _, _ = load(fname)
         p = _ee_position(plant, fname, np.zeros(plant.num_positions()))
-        if expected is not None:
-            np.testing.assert_allclose(p, expected, atol=1e-12)
+        np.testing.assert_allclose(p, expected, atol=1e-12)
     plant, _, _ = load("planar2r.urdf")  # hanging down: the ABC start posture
     np.testing.assert_allclose(_ee_position(plant, "planar2r.urdf", [-PI / 2, 0]), [0, 0, -0.6096], atol=1e-12)
 

@@ -1,7 +1,9 @@
 """Compiling ahead (drake_mh/study/warmup.py): ``drake-mh warmup``, and the demo's background
 compilation, which never sinks the demo."""
 
+import logging
 import multiprocessing
+import signal
 import subprocess
 import sys
 import time
@@ -11,16 +13,22 @@ import pytest
 from drake_mh.study import warmup
 
 
-def test_a_failing_compilation_is_swallowed():
-    warmup._run(lambda: 1 / 0)  # logged, not raised: the study then compiles for itself
+def test_a_failing_compilation_is_swallowed(caplog):
+    """Logged with its traceback, not raised: the study then compiles for itself."""
+    with caplog.at_level(logging.DEBUG, logger="drake_mh.study.warmup"):
+        assert warmup._run(lambda: 1 / 0) is None
+    assert "background compilation failed" in caplog.text and "ZeroDivisionError" in caplog.text
 
 
-def test_wait_stops_a_compilation_that_runs_too_long():
+def test_wait_stops_a_compilation_that_runs_too_long(caplog):
+    """A process that would sleep a minute is stopped (SIGTERM: a negative exit code, which a
+    process left to finish would not have) and the stop is logged."""
     process = multiprocessing.get_context("spawn").Process(target=time.sleep, args=(60,), daemon=True)
     process.start()
-    start = time.monotonic()
-    warmup.wait([process], timeout=0.5)
-    assert not process.is_alive() and time.monotonic() - start < 20
+    with caplog.at_level(logging.WARNING, logger="drake_mh.study.warmup"):
+        warmup.wait([process], timeout=0.5)
+    assert not process.is_alive() and process.exitcode == -signal.SIGTERM
+    assert "stopping it" in caplog.text
     warmup.wait([])  # nothing started: nothing to wait for
 
 

@@ -6,7 +6,7 @@ import os
 
 import numpy as np
 import pytest
-from traj_helpers import random_waypoints
+from traj_helpers import random_waypoints, sampled_ratios
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from scipy.interpolate import PPoly
@@ -24,40 +24,48 @@ def _robot(name):
     return _ROBOTS[name]
 
 
+EXAMPLES = int(os.environ.get("DRAKE_MH_EXAMPLES", 25))
+
+
 @pytest.mark.slow
-@settings(max_examples=int(os.environ.get("DRAKE_MH_EXAMPLES", 25)), deadline=None,
-          suppress_health_check=[HealthCheck.too_slow])
-@given(name=st.sampled_from(["panda", "planar2r", "seed000_6dof"]),
-       method=st.sampled_from(["toppra", "drake-toppra", "ruckig"]),
-       k=st.integers(2, 7), gridpoints=st.sampled_from([20, 60, 150]), seed=st.integers(0, 2**31),
-       scale=st.sampled_from([1.0, 0.5]))
-# found by CI: Drake's Toppra at 20 gridpoints, a torque excess between them (gravity at 0.97 of the
-# limit) that re-solving with a tighter torque limit did not shrink; now repaired by time scaling
-@example(name="seed000_6dof", method="drake-toppra", k=7, gridpoints=20, seed=37359, scale=0.5)
-def test_every_retimed_trajectory_is_within_its_limits(name, method, k, gridpoints, seed, scale):
-    """Property: whatever path, robot, method and gridpoints, a returned trajectory is within limits.
+def test_every_retimed_trajectory_is_within_its_limits():
+    """Property: whatever path, robot, method and gridpoints, a returned trajectory is within
+    limits, by its certificate and by an independent check: its positions sampled at 3,000
+    random times, their finite differences and Drake's inverse dynamics with gravity on a fresh
+    plant (tests/trajectories/traj_helpers.py). A request may be refused (InfeasibleTrajectory,
+    saying why), but at least 60 % of the examples are retimed and checked, and 20 in all.
 
     ``DRAKE_MH_EXAMPLES=300`` runs a longer search (passed: 300 examples).
     """
-    robot = _robot(name)
-    W = random_waypoints(robot, np.random.default_rng(seed), k=k, spread=0.95)
-    try:
-        traj = retime(W, robot, method, gridpoints=gridpoints, scale=scale)
-    except InfeasibleTrajectory:
-        return  # allowed: it says why (e.g. a spline that cannot be kept inside the limits)
-    enforced = ("position",) + traj.info["limits"]
-    assert traj.info["certificate"].max_ratio(enforced) <= 1 + 1e-6
-    # independent re-check: 4x denser, torque from Drake's own inverse dynamics, random times too
-    cert = certify(traj, robot, quantities=enforced, samples_per_piece=32, min_samples=4000,
-                   torque_backend="drake" if len(traj.breaks) < 200 else "rnea", scale=scale)
-    assert cert.max_ratio() <= 1 + 1e-6, cert.table()
-    t = np.random.default_rng(seed).uniform(0, traj.duration, 500)
-    q, v, a = traj.derivatives(t, 2)
-    assert np.all(q >= robot.lower - 1e-9) and np.all(q <= robot.upper + 1e-9)
-    if "velocity" in enforced:
-        assert np.all(np.abs(v) <= scale * robot.velocity_limits * (1 + 1e-6))
-    if "acceleration" in enforced:
-        assert np.all(np.abs(a) <= scale * robot.acceleration_limits * (1 + 1e-6))
+    ran, checked = [], []
+
+    @settings(max_examples=EXAMPLES, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow])
+    @given(name=st.sampled_from(["panda", "planar2r", "seed000_6dof"]),
+           method=st.sampled_from(["toppra", "drake-toppra", "ruckig"]),
+           k=st.integers(2, 7), gridpoints=st.sampled_from([20, 60, 150]), seed=st.integers(0, 2**31),
+           scale=st.sampled_from([1.0, 0.5]))
+    # found by CI: Drake's Toppra at 20 gridpoints, a torque excess between them (gravity at 0.97 of
+    # the limit) that re-solving with a tighter torque limit did not shrink; now repaired by time scaling
+    @example(name="seed000_6dof", method="drake-toppra", k=7, gridpoints=20, seed=37359, scale=0.5)
+    def retimed_is_within_limits(name, method, k, gridpoints, seed, scale):
+        robot = _robot(name)
+        W = random_waypoints(robot, np.random.default_rng(seed), k=k, spread=0.95)
+        ran.append(1)
+        try:
+            traj = retime(W, robot, method, gridpoints=gridpoints, scale=scale)
+        except InfeasibleTrajectory as exc:
+            assert str(exc)  # allowed: it says why (e.g. a spline that cannot be kept inside the limits)
+            return
+        enforced = traj.info["limits"]
+        assert traj.info["certificate"].max_ratio(("position",) + enforced) <= 1 + 1e-6
+        sampled = sampled_ratios(traj, robot, enforced, seed=seed)
+        assert sampled["position"] <= 1e-9, sampled
+        for quantity in enforced:
+            assert sampled[quantity] <= scale * (1 + (1e-4 if quantity == "torque" else 1e-5)), (quantity, sampled)
+        checked.append(1)
+
+    retimed_is_within_limits()
+    assert len(checked) >= max(20, 0.6 * len(ran)), (len(checked), len(ran))
 
 
 def _poly_trajectory(c, breaks, names=("panda_joint1",)):

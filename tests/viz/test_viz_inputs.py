@@ -61,8 +61,9 @@ def test_position_function_trajectories_are_sampled(planar2r):
 
 
 def test_drake_mh_trajectory_is_shown(planar2r):
-    trajectories = pytest.importorskip("drake_mh.trajectories")
     from scipy.interpolate import CubicSpline
+
+    from drake_mh import trajectories
 
     spline = CubicSpline([0.0, 2.0], [[0.0, 0.0], [0.5, -0.5]], bc_type="clamped")  # a PPoly of time
     traj = trajectories.Trajectory(spline)

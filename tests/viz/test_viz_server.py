@@ -41,9 +41,8 @@ def _listening_addresses(port: int) -> list[str]:
     return out
 
 
+@pytest.mark.skipif(not Path("/proc/net/tcp").exists(), reason="needs Linux /proc/net/tcp to list listening sockets")
 def test_server_listens_on_loopback_only(meshcat):
-    if not Path("/proc/net/tcp").exists():
-        pytest.skip("needs Linux /proc/net/tcp to list listening sockets")
     hosts = _listening_addresses(meshcat.port())
     assert hosts, "the Meshcat port is not listening"
     loopback = {"0100007F", "00000000000000000000000001000000"}  # 127.0.0.1, ::1

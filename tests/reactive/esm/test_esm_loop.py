@@ -33,11 +33,22 @@ def scenario_1_amnn(robot):
 
 
 @pytest.mark.slow
-def test_scenario_1_default_solver_is_safe(scenario_1_amnn):
+def test_scenario_1_default_solver_is_safe(robot, scenario_1_amnn):
+    """The recorded clearances are the true ones, in closed form (the ball against the capsules
+    of a fresh Drake plant at each step's configuration and instant), and never below the
+    threshold."""
+    from references import FreshDrake
+
     run = scenario_1_amnn
     _assert_verified(run)
     assert run.threshold_violations == 0
-    assert run.min_distance.min() >= run.threshold
+    drake = FreshDrake(robot)
+    obstacles = get_scenario("self_motion", config=ESMConfig(h1=10.0)).obstacles
+    assert all(isinstance(o.shape, Sphere) for o in obstacles)
+    closed_form = [min(drake.ball_distance(theta, o.state(t)[0], o.shape.radius) for o in obstacles)
+                   for t, theta in zip(run.t, run.theta)]
+    np.testing.assert_allclose(run.min_distance, closed_form, atol=1e-9)
+    assert min(closed_form) >= run.threshold
     assert run.active_rows.max() >= 1                   # the obstacle did constrain the motion
 
 

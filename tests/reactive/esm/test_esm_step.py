@@ -77,12 +77,17 @@ def test_point_jacobian_eq_8_matches_drake(robot):
 
 
 def test_objective_matches_drake(robot, close_step):
+    """The error and μ (eq. (3): sqrt(det(J_v J_vᵀ))) from Drake on a fresh plant, by hand."""
+    from references import FreshDrake
+
+    drake = FreshDrake(robot)
     Q = np.clip(np.array(THETA0) + np.random.default_rng(0).normal(scale=0.03, size=(6, 7)),
                 close_step.lower, close_step.upper)
     F, e, mu = ESMObjective(robot, close_step).values(Q)
     for q, Fi, ei, mi in zip(Q, F, e, mu):
-        e_drake = np.linalg.norm(robot.fk_drake(q)[:3, 3] - np.array(TARGET))
-        mu_drake = robot.manipulability(q)
+        e_drake = np.linalg.norm(drake.fk(q, robot.ee_frame_name)[:3, 3] - np.array(TARGET))
+        Jv = drake.jacobian(q, robot.ee_frame_name)[3:]
+        mu_drake = np.sqrt(np.linalg.det(Jv @ Jv.T))
         assert ei == pytest.approx(e_drake, abs=1e-12)
         assert mi == pytest.approx(mu_drake, rel=1e-10)
         assert Fi == pytest.approx(10.0 * e_drake + 1.0 / mu_drake, rel=1e-10)

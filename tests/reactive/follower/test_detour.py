@@ -1,5 +1,5 @@
 """Certified motion between the follower's points: detours where the straight line is not certified,
-an honest halt where no detour is found (issue #16 item 4)."""
+an honest halt where no detour is found."""
 
 import numpy as np
 import pytest

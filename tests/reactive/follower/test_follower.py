@@ -7,6 +7,7 @@ import pytest
 
 from drake_mh.errors import InvalidArgument, UnknownMethod
 from drake_mh.reactive.follower import FollowerConfig, LocalIKProblem, RegeneratingFollower, largest_joint_step
+from references import FreshDrake
 
 START = (0.2, 0.2, 0.6)
 CONFIG = FollowerConfig(method="e3gsa", budget=8000)
@@ -59,7 +60,9 @@ def test_regeneration_touches_only_colliding_points(robot, planned):
     before = follower.Q.copy()
     scene.move("ball", elbow(robot, before[14]))
     colliding, exact, _ = follower.predict()
+    drake = FreshDrake(robot, scene)  # Drake's own query on a fresh plant (a ball: its closed form)
     assert colliding.size > 0 and np.all(exact < CONFIG.clearance)
+    np.testing.assert_allclose(drake.min_distances(before[colliding]), exact, atol=1e-9)
     event = follower.react()
     changed = np.flatnonzero(np.any(follower.Q != before, axis=1))
     assert event.path_colliding.size == 0 and not event.replans          # the arm is hit, not the path
@@ -68,9 +71,9 @@ def test_regeneration_touches_only_colliding_points(robot, planned):
     assert set(changed) <= set(colliding.tolist()) and changed.size > 0
     assert np.array_equal(follower.points, planned[0])                    # §3.4.1: the path is unchanged
     assert event.failed.size == 0
-    for k in colliding:  # verified by Drake's exact signed distance with the IK clearance
-        assert scene.min_distance(follower.Q[k]) >= CONFIG.ik_clearance
-        assert np.linalg.norm(robot.fk(follower.Q[k])[:3, 3] - follower.points[k]) <= 1e-3
+    for k in colliding:  # not the IK's own verification: Drake on the fresh plant
+        assert drake.min_distance(follower.Q[k]) >= CONFIG.ik_clearance
+        assert np.linalg.norm(drake.fk(follower.Q[k], robot.ee_frame_name)[:3, 3] - follower.points[k]) <= 1e-3
     assert follower.predict()[0].size == 0
     assert np.all(follower.Q[: follower.index + 1] == before[: follower.index + 1])  # the past never changes
     assert follower.regenerated_mask[colliding].all() and follower.regenerated_mask.sum() == colliding.size
@@ -130,8 +133,9 @@ def test_any_ik_method_regenerates(robot, planned, method):
     follower.advance(4)
     scene.move("ball", elbow(robot, follower.Q[14]))
     event = follower.react()
-    assert event.changed and event.failed.size == 0
-    assert all(scene.min_distance(follower.Q[k]) >= config.ik_clearance for k in event.regenerated)
+    assert event.changed and event.failed.size == 0 and event.regenerated.size > 0
+    drake = FreshDrake(robot, scene)  # Drake's own query on a fresh plant, not the IK's verification
+    assert all(drake.min_distance(follower.Q[k]) >= config.ik_clearance for k in event.regenerated)
 
 
 @pytest.mark.slow

@@ -39,6 +39,18 @@ def dense_motion_clearance(rec, per_piece=50) -> float:
     return float(worst)
 
 
+def closed_form_clearance(rec) -> np.ndarray:
+    """The clearance of each executed configuration to the obstacle where it was then, in closed
+    form (the ball against the capsules and sphere of a fresh Drake plant), not the scenario's own
+    exact distance, which its IK decided with."""
+    import drake_mh
+    from references import FreshDrake
+
+    drake = FreshDrake(drake_mh.load_robot("seed000_6dof"))
+    return np.array([drake.ball_distance(rec["traj_q"][k], rec["obstacle_p"][k], rec["obstacle_radius"])
+                     for k in range(rec["reached"] + 1)])
+
+
 def test_scenario_regenerates_and_stays_clear():
     rec = run_framework_scenario("e3gsa", seed=2)  # measured: 13 of 48 points collide
     _check_record(rec, 1)
@@ -46,6 +58,9 @@ def test_scenario_regenerates_and_stays_clear():
     assert dense_motion_clearance(rec) >= 0
     assert rec["event1_colliding"] > 0 and rec["min_distance_unregenerated"] < 0   # the old plan would collide
     assert rec["success"] and rec["min_distance_executed"] >= 0.01 - 1e-9 and rec["min_distance_swept"] > 0
+    clearance = closed_form_clearance(rec)
+    np.testing.assert_allclose(clearance, rec["clearance"][:rec["reached"] + 1], atol=1e-9)
+    assert clearance.min() >= 0.01 - 1e-9
     assert rec["event1_regenerated"] == rec["event1_colliding"] == rec["regenerated"].sum()
     assert rec["max_step_executed"] < 0.5 and rec["max_position_error"] <= 1e-3
 
@@ -62,6 +77,7 @@ def test_obstacle_landing_on_the_occupied_configuration_is_escaped(hybrid_seed6)
     rec = hybrid_seed6
     assert rec["clearance_at_move"] < 0
     assert rec["success"] and rec["min_distance_executed"] >= 0.01 - 1e-9 and rec["min_distance_swept"] > 0
+    assert closed_form_clearance(rec).min() >= 0.01 - 1e-9
     assert rec["regenerated"][2] and rec["joint_steps"][1] > 0.3      # the escape is a real step
 
 
