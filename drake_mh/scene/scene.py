@@ -542,7 +542,21 @@ class Scene:
 
     def segment_free(self, q_a, q_b, clearance: float = 0.0, self_clearance: float = 0.0) -> bool:
         """Whether the straight joint-space motion ``q_a -> q_b`` is certified free *for every
-        configuration on it* (:func:`drake_mh.scene.segments.certify_segments`)."""
+        configuration on it* (:func:`drake_mh.scene.segments.certify_segments`).
+
+        Raises:
+            SceneError: ``q_a`` or ``q_b`` is not one configuration ``(nq,)`` (several segments:
+                :meth:`certify_segments`), or a bad clearance.
+        """
+        for name, q in (("q_a", q_a), ("q_b", q_b)):
+            try:
+                several = np.ndim(q) > 1
+            except ValueError:  # ragged: certify_segments names what is wrong
+                several = False
+            if several:
+                raise SceneError(f"segment_free checks one segment: {name} must be one configuration "
+                                 f"({self._nq},), got shape {np.shape(q)}; certify several segments with "
+                                 "certify_segments(QA, QB)")
         return bool(_segments().certify_segments(self, q_a, q_b, clearance, self_clearance).certified[0])
 
     def certify_segments(self, QA, QB, clearance: float = 0.0, self_clearance: float = 0.0, **options):
