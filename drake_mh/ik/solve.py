@@ -63,8 +63,8 @@ def _check_limits(budget, timeout):
         except OverflowError:  # an int beyond a double
             whole = False
         if not whole or not 1 <= budget <= MAX_BUDGET:
-            raise InvalidArgument(f"budget must be an integer in [1, {MAX_BUDGET:.0e}] (evaluations, or solver starts "
-                                  f"for Drake's solvers) or None; got {str(budget)[:40]}")
+            raise InvalidArgument(f"budget must be an integer >= 1 and <= {MAX_BUDGET:.0e} (evaluations, or solver "
+                                  f"starts for Drake's solvers) or None; got {str(budget)[:40]}")
         budget = int(budget)
     if timeout is not None:
         try:
@@ -72,7 +72,8 @@ def _check_limits(budget, timeout):
         except (TypeError, ValueError, OverflowError):
             seconds = float("nan")
         if isinstance(timeout, bool) or not 0 < seconds < np.inf:
-            raise InvalidArgument(f"timeout must be a finite number of seconds > 0 or None; got {str(timeout)[:40]}")
+            raise InvalidArgument(f"timeout must be a positive, finite number of seconds or None; "
+                                  f"got {str(timeout)[:40]}")
         timeout = seconds
     return budget, timeout
 
