@@ -7,8 +7,10 @@ Example::
     drake-mh app --max-seconds 60 --status-file app.json    # headless / scripted use
     drake-mh app --robot panda --goal 0.5 0.3 0.4 --plan pose --plan-method rrt_connect
 
-Prints the Meshcat URL (localhost only) and runs until Ctrl-C or ``--max-seconds``. Exit code
-0 on a normal end, 2 for bad input (unknown robot or method: one line naming the choices).
+Prints the URL of the app's page (``open http://localhost:PORT in a browser``: its controls
+beside Meshcat's 3-D view; localhost only) and runs until Ctrl-C or ``--max-seconds``. Exit code
+0 on a normal end, 2 for bad input (unknown robot or method, a negative seed: one line naming
+what is valid).
 """
 
 from __future__ import annotations
@@ -32,7 +34,9 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
         "cycle them), edit start / via / end points and the number of points (sliders), show the "
         "environment, generate solutions, test run, run / stop, and move the obstacle with its X / Y / Z "
         "sliders while the arm runs: colliding solutions are regenerated (§3.4.1) and the path re-planned "
-        "where the obstacle cuts it (§3.4.2). The server listens on localhost only.",
+        "where the obstacle cuts it (§3.4.2). It prints the URL to open: 'open http://localhost:PORT in a "
+        "browser' (the app's page: its controls beside Meshcat's 3-D view). Both servers, the page's and "
+        "Meshcat's, listen on localhost only.",
     )
     p.add_argument("--robot", action="append", default=None, metavar="NAME",
                    help="robot(s) (bundled names or model files) the 'Next robot' button cycles through; "
@@ -51,13 +55,15 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
                    help="obstacle position [m] (default 0.2 0.2 0.6, the paper's)")
     p.add_argument("--obstacle-radius", type=float, default=0.2, help="sphere radius [m] (default 0.2)")
     p.add_argument("--no-obstacle", action="store_true", help="no obstacle")
-    p.add_argument("--seed", type=int, default=0, help="seed of generation and regeneration (default 0)")
-    p.add_argument("--budget", type=int, default=None, help="per IK solve (default: the method's)")
+    p.add_argument("--seed", type=int, default=0, help="seed of generation and regeneration, an integer >= 0 "
+                                                        "(default 0)")
+    p.add_argument("--budget", type=int, default=None, help="per IK solve, >= 1 (default: the method's)")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate of the loop [Hz] (default 30)")
     p.add_argument("--speed", type=float, default=1.0, help="playback speed (default 1: the path's timing)")
     p.add_argument("--port", type=int, default=None,
-                   help="Meshcat port (default: first free from 7000; 0: any); the app's page takes the next "
-                        "free port")
+                   help="Meshcat's port (default: the first free one from 7000; 0: any free one); the app's "
+                        "page, whose URL the app prints, takes the first free port after Meshcat's (0: any free "
+                        "one)")
     p.add_argument("--generate", action="store_true", help="generate solutions at start")
     p.add_argument("--run", action="store_true", help="start running at once (implies --generate)")
     p.add_argument("--max-seconds", type=float, default=None, metavar="S",

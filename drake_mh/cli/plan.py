@@ -157,11 +157,11 @@ def _print(problem, result, as_json: bool) -> None:
         data.update(robot=robot.name, joint_names=list(robot.joint_names), q_start=problem.q_start.tolist(),
                     path=None if result.path is None else np.asarray(result.path).tolist(),
                     goal_time=result.goal_time, seed=result.seed, obstacles=list(problem.scene.obstacles),
-                    caption=motion_caption(result))
+                    caption=motion_caption(result, problem.scene))
         print(json.dumps(data))
         return
     state = "verified" if result.success else "FAILED"
-    print(f"{state}: {motion_caption(result)} ({robot.name}, {len(problem.scene.obstacles)} obstacles)")
+    print(f"{state}: {motion_caption(result, problem.scene)} ({robot.name}, {len(problem.scene.obstacles)} obstacles)")
     if result.success:
         jerk = ("jerk not limited (toppra's acceleration steps; --retime ruckig limits it)"
                 if result.jerk_limited is False else f"max jerk {result.max_jerk:.3g} rad/s^3")

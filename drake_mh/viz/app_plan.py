@@ -289,7 +289,7 @@ class AppPlanner:
             handle(name)
 
     def _finish(self, result) -> None:
-        from drake_mh.viz.motion import motion_caption
+        from drake_mh.viz.motion import clearance_words, motion_caption
 
         self.result = result
         timed_out = result.planning_time >= 0.98 * self.timeout
@@ -307,15 +307,15 @@ class AppPlanner:
                 why = f"the path found is not certified ({result.message})"
             self.result = None
             return self._failed(f"{result.method}: {why}")
-        self.last["caption"] = motion_caption(result)
+        self.last["caption"] = motion_caption(result, self.app.scene)
         Q = result.trajectory.position(np.linspace(result.trajectory.start_time, result.trajectory.end_time, 60))
         self.app.view.add_ee_path(Q, "planned", colour=PLAN_PATH_COLOUR)
         self.t = 0.0
         self.app.mode = "plan"
         ik = f" (goal IK {self.goal_time:.2f} s)" if self.kind == "pose" else ""
         self.app.message = (f"moving to the goal {self.kind}: planned with {result.method} in "
-                            f"{result.planning_time * 1e3:.1f} ms{ik}, certified clearance >= "
-                            f"{result.min_clearance * 1e3:.1f} mm, {result.duration:.2f} s motion")
+                            f"{result.planning_time * 1e3:.1f} ms{ik}, {clearance_words(result, self.app.scene)}, "
+                            f"{result.duration:.2f} s motion")
 
     def _failed(self, message: str) -> None:
         """Planning gave no certified motion: the robot stays where it is."""
