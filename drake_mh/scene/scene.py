@@ -56,13 +56,13 @@ def _penetration():
 
 
 def _vector3(value, what: str) -> np.ndarray:
-    if isinstance(value, (str, bytes)) or np.iscomplexobj(value):
-        raise SceneError(f"{what} must be 3 finite numbers, got {value!r}")
-    try:
-        arr = np.asarray(value, dtype=float).reshape(-1)
+    """``value`` as a new ``(3,)`` float array (a copy: an obstacle keeps it, the caller's array may change)."""
+    try:  # numpy raises ValueError on ragged nested lists, in iscomplexobj too
+        arr = None if isinstance(value, (str, bytes)) or np.iscomplexobj(value) \
+            else np.array(value, dtype=float).reshape(-1)
     except (TypeError, ValueError):
-        raise SceneError(f"{what} must be 3 finite numbers, got {value!r}") from None
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        arr = None
+    if arr is None or arr.shape != (3,) or not np.all(np.isfinite(arr)):
         raise SceneError(f"{what} must be 3 finite numbers, got {value!r}")
     return arr
 
