@@ -211,6 +211,14 @@ def make_rng(seed: Any, what: str = "seed") -> np.random.Generator:
                               f"got {seed!r} ({exc})") from None
 
 
+def check_seed(seed: Any, what: str = "seed") -> int:
+    """``seed`` as an ``int >= 0`` (numpy's integers included), or :class:`InvalidArgument` naming
+    ``what``: a float (``1.5`` would be truncated), text, a bool or a negative number."""
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise InvalidArgument(f"{what} must be an integer >= 0, got {seed!r}")
+    return int(seed)
+
+
 def check_budget(budget: Any) -> int:
     """Returns ``budget`` as an ``int >= 1`` or raises :class:`InvalidArgument`."""
     try:

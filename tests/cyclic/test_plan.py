@@ -106,3 +106,9 @@ def test_a_component_keeps_copies_of_its_lengths_and_limits():
         with pytest.raises(InvalidArgument, match=next(iter(bad))):
             ThreeLinkProblem(arguments["lengths"], base, target, arguments["lower"], arguments["upper"],
                              n_samples=arguments["n_samples"])
+
+
+def test_a_bad_seed_is_named_before_any_work(planar5):
+    for seed in ("abc", -1, 1.5):  # 1.5 was truncated to 1, the others numpy's errors
+        with pytest.raises(InvalidArgument, match="seed must be an integer >= 0"):
+            plan(circle_task(planar5), "woa", budget=40, seed=seed)
