@@ -79,7 +79,8 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
     g.add_argument("--plan-method", default=None, metavar="NAME",
                    help="motion planner of the Plan buttons (default rrt_connect_smooth; any of "
                         "drake_mh.planning.available_motion_methods(); 'Next planner' cycles them)")
-    g.add_argument("--plan-timeout", type=float, default=5.0, metavar="S", help="planning limit [s] (default 5)")
+    g.add_argument("--plan-timeout", type=float, default=5.0, metavar="S",
+                   help="limit of each search [s]: the goal IK and the planning (default 5)")
     g.add_argument("--goal", nargs=3, type=float, default=None, metavar=("X", "Y", "Z"),
                    help="goal point of the end effector [m] (default: via point 1)")
     g.add_argument("--goal-q", nargs="+", type=float, default=None, metavar="Q",

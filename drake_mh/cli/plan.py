@@ -65,7 +65,8 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
     p.add_argument("--clearance", type=float, default=0.0, help="required distance to obstacles [m] (default 0)")
     p.add_argument("--method", default=None, help="planner (default rrt_connect_smooth)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--timeout", type=float, default=10.0, help="planning limit [s] (default 10)")
+    p.add_argument("--timeout", type=float, default=10.0,
+                   help="limit of the search [s]: a pose goal's IK and the planning together (default 10)")
     p.add_argument("--retime", choices=("auto", "toppra", "ruckig"), default="auto",
                    help="time law: auto (toppra, else ruckig), toppra (fastest; jerk not limited), ruckig "
                         "(jerk-limited, on the straight segments, at rest at each waypoint)")
