@@ -232,15 +232,16 @@ class AppPlanner:
 
         try:
             started = time.perf_counter()
+            deadline = started + timeout  # one limit for the goal IK and the planning
             try:
-                goal_configurations(problem, count=1, timeout=max(0.3, timeout / 3))  # 3 IK seeds at most
+                goal_configurations(problem, count=1, timeout=max(0.3, timeout / 3), deadline=deadline)
             except InvalidMotionProblem as exc:
                 self._answer = ("no goal", str(exc))
                 return
             finally:
                 self.goal_time = time.perf_counter() - started
             self._answer = ("result", solve_motion(problem, method, seed=self.attempts,
-                                                   timeout=timeout))
+                                                   timeout=max(deadline - time.perf_counter(), 1e-3)))
         except Exception as exc:  # noqa: BLE001 - reported in the status; the app goes on
             self._answer = ("error", f"{type(exc).__name__}: {exc}")
 
@@ -292,7 +293,7 @@ class AppPlanner:
         from drake_mh.viz.motion import clearance_words, motion_caption
 
         self.result = result
-        timed_out = result.planning_time >= 0.98 * self.timeout
+        timed_out = self.goal_time + result.planning_time >= 0.98 * self.timeout
         self.last = {"attempt": self.attempts, "success": bool(result.success), "method": result.method,
                      "goal": self.kind,
                      "planning_time": result.planning_time, "goal_time": self.goal_time,
