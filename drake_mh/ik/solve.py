@@ -68,8 +68,8 @@ def _check_limits(budget, timeout):
         budget = int(budget)
     if timeout is not None:
         try:
-            seconds = float(timeout)
-        except (TypeError, ValueError, OverflowError):
+            seconds = float(timeout) if isinstance(timeout, numbers.Real) else float("nan")  # "1" is not a number
+        except OverflowError:  # an int beyond a double
             seconds = float("nan")
         if isinstance(timeout, bool) or not 0 < seconds < np.inf:
             raise InvalidArgument(f"timeout must be a positive, finite number of seconds or None; "

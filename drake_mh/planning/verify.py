@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_mh.planning.problem import POSE_ORIENTATION_TOLERANCE, POSE_POSITION_TOLERANCE
+from drake_mh.planning.problem import POSE_ORIENTATION_TOLERANCE, POSE_POSITION_TOLERANCE, MotionProblem
 from drake_mh.planning.result import MotionResult
 
 REPORT_TOLERANCE = 1e-3
@@ -120,7 +120,6 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
     import time
 
     from drake_mh.errors import InvalidArgument
-    from drake_mh.planning.problem import MotionProblem
 
     check_retime(retime)
     if not isinstance(problem, MotionProblem):
