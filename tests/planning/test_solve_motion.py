@@ -8,19 +8,11 @@ import time
 import numpy as np
 import pytest
 
-import drake_mh
 from drake_mh.errors import InvalidArgument, InvalidMotionProblem
 from drake_mh.planning import (MotionProblem, available_motion_methods, goal_configurations, solve_motion,
                                verify_motion)
 from drake_mh.scene import Box, Scene, Sphere
-
-PANDA = drake_mh.load_robot("panda")
-
-
-def ball_scene():
-    scene = Scene(PANDA)
-    scene.add("ball", Sphere(0.1), [0.5, 0.0, 0.5])
-    return scene
+from test_core import PANDA, ball_scene
 
 
 def goal_q():
