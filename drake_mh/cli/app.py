@@ -8,8 +8,10 @@ Example::
     drake-mh app --robot panda --goal 0.5 0.3 0.4 --plan pose --plan-method rrt_connect
     drake-mh app --robot panda --scene cell.sdf --no-obstacle   # a cell from a file
 
-Prints the Meshcat URL (localhost only) and runs until Ctrl-C or ``--max-seconds``. Exit code
-0 on a normal end, 2 for bad input (unknown robot or method: one line naming the choices).
+Prints the URL of the app's page (``open http://localhost:PORT in a browser``: its controls
+beside Meshcat's 3-D view; localhost only) and runs until Ctrl-C or ``--max-seconds``. Exit code
+0 on a normal end, 2 for bad input (unknown robot or method, a negative seed: one line naming
+what is valid).
 """
 
 from __future__ import annotations
@@ -33,7 +35,9 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
         "cycle them), edit start / via / end points and the number of points (sliders), show the "
         "environment, generate solutions, test run, run / stop, and move the obstacle with its X / Y / Z "
         "sliders while the arm runs: colliding solutions are regenerated (§3.4.1) and the path re-planned "
-        "where the obstacle cuts it (§3.4.2). The server listens on localhost only.",
+        "where the obstacle cuts it (§3.4.2). It prints the URL to open: 'open http://localhost:PORT in a "
+        "browser' (the app's page: its controls beside Meshcat's 3-D view). Both servers, the page's and "
+        "Meshcat's, listen on localhost only.",
     )
     p.add_argument("--robot", action="append", default=None, metavar="NAME",
                    help="robot(s) (bundled names or model files) the 'Next robot' button cycles through; "
@@ -56,13 +60,15 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
                    help="fixed obstacles from a scene file beside the movable one: drake_mh scene YAML, SDFormat, "
                         "URDF, model directives, MoveIt .scene or planning-scene YAML, cuRobo world YAML "
                         "(docs/scene_files.md)")
-    p.add_argument("--seed", type=int, default=0, help="seed of generation and regeneration (default 0)")
-    p.add_argument("--budget", type=int, default=None, help="per IK solve (default: the method's)")
+    p.add_argument("--seed", type=int, default=0, help="seed of generation and regeneration, an integer >= 0 "
+                                                        "(default 0)")
+    p.add_argument("--budget", type=int, default=None, help="per IK solve, >= 1 (default: the method's)")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate of the loop [Hz] (default 30)")
     p.add_argument("--speed", type=float, default=1.0, help="playback speed (default 1: the path's timing)")
     p.add_argument("--port", type=int, default=None,
-                   help="Meshcat port (default: first free from 7000; 0: any); the app's page takes the next "
-                        "free port")
+                   help="Meshcat's port (default: the first free one from 7000; 0: any free one); the app's "
+                        "page, whose URL the app prints, takes the first free port after Meshcat's (0: any free "
+                        "one)")
     p.add_argument("--generate", action="store_true", help="generate solutions at start")
     p.add_argument("--run", action="store_true", help="start running at once (implies --generate)")
     p.add_argument("--max-seconds", type=float, default=None, metavar="S",
@@ -78,7 +84,8 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
     g.add_argument("--plan-method", default=None, metavar="NAME",
                    help="motion planner of the Plan buttons (default rrt_connect_smooth; any of "
                         "drake_mh.planning.available_motion_methods(); 'Next planner' cycles them)")
-    g.add_argument("--plan-timeout", type=float, default=5.0, metavar="S", help="planning limit [s] (default 5)")
+    g.add_argument("--plan-timeout", type=float, default=5.0, metavar="S",
+                   help="limit of each search [s]: the goal IK and the planning (default 5)")
     g.add_argument("--goal", nargs=3, type=float, default=None, metavar=("X", "Y", "Z"),
                    help="goal point of the end effector [m] (default: via point 1)")
     g.add_argument("--goal-q", nargs="+", type=float, default=None, metavar="Q",

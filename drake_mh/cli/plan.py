@@ -77,7 +77,8 @@ def register(subparsers, common: argparse.ArgumentParser) -> None:
     p.add_argument("--clearance", type=float, default=0.0, help="required distance to obstacles [m] (default 0)")
     p.add_argument("--method", default=None, help="planner (default rrt_connect_smooth)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--timeout", type=float, default=10.0, help="planning limit [s] (default 10)")
+    p.add_argument("--timeout", type=float, default=10.0,
+                   help="limit of the search [s]: a pose goal's IK and the planning together (default 10)")
     p.add_argument("--retime", choices=("auto", "toppra", "ruckig"), default="auto",
                    help="time law: auto (toppra, else ruckig), toppra (fastest; jerk not limited), ruckig "
                         "(jerk-limited, on the straight segments, at rest at each waypoint)")
@@ -200,12 +201,13 @@ def _print(problem, result, as_json: bool, out=None) -> None:
         data.update(robot=robot.name, joint_names=list(robot.joint_names), q_start=problem.q_start.tolist(),
                     path=None if result.path is None else np.asarray(result.path).tolist(),
                     goal_time=result.goal_time, seed=result.seed, obstacles=list(problem.scene.obstacles),
-                    caption=motion_caption(result), limits=None if result.limits is None else result.limits.as_dict(),
+                    caption=motion_caption(result, problem.scene),
+                    limits=None if result.limits is None else result.limits.as_dict(),
                     trajectory_file=None if out is None else str(out))
         print(json.dumps(data))
         return
     state = "verified" if result.success else "FAILED"
-    print(f"{state}: {motion_caption(result)} ({robot.name}, {len(problem.scene.obstacles)} obstacles)")
+    print(f"{state}: {motion_caption(result, problem.scene)} ({robot.name}, {len(problem.scene.obstacles)} obstacles)")
     if result.success:
         jerk = ("jerk not limited (toppra's acceleration steps; --retime ruckig limits it)"
                 if result.jerk_limited is False else f"max jerk {result.max_jerk:.3g} rad/s^3")

@@ -32,7 +32,7 @@ from drake_mh.cyclic.problem import InfeasibleComponent, ThreeLinkProblem
 from drake_mh.cyclic.task import CyclicTask, ThreeLinkComponent, TwoLinkComponent
 from drake_mh.cyclic.three_link import three_link_ik
 from drake_mh.errors import InvalidArgument, NoFiniteValue
-from drake_mh.optim.base import summarize_array
+from drake_mh.optim.base import check_seed, summarize_array
 
 logger = logging.getLogger(__name__)
 
@@ -208,7 +208,7 @@ class CyclicPlan:
 def _child_seed(seed, i: int):
     if seed is None:
         return None
-    return int(np.random.SeedSequence([int(seed), i]).generate_state(1)[0])
+    return int(np.random.SeedSequence([check_seed(seed), i]).generate_state(1)[0])
 
 
 def _finish(task, index, problem, k, intervals, search, result, converged_n) -> ComponentResult:
@@ -269,6 +269,8 @@ def plan(task: CyclicTask, method: str = "woa", budget: int = 2000, seed=0, pop_
     """
     from drake_mh.optim import minimize
 
+    if seed is not None:
+        check_seed(seed)  # before any work (1.5 was truncated, "abc" was numpy's error)
     ks: list[float] = []
     results = []
     for j, i in enumerate(task.three_link_indices()):

@@ -21,6 +21,7 @@ trajectory violates ±π limits and is infeasible here.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -87,6 +88,15 @@ class Boundary:
     k_intervals: list
 
 
+def _copy3(value) -> np.ndarray:
+    """A new float array of ``value``'s numbers (shape ``(0,)`` where it holds none: the callers'
+    shape checks then name it)."""
+    try:
+        return np.zeros(0) if np.iscomplexobj(value) else np.array(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):  # text, ragged nested lists
+        return np.zeros(0)
+
+
 class ThreeLinkProblem:
     """Constant-k planning of one 3-link component (eqs. (1), (7)-(12), (17)-(21)).
 
@@ -107,9 +117,7 @@ class ThreeLinkProblem:
     def __init__(self, lengths, base: Callable, target: Callable, lower, upper,
                  obstacles: Sequence[CircleObstacle] = (), root: int = 1, n_samples: int = 1000,
                  link_radius: float = 0.0, name: str = "component"):
-        self.lengths = np.asarray(lengths, dtype=float).reshape(-1)
-        self.lower = np.asarray(lower, dtype=float).reshape(-1)
-        self.upper = np.asarray(upper, dtype=float).reshape(-1)
+        self.lengths, self.lower, self.upper = (_copy3(v) for v in (lengths, lower, upper))  # copies
         if self.lengths.shape != (3,) or np.any(self.lengths <= 0):
             raise InvalidArgument(f"{name}: lengths must be 3 positive link lengths [m], got {lengths!r}")
         if (self.lower.shape != (3,) or self.upper.shape != (3,) or np.any(self.lower > self.upper)
@@ -118,8 +126,8 @@ class ThreeLinkProblem:
                                   f"got {lower!r}, {upper!r}")
         if root not in (1, -1):
             raise InvalidArgument(f"{name}: root must be +1 or -1 (the sign of eq. (8b)), got {root!r}")
-        if int(n_samples) < 8:
-            raise InvalidArgument(f"{name}: n_samples must be >= 8, got {n_samples!r}")
+        if isinstance(n_samples, bool) or not isinstance(n_samples, numbers.Integral) or n_samples < 8:
+            raise InvalidArgument(f"{name}: n_samples must be an integer >= 8, got {n_samples!r}")
         self.base = base
         self.target = target
         self.obstacles = tuple(obstacles)

@@ -220,12 +220,12 @@ class IKProblem:
         if not isinstance(self.robot, Robot):
             raise InvalidIKProblem(f"robot must be a drake_mh Robot (drake_mh.load_robot(...)), got "
                                    f"{type(self.robot).__name__}")
-        if self.target is None or np.iscomplexobj(self.target):
-            raise InvalidIKProblem(f"target must be a real position (3,) [m] or a pose (4, 4), got {self.target!r}")
-        try:
-            target = np.asarray(self.target, dtype=float)
+        try:  # numpy raises ValueError on ragged nested lists, in iscomplexobj too
+            target = None if self.target is None or np.iscomplexobj(self.target) else np.asarray(self.target, float)
         except (TypeError, ValueError):
             raise InvalidIKProblem(f"target must be a position (3,) or a pose (4, 4), got {self.target!r}") from None
+        if target is None:
+            raise InvalidIKProblem(f"target must be a real position (3,) [m] or a pose (4, 4), got {self.target!r}")
         if not np.isfinite(target).all():
             raise InvalidIKProblem("target contains NaN or inf")
         if target.shape == (4, 4):
@@ -243,8 +243,11 @@ class IKProblem:
             p_WT = target.reshape(-1).copy()
             R_WT = None
             if self.rpy is not None:
-                rpy = np.asarray(self.rpy, dtype=float).reshape(-1)
-                if rpy.shape != (3,) or not np.all(np.isfinite(rpy)):
+                try:
+                    rpy = None if np.iscomplexobj(self.rpy) else np.asarray(self.rpy, dtype=float).reshape(-1)
+                except (TypeError, ValueError):
+                    rpy = None
+                if rpy is None or rpy.shape != (3,) or not np.all(np.isfinite(rpy)):
                     raise InvalidIKProblem(f"rpy must be 3 finite angles [rad] (roll, pitch, yaw), got {self.rpy!r}")
                 R_WT = _rotation_from_rpy(rpy)
         else:
@@ -269,7 +272,7 @@ class IKProblem:
                 raise InvalidIKProblem("the scene belongs to another Robot object; build it with Scene(robot) "
                                        "for the robot of this problem")
         if self.q_ref is not None:
-            set_("q_ref", self.robot.check_q(self.q_ref, "q_ref"))
+            set_("q_ref", self.robot.check_q(self.q_ref, "q_ref").copy())  # not a view of the caller's array
         if self.frame is not None:
             self.robot._frame(self.frame)  # raises FrameNotFound listing the frames
 

@@ -125,19 +125,29 @@ def available_ik_methods() -> list[str]:
     return METHODS.names()
 
 
+MAX_BUDGET = 10**12
+"""Largest ``budget`` (kernels count it in 64-bit integers)."""
+
+
 def _check_limits(budget, timeout):
     if budget is not None:
-        if isinstance(budget, bool) or not isinstance(budget, numbers.Real) or not float(budget).is_integer() or budget < 1:
-            raise InvalidArgument(f"budget must be an integer >= 1 (evaluations, or solver starts for "
-                                  f"Drake's solvers) or None; got {budget!r}")
+        try:
+            whole = not isinstance(budget, bool) and isinstance(budget, numbers.Real) and float(budget).is_integer()
+        except OverflowError:  # an int beyond a double
+            whole = False
+        if not whole or not 1 <= budget <= MAX_BUDGET:
+            raise InvalidArgument(f"budget must be an integer >= 1 and <= {MAX_BUDGET:.0e} (evaluations, or solver "
+                                  f"starts for Drake's solvers) or None; got {str(budget)[:40]}")
         budget = int(budget)
     if timeout is not None:
         try:
-            timeout = float(timeout)
-        except (TypeError, ValueError):
-            raise InvalidArgument(f"timeout must be a positive number of seconds or None; got {timeout!r}") from None
-        if not np.isfinite(timeout) or timeout <= 0:
-            raise InvalidArgument(f"timeout must be a positive number of seconds or None; got {timeout!r}")
+            seconds = float(timeout) if isinstance(timeout, numbers.Real) else float("nan")  # "1" is not a number
+        except OverflowError:  # an int beyond a double
+            seconds = float("nan")
+        if isinstance(timeout, bool) or not 0 < seconds < np.inf:
+            raise InvalidArgument(f"timeout must be a positive, finite number of seconds or None; "
+                                  f"got {str(timeout)[:40]}")
+        timeout = seconds
     return budget, timeout
 
 
@@ -162,7 +172,8 @@ def solve_ik(problem: IKProblem, method: str = "hybrid", seed=0, budget: int | N
             success or budget rather than by the timeout).
         budget: function evaluations for the optimizers (default 20,000), configurations
             evaluated for ``hybrid``/``pinv``/``dls`` (default 200,000 when there is no
-            timeout), solver starts for ``drake_*`` (default 20 when there is no timeout).
+            timeout), solver starts for ``drake_*`` (default 20 when there is no timeout); at
+            most :data:`MAX_BUDGET`.
         timeout: [s] wall-clock limit (``None``: none); the solve stops at whichever of budget
             and timeout comes first. It measures solving only: loading what the method needs
             (:func:`prepare`: compiled kernels, Drake's program; once per process, or a few

@@ -77,7 +77,8 @@ def minimize(f: Callable[[np.ndarray], Any], bounds: Any, method: str = "pso", b
     """Minimizes a vectorized objective over a box with an exact evaluation budget.
 
     Args:
-        f: objective, ``f(X (P, D)) -> (P,)``; NaN counts as +inf.
+        f: objective, ``f(X (P, D)) -> (P,)`` real values; NaN counts as +inf; -inf is the
+            minimum there is: the run ends at the first point that scores it (``x``, ``f = -inf``).
         bounds: ``(D, 2)`` array of ``[lower, upper]`` rows, or a tuple ``(lower, upper)``.
         method: one of :func:`available_methods`.
         budget: function evaluations; never exceeded, and all used unless ``target`` or
@@ -97,13 +98,14 @@ def minimize(f: Callable[[np.ndarray], Any], bounds: Any, method: str = "pso", b
     Raises:
         UnknownMethod: unknown ``method``.
         InvalidArgument: bad bounds, budget, pop_size, x0, target or hyper-parameters.
-        InvalidObjective: ``f`` does not return shape ``(P,)``, or modifies ``X`` in place.
+        InvalidObjective: ``f`` does not return real values of shape ``(P,)``, or modifies ``X``
+            in place.
         NoFiniteValue: ``f`` returned NaN or +inf at every evaluated point (no best point).
     """
     cls = get_method(method)
     opt = cls(bounds, budget=budget, seed=seed, pop_size=pop_size, x0=x0, **params)
     result = run(opt, f, target=target, callback=callback)
-    if not np.isfinite(result.f):
+    if not result.f < np.inf:  # -inf is a minimum
         raise NoFiniteValue(
             f"{method}: the objective returned NaN or +inf at all {result.nfe} evaluated points, so "
             "there is no best point; return finite values (e.g. a large penalty instead of inf or "

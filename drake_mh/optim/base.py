@@ -16,7 +16,9 @@ so an ask/tell run with the same seed is bit-identical to a ``minimize`` run.
 
 Conventions shared by all algorithms (each docstring states the rest):
 
-* ``NaN`` objective values are treated as ``+inf`` (worst), never as best.
+* ``NaN`` objective values are treated as ``+inf`` (worst), never as best. ``-inf`` is the
+  minimum there is: the tell that reports it makes it the best point and ends the run (the
+  algorithm's own state never sees it, so its arithmetic stays finite).
 * ``t/T`` in the papers' schedules is the used fraction of the budget ``nfe / budget``
   (:meth:`Optimizer.progress`); for a fixed population this equals iteration / max_iter.
 * A *partial* tell (fewer rows than were asked: the truncated last generation) updates
@@ -209,11 +211,23 @@ def make_rng(seed: Any, what: str = "seed") -> np.random.Generator:
                               f"got {seed!r} ({exc})") from None
 
 
+def check_seed(seed: Any, what: str = "seed") -> int:
+    """``seed`` as an ``int >= 0`` (numpy's integers included), or :class:`InvalidArgument` naming
+    ``what``: a float (``1.5`` would be truncated), text, a bool or a negative number."""
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise InvalidArgument(f"{what} must be an integer >= 0, got {seed!r}")
+    return int(seed)
+
+
 def check_budget(budget: Any) -> int:
     """Returns ``budget`` as an ``int >= 1`` or raises :class:`InvalidArgument`."""
-    if isinstance(budget, bool) or not isinstance(budget, numbers.Real) or not float(budget).is_integer():
+    try:
+        whole = not isinstance(budget, bool) and isinstance(budget, numbers.Real) and float(budget).is_integer()
+    except OverflowError:  # an int beyond a double
+        whole = False
+    if not whole:
         raise InvalidArgument(
-            f"budget is a number of function evaluations and must be an integer >= 1; got {budget!r}"
+            f"budget is a number of function evaluations and must be an integer >= 1; got {str(budget)[:40]}"
         )
     if budget < 1:
         raise InvalidArgument(f"budget must be >= 1 function evaluation; got {budget}")
@@ -247,7 +261,7 @@ def evaluate(f: Callable[[np.ndarray], Any], X: np.ndarray) -> np.ndarray:
     """Calls the vectorized objective and checks that it returned ``(P,)`` numbers.
 
     Raises:
-        InvalidObjective: the objective returned a wrong shape or a non-numeric value.
+        InvalidObjective: the objective returned a wrong shape, a non-numeric or a complex value.
     """
     X_view = X.view()
     X_view.flags.writeable = False  # an objective must not change the candidates it scores
@@ -261,11 +275,16 @@ def evaluate(f: Callable[[np.ndarray], Any], X: np.ndarray) -> np.ndarray:
             "returned x is the point that scored f); work on a copy, e.g. X = X.copy()"
         ) from exc
     try:
-        F = np.asarray(F, dtype=float)
+        complex_ = np.iscomplexobj(F)
+        F = F if complex_ else np.asarray(F, dtype=float)
     except (TypeError, ValueError) as exc:
         raise InvalidObjective(
             f"the objective must return a float array of shape ({len(X)},); conversion failed: {exc}"
         ) from None
+    if complex_:  # numpy would keep the real part with only a warning
+        raise InvalidObjective(
+            "the objective returned complex values; it must return real numbers (take np.real or "
+            "np.abs of them if that is what you minimize)")
     if F.shape != (len(X),):
         if F.size == len(X) and F.ndim == 2:
             F = F.reshape(-1)
@@ -362,8 +381,8 @@ class Optimizer(abc.ABC):
 
     @property
     def done(self) -> bool:
-        """``True`` when the budget is used up or the last tell was partial."""
-        return self.nfe >= self.budget or self._truncated
+        """``True`` when the budget is used up, the last tell was partial, or a value was -inf."""
+        return self.nfe >= self.budget or self._truncated or self.best_f == -np.inf
 
     def progress(self) -> float:
         """Used fraction of the budget, ``t/T`` of the papers' schedules, in ``[0, 1]``."""
@@ -380,7 +399,8 @@ class Optimizer(abc.ABC):
         if self.done:
             raise AskTellError(
                 f"the run is over (nfe = {self.nfe} of budget {self.budget}"
-                f"{', last tell was partial' if self._truncated else ''}); read result()"
+                f"{', last tell was partial' if self._truncated else ''}"
+                f"{', a value was -inf' if self.best_f == -np.inf else ''}); read result()"
             )
         X = self._ask()
         self._pending = X
@@ -397,6 +417,8 @@ class Optimizer(abc.ABC):
         pending = self._pending
         if pending is None:
             raise AskTellError("tell() without a pending ask(): call ask() first")
+        if np.iscomplexobj(F):
+            raise InvalidObjective("tell() got complex values; objective values must be real numbers")
         F = np.asarray(F, dtype=float).reshape(-1)
         k = F.shape[0]
         if k > len(pending) or np.shape(X) != (k, self.dim):
@@ -427,6 +449,8 @@ class Optimizer(abc.ABC):
         self._history.append((self.nfe, self.best_f))
         if k < len(pending):
             self._truncated = True
+            return
+        if self.best_f == -np.inf:  # the minimum there is: the run is over (done)
             return
         self._tell(pending, F)
         self.nit += 1
@@ -535,6 +559,9 @@ def run(opt: Optimizer, f: Callable[[np.ndarray], Any], target: float | None = N
         opt.tell(X, F)
         if target is not None and opt.best_f <= target:
             message = "target reached"
+            break
+        if opt.best_f == -np.inf:
+            message = "the objective returned -inf: the minimum there is"
             break
         if callback is not None:
             state = OptimizerState(opt.nfe, opt.nit, opt.best_x.copy(), opt.best_f, X, F)

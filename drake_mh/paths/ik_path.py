@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
+from drake_mh.optim.base import check_seed
 from drake_mh.paths.continuity import DEFAULT_SEARCH_RADII, solve_near
 
 __all__ = ["JointPath", "ik_along_path", "joint_steps", "certify_motion"]
@@ -134,7 +135,7 @@ def ik_along_path(robot, points, method: str = "hybrid", seed: int = 0, *, q_sta
     if not radii or not all(r is None or (isinstance(r, (int, float)) and np.isfinite(r) and r > 0) for r in radii):
         raise InvalidArgument(f"search_radii must be a non-empty tuple of positive radii [rad] or None "
                               f"(whole joint range), got {search_radii!r}")
-    seeds = np.random.SeedSequence(seed).spawn(len(P))
+    seeds = np.random.SeedSequence(check_seed(seed)).spawn(len(P))
     Q = np.zeros((len(P), robot.nq))
     ok = np.zeros(len(P), dtype=bool)
     err = np.zeros(len(P))

@@ -23,6 +23,18 @@ POSE_ORIENTATION_TOLERANCE = 1e-2
 """[rad] reaching a goal pose: as :class:`drake_mh.ik.IKProblem`'s default."""
 
 
+def _numbers(value, what: str) -> np.ndarray:
+    """``value`` as a real float array (complex values refused, not truncated to their real part)."""
+    try:
+        complex_ = np.iscomplexobj(value)
+        array = None if complex_ else np.asarray(value, dtype=float)
+    except (TypeError, ValueError):  # text, None, ragged nested lists
+        raise InvalidMotionProblem(f"{what} must be an array of numbers, got {str(value)[:80]!r}") from None
+    if complex_:
+        raise InvalidMotionProblem(f"{what} must be real numbers, got complex values")
+    return array
+
+
 @dataclass(frozen=True, eq=False)
 class MotionProblem:
     """A point-to-point motion among the obstacles of a scene.
@@ -39,10 +51,15 @@ class MotionProblem:
         frame: end-effector frame for a pose goal (default ``robot.ee_frame_name``).
         name: label for reports.
 
+    The arrays are copied: changing the caller's arrays afterwards changes nothing here. A
+    start that already reaches the goal is a valid problem: :func:`~drake_mh.planning.solve_motion`
+    answers it with the one-waypoint path and a stationary trajectory of zero duration. The scene
+    is the caller's and may change; ``solve_motion`` checks start and goals against it as it is.
+
     Raises:
-        InvalidMotionProblem: any argument ill-formed, outside the limits, or a start / every
-            goal configuration in collision (measured with the sphere model: certified free is
-            what the planners need).
+        InvalidMotionProblem: any argument ill-formed (complex, ragged or text arrays
+            included), outside the limits, or a start / every goal configuration in collision
+            (measured with the sphere model: certified free is what the planners need).
     """
 
     robot: object
@@ -81,29 +98,32 @@ class MotionProblem:
                 f"q_start is in collision or closer than the clearance ({clearance} m to obstacles, {self_clearance} "
                 f"m between links) under the sphere model; exact distance {self.scene.min_distance(q_start[0]):.4f} m. "
                 "Move the start, lower the clearance, or move the obstacles")
-        goal = np.asarray(self.goal, dtype=float) if not isinstance(self.goal, (str, bytes)) else None
-        if goal is not None and goal.shape == (4, 4) and self.robot.nq != 4:
+        goal = _numbers(self.goal, "goal")
+        if goal.shape == (4, 4) and self.robot.nq != 4:
             if not np.all(np.isfinite(goal)) or not np.allclose(goal[3], [0, 0, 0, 1]):
                 raise InvalidMotionProblem("a goal pose must be a finite homogeneous transform X_WG (4, 4)")
             R = goal[:3, :3]
             if not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
                 raise InvalidMotionProblem("the goal pose's rotation X_WG[:3, :3] must be a rotation matrix")
             object.__setattr__(self, "goal_pose", goal.copy())
+            object.__setattr__(self, "goal", goal.copy())
             self.robot.batch._frame_anchor(self.frame)  # FrameNotFound for an unknown frame
             return
-        G = self._configurations(self.goal, "goal")
+        G = self._configurations(goal, "goal")
         free = self.scene.collision_free(G, clearance, self_clearance)
         if not np.any(free):
             raise InvalidMotionProblem(
                 f"every goal configuration ({len(G)}) is in collision or closer than the clearance under the sphere "
                 "model; move the goal or the obstacles, or lower the clearance")
+        object.__setattr__(self, "goal", G[0] if goal.ndim == 1 else G)
         object.__setattr__(self, "goal_configurations", G[free])
 
     def _configurations(self, value, what: str) -> np.ndarray:
+        """``value`` as a fresh ``(N, nq)`` array (a copy: the caller's array may change later)."""
         robot = self.robot
         try:
-            Q = np.atleast_2d(robot.check_Q(np.atleast_2d(np.asarray(value, dtype=float))))
-        except (DrakeMhError, TypeError, ValueError) as exc:
+            Q = np.array(robot.check_Q(np.atleast_2d(_numbers(value, what)), what), dtype=float, order="C")
+        except DrakeMhError as exc:
             raise InvalidMotionProblem(f"{what} must be configuration(s) of {robot.nq} joints [rad or m]: {exc}") from None
         outside = (Q < robot.lower - 1e-12) | (Q > robot.upper + 1e-12)
         if np.any(outside):
@@ -112,6 +132,19 @@ class MotionProblem:
                 f"{what}: joint {robot.joint_names[j]!r} = {Q[row, j]:.6g} is outside its limits "
                 f"[{robot.lower[j]:.6g}, {robot.upper[j]:.6g}]")
         return np.ascontiguousarray(Q)
+
+    def blocked_now(self, goals: np.ndarray | None = None) -> str:
+        """Why planning cannot start in the scene as it is now ("" when it can): the start, or
+        every row of ``goals``, no longer certified free (an obstacle added or moved since the
+        problem was built)."""
+        if not self.is_free(self.q_start):
+            return (f"q_start is now in collision or closer than the clearance ({self.clearance} m) under the sphere "
+                    "model: the scene changed after the problem was built; move the obstacle or the start")
+        if goals is not None and not np.any(self.is_free(goals)):
+            return (f"every goal configuration ({len(goals)}) is now in collision or closer than the clearance "
+                    f"({self.clearance} m) under the sphere model: the scene changed after the problem was built; "
+                    "move the obstacle or the goal")
+        return ""
 
     def is_free(self, Q) -> np.ndarray | bool:
         """Certified free under the sphere model with this problem's clearances."""

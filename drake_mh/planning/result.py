@@ -20,7 +20,8 @@ class MotionResult:
         method: the planner's name.
         success: verified (:mod:`drake_mh.planning.verify`): limits, start, goal, the whole
             motion certified collision-free, a certified trajectory. Never a solver's flag.
-        path: ``(M, nq)`` waypoints [rad], or ``None`` when the method found nothing.
+        path: ``(M, nq)`` waypoints [rad] (``M = 1`` when the start is the goal), or ``None``
+            when the method found nothing.
         message: why it failed, or a summary.
         planning_time: wall-clock seconds of planning (neither goal IK nor verification).
         cpu_time: CPU seconds of planning.
@@ -28,7 +29,9 @@ class MotionResult:
         min_clearance: certified lower bound of the obstacle clearance along the executed
             motion [m] (NaN when not certified).
         path_length: ``Σ ||q_{i+1} - q_i||`` [rad].
-        trajectory: the retimed :class:`drake_mh.trajectories.Trajectory` (``None`` if none).
+        trajectory: the retimed :class:`drake_mh.trajectories.Trajectory` (``None`` if none;
+            a stationary one of zero duration, ``method == "stationary"``, when the start is the
+            goal).
         duration: its duration [s] (NaN if none).
         max_jerk: largest joint jerk along it [rad/s³] (sampled; ``inf`` for toppra's
             acceleration steps on a robot with jerk limits; NaN if no trajectory).

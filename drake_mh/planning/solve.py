@@ -28,7 +28,10 @@ from drake_mh.errors import InvalidArgument, InvalidMotionProblem
 from drake_mh.planning.methods import METHODS
 from drake_mh.planning.problem import MotionProblem
 from drake_mh.planning.result import MotionResult
-from drake_mh.planning.verify import check_retime, check_scaling, verify_motion
+from drake_mh.planning.verify import check_retime, check_scaling, reaches_goal, verify_motion
+
+MAX_BUDGET = 10**12
+"""Largest ``budget`` (kernels count it in 64-bit integers, with headroom for their products)."""
 
 
 def register(name: str, description: str):
@@ -84,38 +87,66 @@ def prepare_motion_method(method, problem: MotionProblem, **options) -> float:
     return time.perf_counter() - start
 
 
-def goal_configurations(problem: MotionProblem, count: int = 4, timeout: float | None = 5.0) -> np.ndarray:
+def _goal_ik(problem: MotionProblem):
+    """The IK problem of a pose goal (built once per problem)."""
+    ik = problem.__dict__.get("_goal_ik")
+    if ik is None:
+        from drake_mh.ik import IKProblem
+
+        ik = IKProblem(problem.robot, problem.goal_pose, scene=problem.scene, clearance=problem.clearance,
+                       frame=problem.frame)
+        object.__setattr__(problem, "_goal_ik", ik)
+    return ik
+
+
+def goal_configurations(problem: MotionProblem, count: int = 4, timeout: float | None = 5.0,
+                        deadline: float | None = None) -> np.ndarray:
     """The problem's goal configurations; for a pose goal, up to ``count`` collision-free IK
     answers (hybrid IK with the scene, seeds 0, 1, ..., each verified with Drake, then
     certified free under the sphere model with the problem's clearances), computed once per
-    problem and shared by every method (their time is :attr:`MotionResult.goal_time`, not
-    planning time).
+    problem and obstacle set and shared by every method (their time is
+    :attr:`MotionResult.goal_time`).
+
+    Args:
+        timeout: [s] per IK seed (``None``: none).
+        deadline: ``time.perf_counter()`` value by which to stop (``None``: none); answers
+            found by then are returned, and are not kept for the next call.
 
     Raises:
-        InvalidMotionProblem: no collision-free IK answer for the pose.
+        InvalidMotionProblem: no collision-free IK answer for the pose (every seed tried), or
+            none before the deadline (the message says so).
     """
     if problem.goal_pose is None:
         return problem.goal_configurations
+    arrays = problem.scene.obstacle_arrays  # a new tuple after any change of the obstacles
     cached = problem.__dict__.get("_goal_cache")
-    if cached is not None:
-        return cached
-    from drake_mh.ik import IKProblem, solve_ik
+    if cached is not None and cached[1] is arrays:
+        return cached[0]
+    from drake_mh.ik import solve_ik
 
-    ik = IKProblem(problem.robot, problem.goal_pose, scene=problem.scene, clearance=problem.clearance,
-                   frame=problem.frame)
-    found = []
+    ik = _goal_ik(problem)
+    found, tried = [], 0
     for seed in range(3 * count):
-        answer = solve_ik(ik, "hybrid", seed=seed, timeout=timeout)
+        limits = [t for t in (timeout, None if deadline is None else deadline - time.perf_counter()) if t is not None]
+        if limits and min(limits) <= 0:
+            break
+        answer = solve_ik(ik, "hybrid", seed=seed, timeout=min(limits) if limits else None)
+        tried += 1
         if answer.success and problem.is_free(answer.q):
             if not found or min(np.max(np.abs(answer.q - q)) for q in found) > 1e-3:
                 found.append(answer.q)
         if len(found) >= count:
             break
+    cut = len(found) < count and deadline is not None and time.perf_counter() >= deadline  # the deadline ended it
     if not found:
-        raise InvalidMotionProblem("no collision-free IK answer for the goal pose: it may be out of reach or "
-                                   "inside an obstacle; check it with drake_mh.solve_ik")
+        raise InvalidMotionProblem(
+            f"no collision-free IK answer for the goal pose within the timeout ({tried} IK seeds tried); raise "
+            "the timeout, or check the pose with drake_mh.solve_ik" if cut else
+            "no collision-free IK answer for the goal pose: it may be out of reach or inside an obstacle; check "
+            "it with drake_mh.solve_ik")
     goals = np.asarray(found)
-    object.__setattr__(problem, "_goal_cache", goals)
+    if not cut:
+        object.__setattr__(problem, "_goal_cache", (goals, arrays))
     return goals
 
 
@@ -124,13 +155,25 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
                  acceleration_scaling: float | None = None, **options) -> MotionResult:
     """Plan a motion with any registered method; the answer is verified the same way for all.
 
+    The scene is read as it is now: a start or every goal configuration that an obstacle added
+    or moved since the problem was built puts in collision fails at once, saying so. A start
+    that already reaches the goal (a goal configuration within 1e-6 rad, or the goal pose within
+    its tolerances) is answered without planning: the one-waypoint path, verified, and a
+    stationary trajectory of zero duration.
+
     Args:
         problem: the :class:`MotionProblem`.
         method: a name of :func:`available_motion_methods`.
-        seed: seed of the method's randomness (same seed, same path when the run ends by
-            success or budget rather than by the timeout).
-        timeout: [s] wall-clock limit of planning (``None``: none).
-        budget: the method's own unit (tree nodes, evaluations, solver iterations).
+        seed: seed of the method's randomness, an integer >= 0 or a numpy SeedSequence /
+            Generator (same seed, same path when the run ends by success or budget rather than
+            by the timeout).
+        timeout: [s] wall-clock limit of the whole search, ``None``: none. It bounds the goal
+            IK of a pose goal and the planning together (a pose goal with no IK answer by then
+            fails, saying so). Not counted: loading compiled code before the clock starts
+            (``info["prepare_time"]``), and the verification and retiming of a path found in
+            time (bounded work, ``verify_time``).
+        budget: the method's own unit (tree nodes, evaluations, solver iterations), an integer
+            in ``[1, MAX_BUDGET]``.
         retime: also retime and certify a trajectory: ``True`` toppra, else ruckig; ``"toppra"``;
             ``"ruckig"`` (jerk-limited, on the straight segments, at rest at each waypoint);
             ``False`` none (:func:`~drake_mh.planning.verify_motion`). The limits are the
@@ -140,14 +183,16 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
         velocity_scaling, acceleration_scaling: MoveIt's scaling factors in (0, 1]: the
             fraction of the velocity / acceleration limits the trajectory may use (``None``: the
             robot's defaults, 1 unless a limits file sets them).
-        **options: the method's options.
+        **options: the method's options (every method rejects one it does not know, listing its
+            own).
 
     Returns:
         A verified :class:`MotionResult` (``success`` recomputed, never the method's flag). Its
-        ``info["prepare_time"]`` holds the seconds spent loading or compiling the method's kernels
-        before the planning clock started, ``info["compile_time"]`` the seconds spent compiling
-        kernels anywhere in the call (the first call on a machine compiles the planner's,
-        the verification's and the retiming's kernels: minutes; 0 once they are cached).
+        ``info["prepare_time"]`` holds the seconds spent loading or compiling kernels (the
+        goal IK's, the method's and its warm-start planner's) before the clock started,
+        ``info["compile_time"]`` the seconds spent compiling kernels anywhere in the call (the
+        first call on a machine compiles the planner's, the verification's and the retiming's
+        kernels: minutes; 0 once they are cached).
 
     Raises:
         UnknownMethod, InvalidArgument, InvalidMotionProblem.
@@ -155,32 +200,67 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
     if not isinstance(problem, MotionProblem):
         raise InvalidArgument(f"problem must be a drake_mh.planning.MotionProblem, got {type(problem).__name__}")
     function = METHODS.get(method)
-    if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, numbers.Real)
-                                or not np.isfinite(timeout) or timeout <= 0):
-        raise InvalidArgument(f"timeout must be a number of seconds > 0 or None, got {timeout!r}")
-    if budget is not None and (isinstance(budget, bool) or not isinstance(budget, numbers.Integral) or budget < 1):
-        raise InvalidArgument(f"budget must be an integer >= 1 or None, got {budget!r}")
+    seconds = None if timeout is None else float("nan")
+    if isinstance(timeout, numbers.Real) and not isinstance(timeout, bool):
+        try:
+            seconds = float(timeout)
+        except OverflowError:  # an int beyond a double
+            pass
+    if timeout is not None and not 0 < seconds < np.inf:
+        raise InvalidArgument(f"timeout must be a finite number of seconds > 0, or None (no limit); "
+                              f"got {str(timeout)[:40]!r}")
+    if budget is not None and (isinstance(budget, bool) or not isinstance(budget, numbers.Integral)
+                               or not 1 <= budget <= MAX_BUDGET):
+        raise InvalidArgument(f"budget must be an integer in [1, {MAX_BUDGET:.0e}] or None, got {budget!r}")
+    from drake_mh.ik.solve import prepare as ik_prepare
+    from drake_mh.optim.base import make_rng
+
+    rng = make_rng(seed, "seed")
     check_retime(retime)
     check_scaling(velocity_scaling, acceleration_scaling)
     compiled_before = compile_seconds()
-    rng = np.random.default_rng(seed)
-    goal_start = time.perf_counter()
-    goals = goal_configurations(problem)
-    goal_time = time.perf_counter() - goal_start
-    # load compiled kernels (the warm-start planner's too) before the clock starts, once per process
-    prepare_time = prepare_motion_method(function, problem, **dict(options))
-    wall, cpu = time.perf_counter(), time.process_time()
-    deadline = None if timeout is None else wall + float(timeout)
-    path, info = function(problem, goals, rng, deadline, budget, **options)
-    planning_time, cpu_time = time.perf_counter() - wall, time.process_time() - cpu
-    result = MotionResult(method, seed=seed, info=dict(info or {}), goal_time=goal_time, planning_time=planning_time,
-                          cpu_time=cpu_time)
-    # a plan that prepared for itself (called without solve_motion's prepare) reports that time too
-    result.info["prepare_time"] = prepare_time + float(result.info.get("prepare_time", 0.0))
-    if path is None:
-        result.message = result.info.pop("message", "no path found")
-    else:
-        result = verify_motion(problem, path, method, result, retime=retime, velocity_scaling=velocity_scaling,
-                               acceleration_scaling=acceleration_scaling)
+    result = MotionResult(method, seed=seed, planning_time=0.0, cpu_time=0.0)
+    # load compiled code (the goal IK's, the method's and its warm-start planner's) before the clock starts
+    result.info["prepare_time"] = (
+        (0.0 if problem.goal_pose is None else ik_prepare(_goal_ik(problem), "hybrid"))
+        + prepare_motion_method(function, problem, **dict(options)))
+    result = _search(problem, function, method, rng, seconds, budget, retime, velocity_scaling, acceleration_scaling,
+                     result, options)
     result.info["compile_time"] = compile_seconds() - compiled_before
     return result
+
+
+def _search(problem, function, method, rng, seconds, budget, retime, velocity_scaling, acceleration_scaling,
+            result, options) -> MotionResult:
+    """solve_motion after its checks and loading: the goal, the planning and the verification."""
+    wall, cpu = time.perf_counter(), time.process_time()
+    deadline = None if seconds is None else wall + seconds
+    result.message = problem.blocked_now()
+    if result.message:
+        return result
+    scaling = dict(velocity_scaling=velocity_scaling, acceleration_scaling=acceleration_scaling)
+    if reaches_goal(problem, problem.q_start)[0] is not None:  # nothing to plan: stay
+        return verify_motion(problem, problem.q_start[None], method, result, retime=retime, **scaling)
+    try:
+        goals = goal_configurations(problem, deadline=deadline)
+    except InvalidMotionProblem as exc:
+        if deadline is None or time.perf_counter() < deadline:
+            raise
+        result.message, result.goal_time = str(exc), time.perf_counter() - wall
+        return result
+    result.goal_time = time.perf_counter() - wall
+    result.message = problem.blocked_now(goals)
+    if result.message:
+        return result
+    goals = goals[problem.is_free(goals)]  # those an obstacle added since has not blocked
+    start = time.perf_counter()
+    prepared = float(result.info["prepare_time"])
+    path, info = function(problem, goals, rng, deadline, budget, **options)
+    result.planning_time, result.cpu_time = time.perf_counter() - start, time.process_time() - cpu
+    result.info.update(info or {})
+    # a plan that prepared for itself (called without solve_motion's prepare) reports that time too
+    result.info["prepare_time"] = prepared + (float(info["prepare_time"]) if info and "prepare_time" in info else 0.0)
+    if path is None:
+        result.message = result.info.pop("message", "no path found")
+        return result
+    return verify_motion(problem, path, method, result, retime=retime, **scaling)

@@ -8,8 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from drake_mh.errors import InvalidArgument
 
 def plan(problem, goals, rng, deadline, budget, **options):
     """The straight line from ``problem.q_start`` to the nearest row of ``goals`` (no options)."""
+    if options:
+        raise InvalidArgument(f"straight: unknown option(s) {sorted(options)}; it takes none")
     i = int(np.argmin(np.linalg.norm(goals - problem.q_start, axis=1)))
     return np.stack([problem.q_start, goals[i]]), {"goal": i}

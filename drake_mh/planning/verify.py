@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_mh.planning.problem import POSE_ORIENTATION_TOLERANCE, POSE_POSITION_TOLERANCE
+from drake_mh.planning.problem import POSE_ORIENTATION_TOLERANCE, POSE_POSITION_TOLERANCE, MotionProblem
 from drake_mh.planning.result import MotionResult
 
 REPORT_TOLERANCE = 1e-3
@@ -47,7 +47,9 @@ TRAJECTORY_SHIFTS = (1e-3, 1e-4, 1e-5)
 clearance cannot absorb it."""
 
 
-def _reaches_goal(problem, q_end: np.ndarray) -> tuple[int | None, str]:
+def reaches_goal(problem, q_end: np.ndarray) -> tuple[int | None, str]:
+    """``(index of the goal configuration reached, "")``, or ``(None, how far it is)``: within
+    1e-6 rad of a goal configuration, or the goal pose within 1 mm / 0.01 rad (Drake FK; index 0)."""
     if problem.goal_pose is None:
         errors = np.max(np.abs(problem.goal_configurations - q_end), axis=1)
         i = int(np.argmin(errors))
@@ -110,13 +112,24 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
         velocity_scaling, acceleration_scaling: MoveIt's scaling factors in (0, 1] for the
             retiming (:func:`drake_mh.trajectories.retime`; ``None``: the robot's defaults).
 
+    A one-row path (the start already reaches the goal) gets a stationary trajectory of zero
+    duration, certified like any other (no velocity, acceleration or jerk; the torque that holds
+    the robot against gravity).
+
     Raises:
-        InvalidArgument: another ``retime``, or a scaling factor outside (0, 1].
+        InvalidArgument: another ``retime``, or a scaling factor outside (0, 1];
+            ``problem`` not a MotionProblem; ``path`` not an array of numbers (ragged rows,
+            text, complex values). A numeric path of the wrong shape, non-finite or outside the
+            limits is a failed result, not an error.
     """
     import time
 
+    from drake_mh.errors import InvalidArgument
+
     check_retime(retime)
     check_scaling(velocity_scaling, acceleration_scaling)
+    if not isinstance(problem, MotionProblem):
+        raise InvalidArgument(f"problem must be a drake_mh.planning.MotionProblem, got {type(problem).__name__}")
 
     start = time.perf_counter()
     result = result or MotionResult(method)
@@ -124,12 +137,15 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
     if path is None:
         result.success, result.message = False, result.message or "no path found"
         return result
-    P = np.asarray(path, dtype=float)
+    try:
+        P = None if np.iscomplexobj(path) else np.asarray(path, dtype=float)
+    except (TypeError, ValueError):  # ragged rows, text
+        P = None
+    if P is None:
+        raise InvalidArgument(f"path must be an array of numbers (M, {robot.nq}) [rad], got {str(path)[:80]!r}")
     if P.ndim != 2 or P.shape[1] != robot.nq or len(P) < 1 or not np.all(np.isfinite(P)):
         result.success, result.message = False, f"the method returned an invalid path of shape {P.shape}"
         return result
-    if len(P) == 1:
-        P = np.vstack([P, P])
     result.path = P
     result.path_length = float(np.sum(np.linalg.norm(np.diff(P, axis=0), axis=1)))
     outside = (P < robot.lower - 1e-9) | (P > robot.upper + 1e-9)
@@ -140,7 +156,7 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
     if np.max(np.abs(P[0] - problem.q_start)) > 1e-9:
         result.success, result.message = False, "the path does not start at q_start"
         return result
-    goal_index, why = _reaches_goal(problem, P[-1])
+    goal_index, why = reaches_goal(problem, P[-1])
     if goal_index is None:
         result.success, result.message = False, why
         return result
@@ -166,7 +182,8 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
             result.max_jerk = _max_jerk(trajectory)
             result.jerk_limited = _jerk_limited(trajectory)
             result.min_clearance = trajectory.info.get("certified_clearance", result.min_clearance)
-            result.message = f"certified; retimed with {trajectory.method}"
+            result.message = ("certified; the start is the goal: a stationary trajectory of zero duration"
+                              if trajectory.method == "stationary" else f"certified; retimed with {trajectory.method}")
     result.verify_time = time.perf_counter() - start
     return result
 
@@ -260,8 +277,8 @@ def _retime(problem, P: np.ndarray, methods: tuple, path_certificate, velocity_s
     robot = problem.robot
     keep = np.r_[True, np.any(np.abs(np.diff(P, axis=0)) > 1e-12, axis=1)]  # repeated rows break splines
     W = P[keep]
-    if len(W) < 2:
-        return None, "the path does not move: nothing to retime"
+    if len(W) < 2:  # the start is the goal: stay there
+        return _stationary(robot, W[0], path_certificate)
     reasons = []
     for method in methods:
         try:
@@ -277,3 +294,20 @@ def _retime(problem, P: np.ndarray, methods: tuple, path_certificate, velocity_s
         reasons.append(_reason(method, why))
     return None, (f"certified path ({len(W)} waypoints), but no certified trajectory: " + "; ".join(reasons)
                   + ". solve_motion(..., retime=False) returns the certified path without one")
+
+
+def _stationary(robot, q: np.ndarray, path_certificate) -> tuple[object, str]:
+    """The trajectory that stays at ``q``: zero duration, certified (zero velocity, acceleration
+    and jerk; the torque that holds ``q`` against gravity), with the configuration's certified
+    clearance."""
+    from scipy.interpolate import PPoly
+
+    from drake_mh.trajectories import Trajectory, certify
+
+    trajectory = Trajectory(PPoly(np.array(q, dtype=float)[None, None, :], [0.0, 0.0]),
+                            joint_names=tuple(robot.joint_names), method="stationary")
+    cert = trajectory.info["certificate"] = certify(trajectory, robot)
+    if not cert.ok():
+        return None, f"the start is the goal, but holding it exceeds a limit: {cert.worst()}"
+    trajectory.info["certified_clearance"] = path_certificate.min_clearance
+    return trajectory, ""

@@ -379,13 +379,16 @@ class Robot:
     # --- input checks -----------------------------------------------------------------------
 
     def check_q(self, q, name: str = "q") -> np.ndarray:
-        """Return ``q`` as a float array ``(nq,)``, or raise :class:`InvalidConfiguration`."""
-        if np.iscomplexobj(q):
-            raise InvalidConfiguration(f"{name} must be real [rad or m], got complex values", name)
+        """Return ``q`` as a float array ``(nq,)``, or raise :class:`InvalidConfiguration`.
+
+        The array may share memory with ``q``: a caller that keeps it copies it."""
         try:
-            arr = np.asarray(q, dtype=float)
+            complex_ = np.iscomplexobj(q)  # numpy raises ValueError on ragged nested lists
+            arr = None if complex_ else np.asarray(q, dtype=float)
         except (TypeError, ValueError) as exc:
             raise InvalidConfiguration(f"{name} must be numeric, got {q!r}", name) from exc
+        if complex_:
+            raise InvalidConfiguration(f"{name} must be real [rad or m], got complex values", name)
         if arr.shape != (self.nq,):
             raise InvalidConfiguration(
                 f"{name} must have shape ({self.nq},) for {self.name} (joints {self.joint_names}), "
@@ -396,13 +399,15 @@ class Robot:
         return arr
 
     def check_Q(self, Q, name: str = "Q") -> np.ndarray:
-        """Return a batch as a C-contiguous float array ``(N, nq)`` or raise."""
-        if np.iscomplexobj(Q):
-            raise InvalidConfiguration(f"{name} must be real [rad or m], got complex values", name)
+        """Return a batch as a C-contiguous float array ``(N, nq)`` or raise (it may share
+        memory with ``Q``)."""
         try:
-            arr = np.ascontiguousarray(Q, dtype=float)
+            complex_ = np.iscomplexobj(Q)  # numpy raises ValueError on ragged nested lists
+            arr = None if complex_ else np.ascontiguousarray(Q, dtype=float)
         except (TypeError, ValueError) as exc:
-            raise InvalidConfiguration(f"{name} must be numeric", name) from exc
+            raise InvalidConfiguration(f"{name} must be numeric (one number per joint in every row)", name) from exc
+        if complex_:
+            raise InvalidConfiguration(f"{name} must be real [rad or m], got complex values", name)
         if arr.ndim == 1 and arr.shape[0] == self.nq:
             arr = arr[None, :]
         if arr.ndim != 2 or arr.shape[1] != self.nq:

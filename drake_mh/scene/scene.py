@@ -59,13 +59,13 @@ def _penetration():
 
 
 def _vector3(value, what: str) -> np.ndarray:
-    if isinstance(value, (str, bytes)) or np.iscomplexobj(value):
-        raise SceneError(f"{what} must be 3 finite numbers, got {value!r}")
-    try:
-        arr = np.asarray(value, dtype=float).reshape(-1)
+    """``value`` as a new ``(3,)`` float array (a copy: an obstacle keeps it, the caller's array may change)."""
+    try:  # numpy raises ValueError on ragged nested lists, in iscomplexobj too
+        arr = None if isinstance(value, (str, bytes)) or np.iscomplexobj(value) \
+            else np.array(value, dtype=float).reshape(-1)
     except (TypeError, ValueError):
-        raise SceneError(f"{what} must be 3 finite numbers, got {value!r}") from None
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        arr = None
+    if arr is None or arr.shape != (3,) or not np.all(np.isfinite(arr)):
         raise SceneError(f"{what} must be 3 finite numbers, got {value!r}")
     return arr
 
@@ -587,7 +587,21 @@ class Scene:
 
     def segment_free(self, q_a, q_b, clearance: float = 0.0, self_clearance: float = 0.0) -> bool:
         """Whether the straight joint-space motion ``q_a -> q_b`` is certified free *for every
-        configuration on it* (:func:`drake_mh.scene.segments.certify_segments`)."""
+        configuration on it* (:func:`drake_mh.scene.segments.certify_segments`).
+
+        Raises:
+            SceneError: ``q_a`` or ``q_b`` is not one configuration ``(nq,)`` (several segments:
+                :meth:`certify_segments`), or a bad clearance.
+        """
+        for name, q in (("q_a", q_a), ("q_b", q_b)):
+            try:
+                several = np.ndim(q) > 1
+            except ValueError:  # ragged: certify_segments names what is wrong
+                several = False
+            if several:
+                raise SceneError(f"segment_free checks one segment: {name} must be one configuration "
+                                 f"({self._nq},), got shape {np.shape(q)}; certify several segments with "
+                                 "certify_segments(QA, QB)")
         return bool(_segments().certify_segments(self, q_a, q_b, clearance, self_clearance).certified[0])
 
     def certify_segments(self, QA, QB, clearance: float = 0.0, self_clearance: float = 0.0, **options):

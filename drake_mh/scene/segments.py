@@ -241,9 +241,14 @@ def certify_path(scene, Q, clearance: float = 0.0, self_clearance: float = 0.0, 
 
     Returns:
         A :class:`PathCertificate`.
+
+    Raises:
+        SceneError: ``Q`` holds no configuration; as :func:`certify_segments` otherwise.
     """
     robot = scene.robot
     Q = _as_rows(robot, Q, "Q")
+    if Q.shape[0] == 0:
+        raise SceneError(f"Q must hold at least one configuration (M, {robot.nq}) to certify, got none")
     if Q.shape[0] == 1:
         Q = np.vstack([Q, Q])  # one configuration: a zero-length segment
     if durations is None:

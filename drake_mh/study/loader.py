@@ -124,11 +124,21 @@ def _load_module(source: StudySource) -> ModuleType:
         try:
             code = compile(source.text, source.path, "exec")
             exec(code, module.__dict__)  # noqa: S102 - running the user's study script is the point
-        except Exception:
+        except Exception as exc:  # the file's own error (or not a study file at all): the user's to fix
             del sys.modules[module_name]
-            raise
+            where = getattr(exc, "lineno", None) or _line_of(exc, source.path)
+            raise InvalidStudy(f"{source.path}{f':{where}' if where else ''} is not a study file that runs: "
+                               f"{type(exc).__name__}: {exc} (--verbose shows the traceback)") from exc
         _modules[cache_key] = module
         return module
+
+
+def _line_of(exc: BaseException, path: str) -> int | None:
+    """The line of ``path`` where ``exc`` was raised, from its traceback (None if not there)."""
+    import traceback
+
+    lines = [frame.lineno for frame in traceback.extract_tb(exc.__traceback__) if frame.filename == path]
+    return lines[-1] if lines else None
 
 
 def study_from_module(module: ModuleType, where: str) -> Study:

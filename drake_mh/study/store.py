@@ -269,10 +269,9 @@ class RecordStore:
             NoResults: the folder has no ``records.jsonl``.
         """
         if not self.records_path.is_file():
-            raise NoResults(
-                f"{self.folder} holds no study results ({RECORDS} missing); "
-                "run `drake-mh study NAME --out DIR` first"
-            )
+            what = ("is a file, not a results folder" if self.folder.is_file() else
+                    "does not exist" if not self.folder.exists() else f"holds no study results ({RECORDS} missing)")
+            raise NoResults(f"{self.folder} {what}; give the --out folder of a `drake-mh study NAME --out DIR` run")
         return list(self.load().values())
 
     def append(

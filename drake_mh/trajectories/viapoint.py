@@ -177,7 +177,7 @@ class ViaPointProblem:
 
     Attributes:
         robot: the robot (``planar2r`` in the paper).
-        q_start, q_goal: ``(n,)`` start and goal [rad] (at rest).
+        q_start, q_goal: ``(n,)`` start and goal [rad] (at rest); copied.
         n_via: number of via points ``mp`` (1 in the paper).
         angle_bounds: via joint-angle range [rad] (eq. 21: ±π).
         velocity_bounds: via joint-velocity range [rad/s] (eq. 22: ±π/4).
@@ -200,9 +200,13 @@ class ViaPointProblem:
     def __post_init__(self):
         n = self.robot.nq
         for name in ("q_start", "q_goal"):
-            v = np.asarray(getattr(self, name), float)
-            if v.shape != (n,) or not np.all(np.isfinite(v)):
+            try:  # numpy raises ValueError on ragged nested lists; a complex value would lose its imaginary part
+                v = None if np.iscomplexobj(getattr(self, name)) else np.array(getattr(self, name), dtype=float)
+            except (TypeError, ValueError):
+                v = None
+            if v is None or v.shape != (n,) or not np.all(np.isfinite(v)):
                 raise InvalidArgument(f"{name} must be {n} finite joint angles, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, v)  # a copy: the caller's array may change later
         if int(self.n_via) < 1:
             raise InvalidArgument(f"n_via must be >= 1, got {self.n_via}")
         if self.time_bounds[0] <= 0:

@@ -42,6 +42,7 @@ import dataclasses
 import hashlib
 import json
 import logging
+import numbers
 import os
 import time
 from dataclasses import dataclass, field
@@ -122,16 +123,27 @@ class AppConfig:
         P = np.asarray(self.points, dtype=float)
         if P.shape != (4, 3) or not np.all(np.isfinite(P)):
             raise InvalidArgument(f"points must be start, via 1, via 2, end: 4 finite (x, y, z) [m], got {P.shape}")
-        if isinstance(self.n_points, bool) or int(self.n_points) != self.n_points or not 4 <= self.n_points <= 500:
+        if isinstance(self.n_points, bool) or not isinstance(self.n_points, numbers.Integral) \
+                or not 4 <= self.n_points <= 500:
             raise InvalidArgument(f"n_points must be an integer in [4, 500], got {self.n_points!r}")
-        if not (np.isfinite(self.fps) and 1 <= self.fps <= 120):
+        real = lambda value: not isinstance(value, bool) and isinstance(value, numbers.Real) and np.isfinite(value)
+        if not (real(self.fps) and 1 <= self.fps <= 120):
             raise InvalidArgument(f"fps must be in [1, 120] Hz, got {self.fps!r}")
-        if not (np.isfinite(self.speed) and self.speed > 0):
+        if not (real(self.speed) and self.speed > 0):
             raise InvalidArgument(f"speed must be > 0, got {self.speed!r}")
-        if not (np.isfinite(self.obstacle_radius) and self.obstacle_radius > 0):
+        if not (real(self.obstacle_radius) and self.obstacle_radius > 0):
             raise InvalidArgument(f"obstacle_radius must be a positive length [m], got {self.obstacle_radius!r}")
         if not self.robots:
             raise InvalidArgument("robots must name at least one robot (drake-mh robots lists them)")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, numbers.Integral) or self.seed < 0:
+            raise InvalidArgument(f"seed must be an integer >= 0, got {self.seed!r}")
+        if self.budget is not None and (isinstance(self.budget, bool) or not isinstance(self.budget, numbers.Integral)
+                                        or self.budget < 1):
+            raise InvalidArgument(f"budget must be an integer >= 1 (per IK solve) or None, got {self.budget!r}")
+        if self.obstacle is not None:
+            o = np.asarray(self.obstacle, dtype=float) if not isinstance(self.obstacle, str) else np.zeros(0)
+            if o.shape != (3,) or not np.all(np.isfinite(o)):
+                raise InvalidArgument(f"obstacle must be a point (x, y, z) [m] or None, got {self.obstacle!r}")
         check_plan_settings(self.plan_method, self.plan_timeout, self.goal, self.plan_clearance)
 
 

@@ -54,18 +54,22 @@ _PAGE = r"""<!DOCTYPE html>
   #status.down { background: #ffd9d6; border-left-color: #c0392b; }
   h2 { font-size: 12px; text-transform: uppercase; letter-spacing: .04em; color: #9ab;
        margin: 9px 0 4px; font-weight: 600; }
-  .buttons { display: grid; grid-template-columns: 1fr 1fr; gap: 5px; }
+  /* minmax(0, 1fr): a grid column may shrink below its content's natural width (a range input's
+     is about 130 px), so that every control stays inside the panel beside its scrollbar */
+  .buttons { display: grid; grid-template-columns: minmax(0, 1fr) minmax(0, 1fr); gap: 5px; }
   .buttons > div { display: flex; }
   .buttons > div > button { flex: 1; }
   .buttons > .wide { grid-column: span 2; }
   button { font: inherit; padding: 5px 6px; border: 1px solid #556; border-radius: 4px; background: #2e3440;
-           color: #eee; cursor: pointer; }
+           color: #eee; cursor: pointer; min-width: 0; overflow-wrap: anywhere; }
   button:hover { background: #3b4252; }
   button.primary { background: #2d6cdf; border-color: #2d6cdf; }
   button.stop { background: #8c2f2f; border-color: #8c2f2f; }
-  .slider { display: grid; grid-template-columns: 132px 1fr 62px; gap: 6px; align-items: center;
+  .slider { display: grid; grid-template-columns: 132px minmax(0, 1fr) 62px; gap: 6px; align-items: center;
             margin: 2px 0; font-size: 13px; }
-  .slider input[type=number] { width: 58px; font: inherit; background: #2e3440; color: #eee;
+  .slider > * { min-width: 0; margin: 0; }
+  .slider input[type=range] { width: 100%; }
+  .slider input[type=number] { width: 100%; box-sizing: border-box; font: inherit; background: #2e3440; color: #eee;
                                border: 1px solid #556; border-radius: 3px; }
   .hint { font-size: 12px; color: #999; margin-top: 10px; }
   .hint a { color: #9cf; }
@@ -259,7 +263,8 @@ class AppPage:
 
     Args:
         html: the page.
-        port: http port; ``None`` takes the first free port from ``first`` to 7999, ``0`` any.
+        port: http port; ``None`` takes the first free port from ``first`` on (up to 65535),
+            ``0`` any.
         first: where the search for a free port starts (the app passes Meshcat's port + 1).
 
     Raises:
@@ -287,8 +292,8 @@ class AppPage:
             def log_message(self, fmt, *args):  # requests go to the debug log, not stderr
                 logger.debug("app page: " + fmt, *args)
 
-        candidates = [port] if port is not None else list(range(max(int(first), 1024), 8000)) or [0]
-        self._server = None
+        candidates = [port] if port is not None else range(max(int(first), 1024), 65536)
+        self._server, last = None, OSError("no port left to try")
         for candidate in candidates:
             try:
                 self._server = ThreadingHTTPServer(("localhost", candidate), Handler)

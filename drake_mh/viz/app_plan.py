@@ -232,15 +232,16 @@ class AppPlanner:
 
         try:
             started = time.perf_counter()
+            deadline = started + timeout  # one limit for the goal IK and the planning
             try:
-                goal_configurations(problem, count=1, timeout=max(0.3, timeout / 3))  # 3 IK seeds at most
+                goal_configurations(problem, count=1, timeout=max(0.3, timeout / 3), deadline=deadline)
             except InvalidMotionProblem as exc:
                 self._answer = ("no goal", str(exc))
                 return
             finally:
                 self.goal_time = time.perf_counter() - started
             self._answer = ("result", solve_motion(problem, method, seed=self.attempts,
-                                                   timeout=timeout))
+                                                   timeout=max(deadline - time.perf_counter(), 1e-3)))
         except Exception as exc:  # noqa: BLE001 - reported in the status; the app goes on
             self._answer = ("error", f"{type(exc).__name__}: {exc}")
 
@@ -289,10 +290,10 @@ class AppPlanner:
             handle(name)
 
     def _finish(self, result) -> None:
-        from drake_mh.viz.motion import motion_caption
+        from drake_mh.viz.motion import clearance_words, motion_caption
 
         self.result = result
-        timed_out = result.planning_time >= 0.98 * self.timeout
+        timed_out = self.goal_time + result.planning_time >= 0.98 * self.timeout
         self.last = {"attempt": self.attempts, "success": bool(result.success), "method": result.method,
                      "goal": self.kind,
                      "planning_time": result.planning_time, "goal_time": self.goal_time,
@@ -307,15 +308,15 @@ class AppPlanner:
                 why = f"the path found is not certified ({result.message})"
             self.result = None
             return self._failed(f"{result.method}: {why}")
-        self.last["caption"] = motion_caption(result)
+        self.last["caption"] = motion_caption(result, self.app.scene)
         Q = result.trajectory.position(np.linspace(result.trajectory.start_time, result.trajectory.end_time, 60))
         self.app.view.add_ee_path(Q, "planned", colour=PLAN_PATH_COLOUR)
         self.t = 0.0
         self.app.mode = "plan"
         ik = f" (goal IK {self.goal_time:.2f} s)" if self.kind == "pose" else ""
         self.app.message = (f"moving to the goal {self.kind}: planned with {result.method} in "
-                            f"{result.planning_time * 1e3:.1f} ms{ik}, certified clearance >= "
-                            f"{result.min_clearance * 1e3:.1f} mm, {result.duration:.2f} s motion")
+                            f"{result.planning_time * 1e3:.1f} ms{ik}, {clearance_words(result, self.app.scene)}, "
+                            f"{result.duration:.2f} s motion")
 
     def _failed(self, message: str) -> None:
         """Planning gave no certified motion: the robot stays where it is."""

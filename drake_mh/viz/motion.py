@@ -64,13 +64,28 @@ def motion_samples(result, fps: float = 30.0) -> tuple[np.ndarray, np.ndarray]:
     return t - t0, np.asarray(traj.position(t), dtype=float)
 
 
-def motion_caption(result) -> str:
-    """One line about a motion result: method, planning time, duration, certified clearance,
-    or why it failed."""
+def clearance_words(result, scene=None, samples: int = 60) -> str:
+    """The motion's clearance in words: its certified bound (over the whole motion, under the
+    sphere model, which reads up to its covering tolerance less than the exact geometry) and,
+    with ``scene``, beside it the sampled minimum (Drake's exact distance at ``samples``
+    configurations along the trajectory), each labelled."""
+    words = f"certified clearance >= {result.min_clearance * 1e3:.1f} mm (bound over the whole motion)"
+    trajectory = result.trajectory
+    if scene is not None and scene.obstacles and trajectory is not None:
+        Q = trajectory.position(np.linspace(trajectory.start_time, trajectory.end_time, samples))
+        sampled = float(np.min(scene.exact_min_distance(Q)))
+        words += f", sampled minimum {sampled * 1e3:.1f} mm (exact distance at {samples} configurations)"
+    return words
+
+
+def motion_caption(result, scene=None) -> str:
+    """One line about a motion result: method, planning time, duration, clearance
+    (:func:`clearance_words`: the certified bound, and with ``scene`` the sampled minimum
+    beside it), or why it failed."""
     if not result.success:
         return f"{result.method}: not certified after {result.planning_time:.2f} s: {result.message or 'no path'}"
     return (f"{result.method}: planned in {result.planning_time * 1e3:.1f} ms, {len(result.path)} waypoints, "
-            f"{result.duration:.2f} s motion, certified clearance >= {result.min_clearance * 1e3:.1f} mm")
+            f"{result.duration:.2f} s motion, {clearance_words(result, scene)}")
 
 
 def show_motion(problem_or_robot, result, scene=None, *, fps: float = 30.0, loop: bool = True,

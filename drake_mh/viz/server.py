@@ -5,8 +5,12 @@ takes a port, and Drake requires every call on an instance to come from the thre
 it (a call from another thread ends the process with ``SystemExit``). So drake_mh keeps **one
 instance per thread that uses it** — in practice one per process, created on first use in the
 main thread — and refuses, with a clear error, an instance used from the wrong thread. Drake
-also aborts the process when an instance is *destroyed* by another thread than its creator: a
-:class:`~drake_mh.viz.View` made in a worker thread must not outlive that thread.
+also aborts the process when an instance is *destroyed* by another thread than its creator, and
+Python destroys an object in whichever thread drops its last reference (at exit, the main
+thread). So every server that a thread other than the main thread starts stays held by that
+thread (:class:`_Keeper`) until nothing else refers to it, and is then destroyed there; one that
+is still referred to when its thread ends (a :class:`~drake_mh.viz.View` handed to another
+thread) is never destroyed: it serves until the process exits.
 
 Unlike ``pydrake.geometry.StartMeshcat()`` (which listens on every interface by default), the
 server here listens on ``localhost`` only; to view it from another machine, forward the port
@@ -30,7 +34,7 @@ __all__ = ["get_meshcat", "close_meshcat", "meshcat_url", "check_thread", "priva
 DEFAULT_HOST = "localhost"
 """Interface the server listens on; never ``*`` (all interfaces)."""
 
-_local = threading.local()
+_local = threading.local()  # main thread: .meshcat, its shared server; other threads: .keeper
 _owner: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # meshcat -> creating thread id
 
 
@@ -55,7 +59,8 @@ def get_meshcat(port: int | None = None, *, announce: bool = True):
         if isinstance(port, bool) or not isinstance(port, int) or not (port == 0 or 1024 <= port <= 65535):
             raise InvalidArgument(f"port must be None (first free from 7000), 0 (any free port) or "
                                   f"1024-65535, got {port!r}")
-    meshcat = getattr(_local, "meshcat", None)
+    keeper = _keeper()
+    meshcat = getattr(_local, "meshcat", None) if keeper is None else keeper.shared
     if meshcat is not None:
         if port not in (None, 0) and port != meshcat.port():
             raise InvalidArgument(
@@ -75,7 +80,10 @@ def get_meshcat(port: int | None = None, *, announce: bool = True):
         raise VisualizationError(
             f"cannot start Meshcat on localhost ({where}): {exc}; free the port, pass another "
             "port, or reuse the running server with drake_mh.viz.get_meshcat()") from exc
-    _local.meshcat = meshcat
+    if keeper is None:
+        _local.meshcat = meshcat
+    else:
+        keeper.shared = meshcat
     _owner[meshcat] = threading.get_ident()
     logger.info("Meshcat listening at %s", meshcat.web_url())
     if announce:
@@ -121,6 +129,9 @@ def private_meshcat():
         yield meshcat
     finally:
         _owner.pop(meshcat, None)
+        keeper = _keeper()
+        if keeper is not None:
+            keeper.release(meshcat)
         del meshcat  # last reference: Drake stops the server and frees the port here
 
 
@@ -134,6 +145,13 @@ def close_meshcat() -> None:
 
     The next :func:`get_meshcat` starts a new server.
     """
+    keeper = _keeper()
+    if keeper is not None:
+        if keeper.shared is not None:
+            _owner.pop(keeper.shared, None)
+            keeper.release(keeper.shared)
+            keeper.shared = None
+        return
     meshcat = getattr(_local, "meshcat", None)
     if meshcat is not None:
         _owner.pop(meshcat, None)
@@ -151,3 +169,59 @@ def check_thread(meshcat) -> None:
             "this Meshcat server was started by another thread and Drake only accepts calls from "
             "that thread; create the view in the thread that uses it (drake_mh.viz.get_meshcat() "
             "gives each thread its own server) or use a process pool")
+
+
+class _Keeper:
+    """What a thread other than the main thread holds of the servers it started: its shared
+    server, and those it released (:func:`close_meshcat`, the end of :func:`private_meshcat`)
+    that a caller or a view may still refer to. Each call of this module on the thread drops the
+    released ones that nothing else refers to any more: Drake destroys them there, on their own
+    thread. When the thread ends, Python clears its locals on that thread, and :meth:`__del__`
+    does the same one last time; a server still referred to then would later be destroyed by
+    another thread (Drake aborts the process), so it is kept for the life of the process."""
+
+    def __init__(self):
+        self.shared = None
+        self.released: list = []
+
+    def release(self, meshcat) -> None:
+        """Hold ``meshcat`` until nothing else refers to it (:meth:`sweep`)."""
+        if not any(m is meshcat for m in self.released):
+            self.released.append(meshcat)
+
+    def sweep(self) -> list:
+        """Drop the released servers that nothing else refers to (destroyed now, on this thread);
+        returns those still referred to."""
+        refs = [weakref.ref(meshcat) for meshcat in self.released]
+        self.released.clear()
+        self.released = [meshcat for meshcat in (ref() for ref in refs) if meshcat is not None]
+        return self.released
+
+    def __del__(self):
+        if self.shared is not None:
+            self.release(self.shared)
+            self.shared = None
+        for meshcat in self.sweep():
+            _keep_forever(meshcat)
+
+
+def _keeper() -> _Keeper | None:
+    """This thread's :class:`_Keeper` (``None`` on the main thread: Python's exit destroys what is
+    left there, on the main thread), after a :meth:`~_Keeper.sweep`."""
+    if threading.current_thread() is threading.main_thread():
+        return None
+    keeper = getattr(_local, "keeper", None)
+    if keeper is None:
+        keeper = _local.keeper = _Keeper()
+    keeper.sweep()
+    return keeper
+
+
+def _keep_forever(meshcat) -> None:
+    """A reference that is never dropped: ``meshcat`` is never destroyed (so never by a thread
+    that did not make it); it serves until the process exits."""
+    import ctypes
+
+    ctypes.pythonapi.Py_IncRef(ctypes.py_object(meshcat))
+    logger.warning("a Meshcat server (%s) is still in use after the thread that started it ended; Drake can "
+                   "only destroy it on that thread, so it serves until the process exits", meshcat.web_url())

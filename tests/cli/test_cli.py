@@ -60,7 +60,9 @@ def test_subcommand_modules_plug_in():
         (["study", "x", "--workers", "two"], "--workers"),
         (["study", "x", "--bogus"], "unrecognized arguments: --bogus"),
         (["robots", "no_such_robot"], "unknown robot 'no_such_robot'"),
-        (["report", "/no/such/folder"], "holds no study results"),
+        (["report", "/no/such/folder"], "/no/such/folder does not exist"),
+        (["report", __file__], "is a file, not a results folder"),
+        (["study", __file__.replace("test_cli.py", "no_study.txt")], "unknown study"),
         (["app", "--max-seconds", "1", "--status-file", "/no/such/dir/s.json"], "--status-file"),
         (["study", "bench_kinematics", "--quick", "--out", "/proc/no_such"], "results folder /proc/no_such"),
     ],
@@ -72,6 +74,18 @@ def test_bad_input_exits_2_with_one_line(argv, words, capsys):
     assert len(lines) == 1, captured.err
     assert lines[0].startswith("drake-mh: error: ") and words in lines[0]
     assert "Traceback" not in captured.err
+
+
+def test_a_file_that_is_not_a_study_exits_2_with_one_line(tmp_path, capsys):
+    """A path to any file was run as a study: its own error was 'internal error: NameError'."""
+    for text, words in (("x\n", "NameError: name 'x' is not defined"), ("def (:\n", "SyntaxError"),
+                        ("import drake_mh\n", "defines no Study")):
+        path = tmp_path / "not_a_study"
+        path.write_text(text)
+        assert main(["study", str(path)]) == 2
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("drake-mh: error: ") and words in lines[0], lines
+        assert f"{path}" in lines[0]
 
 
 def test_unknown_names_list_valid_ones(capsys):

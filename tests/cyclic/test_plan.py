@@ -85,3 +85,30 @@ def test_pinv_baseline_drifts_while_plan_closes(leaf_plan, planar12):
     assert result.closure.min() > 1e-3         # ... but does not come back to q0
     assert np.all(np.diff(result.drift[0]) > 0)
     assert result.q.shape[0] == 1 and result.q_start.shape == (1, 4, 12)
+
+
+def test_a_component_keeps_copies_of_its_lengths_and_limits():
+    """ThreeLinkProblem kept views of the caller's arrays; ragged or text ones raised numpy's errors."""
+    from drake_mh.cyclic.problem import ThreeLinkProblem
+
+    def base(r):
+        return np.zeros((len(r), 2)), np.zeros(len(r))
+
+    def target(r):
+        return np.tile([0.5, 0.2], (len(r), 1))
+
+    lengths, lower, upper = np.array([0.3, 0.3, 0.2]), -np.full(3, 3.0), np.full(3, 3.0)
+    component = ThreeLinkProblem(lengths, base, target, lower, upper, n_samples=16)
+    lengths[0], lower[0] = 9.0, 0.0
+    assert component.lengths[0] == 0.3 and component.lower[0] == -3.0
+    for bad in ({"lengths": [[0.3], [0.3, 0.2]]}, {"lengths": "abc"}, {"lower": [0, 0, 1j]}, {"n_samples": "16"}):
+        arguments = {"lengths": [0.3, 0.3, 0.2], "lower": lower, "upper": upper, "n_samples": 16, **bad}
+        with pytest.raises(InvalidArgument, match=next(iter(bad))):
+            ThreeLinkProblem(arguments["lengths"], base, target, arguments["lower"], arguments["upper"],
+                             n_samples=arguments["n_samples"])
+
+
+def test_a_bad_seed_is_named_before_any_work(planar5):
+    for seed in ("abc", -1, 1.5):  # 1.5 was truncated to 1, the others numpy's errors
+        with pytest.raises(InvalidArgument, match="seed must be an integer >= 0"):
+            plan(circle_task(planar5), "woa", budget=40, seed=seed)

@@ -142,6 +142,7 @@ def test_rotation_angle_accurate_from_tiny_to_large(theta, seed):
     ("panda", None, "real position"),
     ("panda", [0.5 + 1j, 0, 0.5], "real position"),
     ("panda", np.diag([1.0, 1.0, 1.0, 2.0]), "last row"),
+    ("panda", [[1, 2], [3]], "position .3,. or a pose"),  # ragged: numpy's ValueError before
 ])
 def test_bad_problem_inputs_are_named(panda, robot, target, match):
     from drake_mh.errors import InvalidIKProblem
@@ -155,3 +156,18 @@ def test_scene_of_the_wrong_type_is_named(panda):
 
     with pytest.raises(InvalidIKProblem, match="must be a drake_mh.scene.Scene"):
         IKProblem(panda, [0.5, 0, 0.5], scene="abc")
+
+
+def test_ragged_or_complex_rpy_is_named(panda):
+    from drake_mh.errors import InvalidIKProblem
+
+    for rpy in ([[0, 1], [2]], [0.1j, 0, 0], "abc"):
+        with pytest.raises(InvalidIKProblem, match="rpy"):
+            IKProblem(panda, [0.5, 0, 0.5], rpy=rpy)
+
+
+def test_the_reference_configuration_is_copied(panda):
+    q_ref = panda.home.copy()
+    problem = IKProblem(panda, [0.5, 0, 0.5], q_ref=q_ref)
+    q_ref[0] = 100.0  # outside the limits: the validated problem must not follow
+    assert problem.q_ref[0] == panda.home[0]

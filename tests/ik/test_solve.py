@@ -122,6 +122,11 @@ def test_timeout_stops_the_search(panda):
     ({"method": "pso", "budget": 0}, InvalidArgument, "budget must be an integer >= 1"),
     ({"method": "pso", "budget": 2.5}, InvalidArgument, "budget"),
     ({"method": "pso", "timeout": -1}, InvalidArgument, "timeout must be a positive"),
+    ({"method": "hybrid", "timeout": 10 ** 400}, InvalidArgument, "timeout must be a positive"),  # OverflowError
+    ({"method": "hybrid", "timeout": float("inf")}, InvalidArgument, "timeout must be a positive"),
+    ({"method": "hybrid", "timeout": "1"}, InvalidArgument, "timeout must be a positive"),
+    ({"method": "hybrid", "budget": 2 ** 63}, InvalidArgument, "budget must be an integer >= 1 and <= 1e"),
+    ({"method": "pso", "budget": 10 ** 400}, InvalidArgument, "budget must be an integer"),  # OverflowError
     ({"method": "hybrid", "pop_size": 10}, InvalidArgument, "config="),
     ({"method": "pso", "nonsense": 1}, InvalidArgument, "nonsense"),
 ])

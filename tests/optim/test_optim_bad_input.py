@@ -55,3 +55,33 @@ def test_tell_with_other_candidates_is_refused():
         opt.tell(X + 0.1, sphere(X + 0.1))
     opt.tell(X, sphere(X))                      # the refused call changed nothing
     assert opt.nfe == len(X)
+
+
+@pytest.mark.parametrize("method", ["pso", "de", "cmaes"])
+def test_complex_objective_values_are_refused(method):
+    """numpy kept the real part with only a warning: the run minimized something else."""
+    with pytest.raises(InvalidObjective, match="complex"):
+        minimize(lambda X: sphere(X) + 1j * X[:, 0], BOUNDS, method=method, budget=100, seed=0)
+    opt = get_method(method)(BOUNDS, budget=100, seed=0)
+    X = opt.ask()
+    with pytest.raises(InvalidObjective, match="complex"):
+        opt.tell(X, sphere(X) + 0j)
+
+
+@pytest.mark.parametrize("method", available_methods())
+def test_minus_infinity_is_the_minimum_it_is(method):
+    """-inf in part of the box: the first point that scores it is the answer, and the run ends
+    there (it used to raise NoFiniteValue saying 'NaN or +inf at all 400 evaluated points')."""
+
+    def cliff(X):
+        return np.where(X[:, 0] > 0.5, -np.inf, sphere(X))
+
+    res = minimize(cliff, BOUNDS, method=method, budget=4000, seed=0)
+    assert res.f == -np.inf and res.x[0] > 0.5 and cliff(res.x[None])[0] == -np.inf
+    assert res.nfe < 4000 and "-inf" in res.message
+    opt = get_method(method)(BOUNDS, budget=1000, seed=0)  # ask/tell: the run is over after the tell
+    X = opt.ask()
+    opt.tell(X, np.full(len(X), -np.inf))
+    assert opt.done and opt.result().f == -np.inf
+    with pytest.raises(AskTellError, match="-inf"):
+        opt.ask()

@@ -61,6 +61,9 @@ def test_bad_input(arm6):
         ik_along_path(arm6, np.zeros((2, 3)), ref_weight=-1.0)
     with pytest.raises(InvalidArgument, match="search_radii"):
         ik_along_path(arm6, np.zeros((2, 3)), search_radii=(0.3, -1.0))
+    for seed in ("abc", -1, 1.5, True):  # numpy's TypeError / ValueError before
+        with pytest.raises(InvalidArgument, match="seed must be an integer >= 0"):
+            ik_along_path(arm6, np.zeros((2, 3)), seed=seed)
 
 
 def test_motion_through_the_solutions_is_certified(arm6):

@@ -116,6 +116,25 @@ def test_budget_and_deadline_end_the_search(problems):
     assert timed.cpu_time < 40 * 0.05
 
 
+def test_the_warm_start_obeys_the_budget_without_a_deadline():
+    """No path exists: ``q1`` must pass 30° to go from -57° to 143°, where the shoulder's housing
+    (the joint-2 axis, q1 + 90°) meets a post at 120°. With ``budget=100`` and no timeout the warm
+    start used to grow rrt_connect's trees to 200,000 nodes (56-100 s); it adds 100 at most."""
+    scene = Scene(PANDA)
+    phi = np.deg2rad(120.0)
+    scene.add("post", Box((0.03, 0.03, 0.12)), [0.14 * np.cos(phi), 0.14 * np.sin(phi), 0.333])
+    q_start, q_goal = PANDA.home.copy(), PANDA.home.copy()
+    q_start[0], q_goal[0] = -1.0, 2.5
+    crossing = PANDA.random_configurations(2000, rng=0)
+    crossing[:, 0] = np.deg2rad(30.0)
+    assert not np.any(scene.collision_free(crossing))  # no free configuration where q1 must pass
+    result = solve_motion(MotionProblem(PANDA, scene, q_start, q_goal), "lazy_prm_star", seed=0, timeout=None,
+                          budget=100, retime=False)
+    assert not result.success and result.path is None
+    assert "the warm start found none (no path: budget reached after 100 tree nodes" in result.message
+    assert result.info["samples"] == 100
+
+
 @pytest.mark.parametrize("options", [{"batch": 0}, {"k_scale": -1.0}, {"warm_start": "yes"}, {"lanes": 1.5},
                                      {"shortcut_min_gain": 1.0}, {"sample_count": 5}])
 def test_bad_options_are_rejected(problems, options):

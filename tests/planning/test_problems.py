@@ -103,6 +103,13 @@ def test_problem_set_errors():
     with pytest.raises(InvalidArgument, match="count"):
         problem_set("cage", PANDA, count=-1)
     assert len(problem_set("cage", PANDA, count=0)) == 0
+    for kwargs in ({"seed": "abc"}, {"seed": -1}, {"seed": 1.7}, {"seed": True}, {"first": -1}, {"first": 0.5}):
+        name = next(iter(kwargs))
+        with pytest.raises(InvalidArgument, match=f"{name} must be an integer"):
+            problem_set("cage", PANDA, count=1, **kwargs)  # 1.7 was silently truncated to 1
+    for name in ("clearance", "self_clearance"):
+        with pytest.raises(InvalidArgument, match=rf"^{name} must be a finite length >= 0 in metres, got -1$"):
+            problem_set("cage", PANDA, count=1, **{name: -1})  # said "got -0.997": the generator's margin
 
 
 @pytest.mark.slow

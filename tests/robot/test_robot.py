@@ -221,10 +221,14 @@ def test_ambiguous_end_effector_needs_a_name():
     ([0, 0, 0, np.nan, 0, 0, 0], "NaN or inf"),
     ([0, 0, 0, 0, np.inf, 0, 0], "NaN or inf"),
     ("abc", "numeric"),
+    ([[0, 0, 0], [0, 0, 0, 0]], "numeric"),  # ragged: numpy's ValueError before
+    (np.zeros(7) + 1j, "real"),
 ])
 def test_bad_configurations(panda, q, match):
     with pytest.raises(InvalidConfiguration, match=match):
         panda.fk(q)
+    with pytest.raises(InvalidConfiguration, match="numeric|real|shape|NaN"):
+        panda.check_Q(q)
 
 
 def test_bad_batches(panda):

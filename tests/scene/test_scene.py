@@ -370,10 +370,25 @@ def test_capsule_obstacles_never_hang_and_match_the_closed_form():
     lambda s: Sphere("abc"), lambda s: Sphere(None), lambda s: Box("abc"), lambda s: Scene(None),
     lambda s: s.add("a", Sphere(0.1), "abc"), lambda s: s.step("abc"),
     lambda s: s.distances(PANDA.home, max_distance=np.nan), lambda s: s.in_collision(PANDA.home, margin=np.nan),
+    lambda s: s.add("a", Sphere(0.1), [[1, 2], [3]]), lambda s: s.add("a", Sphere(0.1), [1, 1, 1], rpy=[[0], [0, 0]]),
+    lambda s: s.add("a", Sphere(0.1), [1, 1, 1j]),  # ragged: numpy's ValueError before
 ])
 def test_bad_input_is_a_scene_error(call):
     with pytest.raises(SceneError):
         call(Scene(PANDA))
+
+
+def test_an_obstacle_keeps_copies_of_its_position_and_velocity():
+    """The velocity was a view of the caller's array: writing to it changed a registered obstacle's
+    velocity (what step() and the planners read) without the scene knowing."""
+    scene = Scene(PANDA)
+    position, velocity = np.array([1.0, 1.0, 1.0]), np.array([0.0, 0.1, 0.0])
+    scene.add("b", Sphere(0.1), position, velocity=velocity)
+    position[0], velocity[1] = 5.0, 9.0
+    assert scene.obstacles["b"].position[0] == 1.0 and scene.obstacles["b"].velocity_W[1] == 0.1
+    scene.move("b", velocity=velocity)
+    velocity[1] = 0.0
+    assert scene.obstacles["b"].velocity_W[1] == 9.0
 
 
 def test_failed_add_changes_nothing():

@@ -209,12 +209,18 @@ def test_moving_obstacle_is_certified_where_it_will_be():
     assert path.certified and np.allclose(scene.obstacles["ball"].position, p + [0, 0, 0.4])
 
 
-def test_certify_path_reports_the_first_failure():
+def wall_across():
+    """``(scene, q0, q1)``: a ball halfway along the straight motion from home to ``q1``."""
     scene = Scene(PANDA)
     q0 = PANDA.home
     q1 = q0.copy()
     q1[1] += 0.8
     scene.add("wall", Sphere(0.1), PANDA.fk(0.5 * (q0 + q1))[:3, 3])
+    return scene, q0, q1
+
+
+def test_certify_path_reports_the_first_failure():
+    scene, q0, q1 = wall_across()
     path = scene.certify_path(np.stack([q0, q0, q1]))
     assert not path.certified and path.first_failure == 1 and np.isnan(path.min_clearance)
     assert "blocked" in repr(path)
@@ -237,3 +243,21 @@ def test_bad_arguments_are_scene_errors():
         scene.certify_segments(q, q, duration=-1.0)
     with pytest.raises(drake_mh.errors.DrakeMhError):
         scene.certify_segments(q[:3], q[:3])
+
+
+def test_an_empty_path_is_refused_not_certified():
+    """certify_path of no configuration read certified=True with a NaN clearance."""
+    scene = cluttered(1, 2)
+    with pytest.raises(SceneError, match="at least one configuration"):
+        scene.certify_path(np.zeros((0, PANDA.nq)))
+
+
+def test_segment_free_checks_one_segment_and_refuses_several():
+    """(2, nq) inputs used to check the first row only and answer True while the second collides."""
+    scene, q0, q1 = wall_across()
+    assert scene.certify_segments(np.stack([q0, q0]), np.stack([q0, q1])).certified.tolist() == [True, False]
+    with pytest.raises(SceneError, match="one segment.*certify_segments"):
+        scene.segment_free(np.stack([q0, q0]), np.stack([q0, q1]))
+    with pytest.raises(drake_mh.errors.DrakeMhError, match="numeric"):
+        scene.segment_free([[1, 2], [3]], q0)
+    assert scene.segment_free(q0, q0) and not scene.segment_free(q0, q1)

@@ -121,6 +121,19 @@ def test_problem_validation(arm):
         ViaPointProblem(arm, START, GOAL, n_via=0)
     with pytest.raises(InvalidArgument, match="positive"):
         ViaPointProblem(arm, START, GOAL, time_bounds=(0.0, 1.0))
+    for bad in ([[0.0], [0.0, 1.0]], (0.1j, 0.0)):  # ragged: numpy's ValueError; complex: the real part kept
+        with pytest.raises(InvalidArgument, match="q_start"):
+            ViaPointProblem(arm, bad, GOAL)
+
+
+def test_problem_keeps_copies_of_start_and_goal(arm):
+    start = np.array(START, dtype=float)
+    prob = ViaPointProblem(arm, start, GOAL)
+    x = prob.bounds.mean(axis=1)[None]
+    before = prob.terms(x)["fitness"][0]
+    start[:] += 1.0  # the validated problem must not follow
+    assert np.array_equal(prob.q_start, np.array(START, dtype=float))
+    assert prob.terms(x)["fitness"][0] == before
 
 
 def test_minimize_finds_the_free_optimum(arm):

@@ -154,6 +154,33 @@ def test_help_says_what_max_seconds_bounds():
     assert re.search(r"--max-seconds S .*S seconds \(wall clock\) after it prints its URL.*until Ctrl-C", text)
 
 
+@pytest.mark.parametrize("option, value", [("--seed", "-1"), ("--budget", "0"), ("--obstacle-radius", "nan")])
+def test_cli_bad_numbers_exit_2_with_one_line(option, value):
+    """``--seed -1`` gave "internal error: ValueError" once the app had started."""
+    out = subprocess.run([sys.executable, "-m", "drake_mh", "app", option, value, "--max-seconds", "1"],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and option.lstrip("-").split("-")[0] in lines[0] and "internal error" not in lines[0]
+
+
+def test_help_says_which_url_to_open_and_which_port_the_page_takes():
+    out = subprocess.run([sys.executable, "-m", "drake_mh", "app", "--help"], capture_output=True, text=True,
+                         timeout=120, env={**os.environ, "COLUMNS": "200"})
+    text = " ".join(out.stdout.split())
+    assert "open http://localhost:PORT in a browser" in text
+    assert "the first free port after Meshcat's" in text
+    assert "next free port" not in text
+
+
+def test_bad_seed_budget_and_obstacle_are_named():
+    for kwargs, match in (({"seed": -1}, "seed"), ({"seed": 1.5}, "seed"), ({"budget": 0}, "budget"),
+                          ({"obstacle": (0, 0)}, "obstacle"), ({"obstacle": (0, 0, float("nan"))}, "obstacle"),
+                          ({"n_points": "12"}, "n_points"), ({"fps": "30"}, "fps")):
+        with pytest.raises(InvalidArgument, match=match):
+            AppConfig(**kwargs)
+
+
 def test_cli_bad_method_exits_2():
     out = subprocess.run([sys.executable, "-m", "drake_mh", "app", "--method", "simplex", "--max-seconds", "1"],
                          capture_output=True, text=True, timeout=120)

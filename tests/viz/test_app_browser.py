@@ -27,6 +27,23 @@ FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-
 
 
 
+_OUTSIDE_THE_PANEL = """
+const panel = document.getElementById("panel");
+const box = panel.getBoundingClientRect();
+const left = box.left + panel.clientLeft, right = left + panel.clientWidth;   // clientWidth: no scrollbar
+const out = [];
+for (const element of panel.querySelectorAll("button, .slider > *, #status")) {
+  const r = element.getBoundingClientRect();
+  if (r.width === 0 && r.height === 0) continue;                              // not displayed
+  if (r.left < left - 0.5 || r.right > right + 0.5)
+    out.push([element.closest("[data-name]")?.dataset.name || element.textContent, element.tagName,
+              Math.round(r.left - left), Math.round(right - r.right)]);
+}
+if (panel.scrollWidth > panel.clientWidth) out.push(["panel", "scrollWidth", panel.scrollWidth, panel.clientWidth]);
+return out;
+"""
+
+
 def _default_sigint():
     """In the app's process, before exec: Ctrl-C as in a terminal. A test run started as a
     background job (``cmd &`` in a script) ignores SIGINT, and a child would inherit that."""
@@ -140,6 +157,11 @@ def test_app_in_headless_chromium(tmp_path):
             element = _button(driver, name) or _slider_field(driver, name)
             assert element is not None and element.is_displayed(), name
             assert box["y"] < element.rect["y"] and element.rect["y"] + element.rect["height"] <= height, name
+        # and every control lies fully inside the panel's visible width, beside its scrollbar: each
+        # slider's value field was cut off by 9 px (the grid's 1fr column could not shrink below the
+        # range input's natural width), and typing in it scrolled the whole panel sideways
+        outside = driver.execute_script(_OUTSIDE_THE_PANEL)
+        assert outside == [], outside
         plan = _button(driver, "Plan to goal pose")
         assert plan is not None and _slider_field(driver, "Goal joint 6") is not None
         driver.execute_script("arguments[0].scrollIntoView();", plan)
@@ -170,6 +192,7 @@ def test_app_in_headless_chromium(tmp_path):
         field.send_keys("0.4", Keys.ENTER)
         moved = _wait(lambda: (s := _status(status)).get("obstacle") and abs(s["obstacle"][2] - 0.4) < 1e-6 and s,
                       60, "the obstacle to move")
+        assert driver.execute_script("return document.getElementById('panel').scrollLeft;") == 0
         assert moved["obstacle"][:2] == generated["obstacle"][:2]
         assert moved["message"] != generated["message"] or moved["events"] > generated["events"]
         time.sleep(1.0)

@@ -62,3 +62,26 @@ def test_page_takes_the_first_free_port_after_meshcats():
             second.close()
     finally:
         first.close()
+
+
+def test_page_takes_the_next_free_port_even_past_7999():
+    """Meshcat on 7998 with 7999 busy: the page failed to start ("cannot serve the app's page ...
+    port from 7999") although ports above were free."""
+    import socket
+
+    busy = socket.socket()
+    try:
+        try:
+            busy.bind(("localhost", 7999))
+            busy.listen()
+        except OSError:  # another process holds it: busy all the same
+            pass
+        page = AppPage("<p>a</p>", first=7999)
+        try:
+            assert page.port > 7999
+            with urllib.request.urlopen(page.url + "/", timeout=10) as response:
+                assert response.read() == b"<p>a</p>"
+        finally:
+            page.close()
+    finally:
+        busy.close()

@@ -73,6 +73,7 @@ def test_plan_to_goal_joints_moves_along_the_certified_motion_to_the_goal(app, m
     assert plan["success"] and plan["method"] == "rrt_connect_smooth" and plan["goal"] == "joints"
     assert plan["waypoints"] >= 3                                # a detour: the straight line is blocked
     assert plan["min_clearance"] > 0 and "certified clearance >=" in state["message"]
+    assert "(bound over the whole motion), sampled minimum" in state["message"]  # each figure labelled
     assert state["message"].startswith("at the goal joints") and app.mode == "idle"
     np.testing.assert_allclose(app.view.q, GOAL_Q, atol=1e-12)  # the shown robot ends at the goal
     np.testing.assert_allclose(state["q"], GOAL_Q, atol=1e-12)

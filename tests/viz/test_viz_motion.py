@@ -55,6 +55,22 @@ def test_the_clearance_is_shown_at_the_closest_frame(meshcat, planned):
     assert caption.startswith("rrt_connect: planned in") and f"{result.min_clearance * 1e3:.1f} mm" in caption
 
 
+def test_the_caption_shows_the_certified_bound_beside_the_sampled_minimum(planned):
+    """"certified clearance >= 0.0 mm" alone said nothing useful about a motion that passed 8 mm
+    away (the bound is the sphere model's): the sampled figure stands beside it, each labelled."""
+    import re
+
+    problem, result = planned
+    caption = motion_caption(result, problem.scene)
+    bound, sampled = (float(x) for x in re.search(
+        r"certified clearance >= ([\d.]+) mm \(bound over the whole motion\), sampled minimum ([\d.]+) mm "
+        r"\(exact distance at 60 configurations\)", caption).groups())
+    t = np.linspace(result.trajectory.start_time, result.trajectory.end_time, 60)
+    exact = problem.scene.exact_min_distance(result.trajectory.position(t)).min()
+    assert sampled == pytest.approx(exact * 1e3, abs=0.051) and bound <= sampled
+    assert "sampled" not in motion_caption(result)  # no scene: the bound alone, labelled
+
+
 def test_report_page_is_recorded_without_the_shared_server(planned):
     problem, result = planned
     html = motion_html(problem, result, fps=10)

@@ -109,3 +109,52 @@ def test_every_drawing_method_checks_the_thread(meshcat, planar2r):
     thread.join(timeout=60)
     assert errors == {name: True for name in calls}
     view.set_q(planar2r.home)                    # the owner thread still draws
+
+
+_HANDED_OVER = """
+import threading
+import drake_mh
+from drake_mh.errors import VisualizationError
+from drake_mh.viz import View, get_meshcat, close_meshcat
+robot = drake_mh.load_robot("panda")
+made = {}
+
+def worker():
+    made["view"] = View(robot, meshcat=get_meshcat(port=0, announce=False))  # handed to the main thread
+
+def tidy_worker():  # everything it makes dies with it: destroyed on its own thread, port freed
+    meshcat = get_meshcat(port=0, announce=False)
+    made["port"] = meshcat.port()
+    View(robot, meshcat=meshcat)
+    del meshcat
+    close_meshcat()
+
+for target in (worker, tidy_worker):
+    thread = threading.Thread(target=target)
+    thread.start()
+    thread.join()
+try:
+    made["view"].set_q(robot.home)
+except VisualizationError as exc:
+    print("refused:", exc)
+import socket
+with socket.socket() as s:
+    s.bind(("localhost", made["port"]))  # the tidy worker's server is gone
+print("port free")
+"""
+
+
+def test_a_view_handed_from_a_worker_thread_does_not_abort_the_process(tmp_path):
+    """Drake's Meshcat asserts in its destructor that its creating thread destroys it: a view made
+    in a worker and kept by the main thread ended the process with SIGABRT (rc -6) at exit."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "handed_over.py"
+    script.write_text(_HANDED_OVER)
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "refused: this Meshcat server was started by another thread" in out.stdout
+    assert "port free" in out.stdout
+    assert "serves until the process exits" in out.stderr  # the handed-over server, said once
+    assert out.stderr.count("serves until the process exits") == 1

@@ -3,7 +3,7 @@
 Method of :func:`drake_mh.planning.solve_motion`:
 
 * ``lazy_prm_star`` — informed lazy PRM*: ``rrt_connect``'s certified path first (its time
-  counts), then batches of ``batch`` samples drawn in the informed set of the best path
+  counts; at most ``budget`` tree nodes), then batches of ``batch`` samples drawn in the informed set of the best path
   (Gammell, Barfoot, Srinivasa, "Informed sampling for asymptotically optimal path planning",
   T-RO 2018), each node joined to its ``e (1 + 1/d) log n`` nearest (PRM*: Karaman & Frazzoli,
   "Sampling-based algorithms for optimal motion planning", IJRR 2011), the shortest path of the

@@ -40,7 +40,8 @@ class LazyPRMStarConfig:
             rebuilt and searched).
         k_scale: neighbours per node as a multiple of PRM*'s ``e (1 + 1/d) log n`` (Karaman &
             Frazzoli 2011; below 1 the asymptotic optimality is lost).
-        warm_start: start from ``rrt_connect``'s path (its time counts): the informed sampling
+        warm_start: start from ``rrt_connect``'s path (its time counts, within the deadline, and
+            it adds at most as many tree nodes as the sample budget): the informed sampling
             then begins at once; without it, samples are uniform until the graph holds a path.
         shortcut_iterations, shortcut_min_gain: random shortcuts of each new shortest path of the
             graph before it is compared with the best (as ``rrt_connect``'s shortcut).
@@ -129,15 +130,16 @@ def plan(problem, goals, rng, deadline, budget, **options):
     begin = time.perf_counter()
     prepare_time = prepare(problem) if not _PREPARED else 0.0
     limit = (lambda: np.inf) if deadline is None else (lambda: deadline + prepare_time - time.perf_counter())
+    samples = DEFAULT_SAMPLES if budget is None else budget
     init, init_goal, warm_info = np.empty((0, goals.shape[1])), 0, {}
-    if config.warm_start:
-        path, warm_info = rrt.plan(problem, goals, rng, None if deadline is None else deadline + prepare_time, None)
+    if config.warm_start:  # bounded by the budget too (tree nodes), not only by the deadline
+        path, warm_info = rrt.plan(problem, goals, rng, None if deadline is None else deadline + prepare_time,
+                                   samples)
         if path is not None:
             init, init_goal = path, warm_info["goal"]
     warm_time = time.perf_counter() - begin - prepare_time
     seed = rng.bit_generator.random_raw()
-    path, outcome, goal, stats = _kernel_call(problem, goals, init, init_goal, seed,
-                                              DEFAULT_SAMPLES if budget is None else budget, limit(), config)
+    path, outcome, goal, stats = _kernel_call(problem, goals, init, init_goal, seed, samples, limit(), config)
     info = {name: int(stats[i]) for name, i in _COUNTS}
     found = len(init) > 0 or stats[S.T_FOUND] > 0
     # (numpy, not the kernel's _length: a first call of a numba function from Python loads it, ~2 ms in the clock)

@@ -7,7 +7,7 @@ import logging
 
 import numpy as np
 
-from drake_mh.errors import InvalidArgument, UnknownMethod
+from drake_mh.errors import DrakeMhError, InvalidArgument, UnknownMethod
 from drake_mh.planning.problems.fixtures import FIXTURES
 from drake_mh.planning.problems.generate import (check_sphere_tolerance, generate_problem, ready_configuration,
                                                   tool_transform)
@@ -198,10 +198,21 @@ def _panda_hand(finger: float):
     return drake_mh.load_robot(copy, ee_frame=ee, locked=locked, packages={"example-robot-data": str(root)})
 
 
-def check_count(count) -> int:
+def check_count(count, what: str = "count", unit: str = "a whole number of problems") -> int:
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 0:
-        raise InvalidArgument(f"count must be a whole number of problems >= 0, got {count!r}")
+        raise InvalidArgument(f"{what} must be {unit} >= 0, got {count!r}")
     return int(count)
+
+
+def _check_clearances(clearance, self_clearance) -> tuple[float, float]:
+    """Both as lengths >= 0 [m], checked before any problem is made (the generator asks IK for a
+    margin more, which a message must not show)."""
+    from drake_mh.scene.segments import check_clearance
+
+    try:
+        return check_clearance(clearance, "clearance"), check_clearance(self_clearance, "self_clearance")
+    except DrakeMhError as exc:
+        raise InvalidArgument(str(exc)) from None
 
 
 def problem_set(name: str, robot="panda", count: int = 10, seed: int = 0, clearance: float = 0.0,
@@ -231,23 +242,27 @@ def problem_set(name: str, robot="panda", count: int = 10, seed: int = 0, cleara
 
     Raises:
         UnknownMethod: an unknown set name (the message lists them).
-        InvalidArgument: a negative ``count`` or a non-positive ``sphere_tolerance``.
+        InvalidArgument: ``count``, ``first`` or ``seed`` not an integer >= 0, a clearance not a
+            length >= 0, or a non-positive ``sphere_tolerance``.
         InvalidMotionProblem: no certified-free pair found for a problem (the robot cannot
             reach into this fixture).
     """
     if name not in FIXTURES:
         raise UnknownMethod(name, list(FIXTURES), what="problem set")
     count = check_count(count)
+    first = check_count(first, "first", "an integer (the first problem's index)")
+    seed = check_count(seed, "seed", "an integer")
+    clearance, self_clearance = _check_clearances(clearance, self_clearance)
     sphere_tolerance = check_sphere_tolerance(sphere_tolerance)
     robot = load_problem_robot(robot)
     problems, info = [], []
-    for index in range(int(first), int(first) + count):
-        problem, data = generate_problem(name, robot, index, seed=int(seed), clearance=clearance,
+    for index in range(first, first + count):
+        problem, data = generate_problem(name, robot, index, seed=seed, clearance=clearance,
                                          self_clearance=self_clearance, self_collision=self_collision,
                                          code=SET_CODES[name], sphere_tolerance=sphere_tolerance)
         problems.append(problem)
         info.append(data)
-    return ProblemSet(problems, name=name, robot=robot, seed=int(seed), info=info)
+    return ProblemSet(problems, name=name, robot=robot, seed=seed, info=info)
 
 
 def motionbenchmaker_set(path, name: str, robot="panda_hand_mbm", count: int | None = None, clearance: float = 0.0,
@@ -272,12 +287,13 @@ def motionbenchmaker_set(path, name: str, robot="panda_hand_mbm", count: int | N
 
     Raises:
         UnknownMethod: an unknown set name.
-        InvalidArgument: a negative ``count`` or a non-positive ``sphere_tolerance``.
+        InvalidArgument: a negative ``count`` or clearance, or a non-positive ``sphere_tolerance``.
     """
     from drake_mh.errors import InvalidMotionProblem
 
     if name not in MBM_SETS:
         raise UnknownMethod(name, list(MBM_SETS), what="MotionBenchMaker set")
+    clearance, self_clearance = _check_clearances(clearance, self_clearance)  # else every problem is skipped
     sphere_tolerance = check_sphere_tolerance(sphere_tolerance)
     robot = load_problem_robot(robot)
     archive = read_motionbenchmaker(path, sets=[name]).get(name, [])

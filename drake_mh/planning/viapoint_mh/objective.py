@@ -97,7 +97,8 @@ class ViaPointMotionConfig:
         seed_fraction, seed_sigma: see ``init``.
         warm_start: name of a registered motion method (``"rrt_connect"``) whose path seeds
             ``warm_fraction`` of the first population (its via points, resampled to ``K``, and
-            noisy copies with ``warm_sigma`` rad); ``None``: cold start.
+            noisy copies with ``warm_sigma`` rad); ``None``: cold start. It plans within the
+            run's deadline and with the run's ``budget`` in its own unit (tree nodes).
         warm_fraction, warm_sigma: see ``warm_start``.
         stall: stop early when the best fitness improved by less than ``1e-4`` (relative)
             during the last ``stall`` × budget evaluations and the best individual's penalty

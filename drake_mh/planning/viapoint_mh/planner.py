@@ -51,7 +51,13 @@ DEFAULT_BUDGET = 6000
 _CONFIG_FIELDS = frozenset(ViaPointMotionConfig.__dataclass_fields__)
 
 
-def _split_options(options: dict) -> tuple[ViaPointMotionConfig, dict]:
+def _split_options(options: dict, optimizer: str | None = None) -> tuple[ViaPointMotionConfig, dict]:
+    """``(config, the optimizer's hyper-parameters)`` of ``solve_motion``'s keywords.
+
+    Raises:
+        InvalidArgument: a bad config, or an option that is neither a config field nor a
+            hyper-parameter of ``optimizer`` (the message lists both).
+    """
     config = options.pop("config", None)
     if config is not None and not isinstance(config, ViaPointMotionConfig):
         raise InvalidArgument(f"config must be a ViaPointMotionConfig, got {type(config).__name__}")
@@ -62,7 +68,17 @@ def _split_options(options: dict) -> tuple[ViaPointMotionConfig, dict]:
         import dataclasses
 
         config = dataclasses.replace(config, **fields)
-    return config, options  # the rest: the optimizer's hyper-parameters
+    if optimizer is not None and options:  # the rest: the optimizer's hyper-parameters
+        import dataclasses
+
+        from drake_mh.optim import get_method
+
+        known = sorted(f.name for f in dataclasses.fields(get_method(optimizer).Config))
+        unknown = sorted(set(options) - set(known))
+        if unknown:
+            raise InvalidArgument(f"mh_{optimizer}: unknown option(s) {unknown}; options are the via-point fields "
+                                  f"{sorted(_CONFIG_FIELDS | {'config'})} and {optimizer}'s hyper-parameters {known}")
+    return config, options
 
 
 def resample_via(path: np.ndarray, K: int) -> np.ndarray:
@@ -95,11 +111,12 @@ def _warm_method(name: str):
         raise InvalidArgument(f"warm_start: {exc}") from None
 
 
-def _warm_path(problem, goals, rng, deadline, name: str) -> tuple[np.ndarray | None, dict]:
+def _warm_path(problem, goals, rng, deadline, budget: int, name: str) -> tuple[np.ndarray | None, dict]:
+    """The warm-start planner's path, within the deadline and ``budget`` of its own unit (tree nodes)."""
     function = _warm_method(name)
     start = time.perf_counter()
     child = np.random.default_rng(rng.integers(2 ** 63))
-    path, info = function(problem, goals, child, deadline, None)
+    path, info = function(problem, goals, child, deadline, budget)
     out = {"method": name, "time": time.perf_counter() - start, "found": path is not None}
     if path is not None:
         path = np.asarray(path, dtype=float)
@@ -285,7 +302,7 @@ def prepare(problem, optimizer: str | None = None, **options) -> None:
     Raises:
         InvalidArgument: bad options (the same as :func:`plan` would raise).
     """
-    config, _ = _split_options(dict(options))
+    config, _ = _split_options(dict(options), optimizer)
     key = (id(problem.robot), config.trajectory)
     if _PREPARED.get(key) is not problem.robot:
         robot = problem.robot
@@ -311,12 +328,12 @@ def plan(problem, goals, rng, deadline, budget, *, optimizer: str, **options):
     """Plan with via-point trajectory optimization (module docstring); ``options``: the fields
     of :class:`~.objective.ViaPointMotionConfig` (or ``config=``) and the optimizer's
     hyper-parameters."""
-    config, params = _split_options(dict(options))
+    config, params = _split_options(dict(options), optimizer)
     budget = DEFAULT_BUDGET if budget is None else int(budget)
     info = {"optimizer": optimizer, "n_via": config.n_via, "trajectory": config.trajectory, "budget": budget}
     warm = None
     if config.warm_start is not None:
-        warm, info["warm_start"] = _warm_path(problem, goals, rng, deadline, config.warm_start)
+        warm, info["warm_start"] = _warm_path(problem, goals, rng, deadline, budget, config.warm_start)
     objective = ViaPointMotion(problem.robot, problem.scene, problem.q_start, goals, problem.clearance,
                                problem.self_clearance, config, problem.frame)
     reserve = int(budget * config.repair_fraction) if config.repair and config.repair_rounds else 0

@@ -55,8 +55,14 @@ def optimal_manipulability(robot, target, starts: int = 64, seed: int = 0, theta
 
     Returns:
         ``(float, (nq,) array)``; ``μ* = -inf`` if no start reached the target.
+
+    Raises:
+        InvalidArgument: ``starts`` or ``seed`` not an integer >= 0 (1.5 is not truncated).
     """
-    return _cached(robot.name, robot, tuple(np.asarray(target, dtype=float).round(12)), int(starts), int(seed),
+    from drake_mh.optim.base import check_seed
+
+    starts, seed = check_seed(starts, "starts"), check_seed(seed)
+    return _cached(robot.name, robot, tuple(np.asarray(target, dtype=float).round(12)), starts, seed,
                    None if theta_hint is None else tuple(np.asarray(theta_hint, dtype=float)))
 
 

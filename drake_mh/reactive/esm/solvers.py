@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from drake_mh.errors import InvalidArgument
+from drake_mh.optim.base import make_rng
 from drake_mh.reactive.esm.config import CONSTRAINT_HANDLINGS
 from drake_mh.reactive.esm.problem import ESMObjective, ESMStep
 
@@ -53,8 +54,12 @@ class StepSolver:
     name = "solver"
 
     def reset(self, seed=None) -> None:
-        """Starts a new run (forgets the warm-start state)."""
-        self.rng = np.random.default_rng(seed)
+        """Starts a new run (forgets the warm-start state).
+
+        Raises:
+            InvalidArgument: ``seed`` is not ``None``, an integer >= 0 or a numpy seed object.
+        """
+        self.rng = make_rng(seed, "seed")
 
     def solve(self, robot, step: ESMStep) -> StepSolution:  # pragma: no cover - interface
         raise NotImplementedError

@@ -60,6 +60,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drake_mh.errors import InvalidArgument, UnknownMethod
+from drake_mh.optim.base import check_seed
 from drake_mh.paths.continuity import LocalIKProblem, revolute_mask, solve_near, wrap_toward
 from drake_mh.paths.ik_path import joint_steps
 from drake_mh.reactive.follower.detour import DetourConfig
@@ -309,7 +310,7 @@ class RegeneratingFollower(CertifiedMotion):
         self.config = config if config is not None else FollowerConfig()
         if not isinstance(self.config, FollowerConfig):
             raise InvalidArgument("config must be a drake_mh.reactive.follower.FollowerConfig")
-        self.seed = int(seed)
+        self.seed = check_seed(seed)
         self.points, self.Q = P, Q.copy()
         self.index = int(index)
         self.executed = np.full_like(self.Q, np.nan)

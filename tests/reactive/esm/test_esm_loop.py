@@ -149,3 +149,11 @@ def test_executed_motion_is_certified_between_the_samples(robot):
                           ((0.0, tuple(v)),))
     bad = certify_esm_motion(robot, dataclasses.replace(scenario, obstacles=(ball,)), run.t, run.theta)
     assert not bad["motion_certified"] and 1 <= bad["motion_first_failure"] <= 10
+
+
+def test_bad_seed_or_starts_of_the_reference_optimum_are_named(robot):
+    from drake_mh.errors import InvalidArgument
+
+    for kwargs in ({"seed": 1.5}, {"seed": "abc"}, {"starts": 2.5}, {"starts": -1}):  # 1.5 was truncated
+        with pytest.raises(InvalidArgument, match=f"{next(iter(kwargs))} must be an integer >= 0"):
+            optimal_manipulability(robot, TARGET, **kwargs)

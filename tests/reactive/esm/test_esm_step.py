@@ -149,6 +149,9 @@ def test_config_and_solver_errors(robot):
         ESMConfig(dt=0.0)
     with pytest.raises(InvalidArgument, match="layers"):
         AMNN(layers=0)
+    for seed in ("abc", -1, 1.5):  # numpy's TypeError / ValueError before
+        with pytest.raises(InvalidArgument, match="seed must be"):
+            AMNN(layers=2, agents=4).reset(seed)
     with pytest.raises(UnknownMethod, match="pso"):
         MetaheuristicSolver("nope", budget=10)
     with pytest.raises(InvalidArgument, match="handling"):

@@ -174,3 +174,6 @@ def test_bad_input_says_how_to_fix(robot, planned):
         RegeneratingFollower(robot, scene, planned[0], planned[1][:-1])
     with pytest.raises(InvalidArgument, match="index"):
         RegeneratingFollower(robot, scene, *planned, index=99)
+    for seed in ("abc", -1, 1.5):  # 1.5 was truncated to 1, the others numpy's errors at the first regeneration
+        with pytest.raises(InvalidArgument, match="seed must be an integer >= 0"):
+            RegeneratingFollower(robot, scene, *planned, seed=seed)
