@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from drake_reference import FreshPlant
+from references import FreshPlant
 from robot_fixtures import erd_root
 
 from drake_mh.trajectories.export import load_trajectory

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 import yaml
-from drake_reference import FreshPlant
+from references import FreshPlant
 from traj_helpers import random_waypoints
 
 from drake_mh.errors import InvalidArgument, InvalidTrajectory, LimitViolation

@@ -7,7 +7,7 @@ import logging
 
 import numpy as np
 import pytest
-from drake_reference import FreshPlant
+from references import FreshPlant
 from robot_fixtures import erd_root
 from traj_helpers import random_waypoints
 
