@@ -57,10 +57,10 @@ def test_summary_tables_ranks_and_anchors():
     assert "| cage | 4 | 8.0 | 75 |" in text  # one problem of four has a free straight line
     assert "| rrt_connect | 100 (4/4) |" in text and "| straight | 25 (1/4) |" in text
     assert "Time to a verified motion: 4 blocks" in text and "Friedman chi2" in text
-    assert "| rrt_connect | 1.25 | (best) | |" in text  # ranks 2, 1, 1, 1
+    assert "| rrt_connect | 1.25 | (best) |" in text  # ranks 2, 1, 1, 1
     assert "VAMP" in text and "cuRobo" in text
     assert module.summarize([]) == "no finished case"
-    assert np.isnan(module._median([float("nan")]))
+    assert np.isnan(module.median([float("nan")]))
 
 
 def test_scene_files_join_the_grids(monkeypatch):
