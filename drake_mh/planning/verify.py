@@ -41,6 +41,12 @@ from drake_mh.planning.result import MotionResult
 REPORT_TOLERANCE = 1e-3
 """[m] the certified minimum clearance is refined to within this of the smallest value seen."""
 
+VERIFY_PARTS = ("path_certification", "retiming", "limit_certification", "trajectory_clearance")
+"""The parts of ``verify_time`` timed in ``info["verify_parts"]`` ([s] each, every retimer tried
+summed): the path's collision certificate; the retimers' solves (a failed one included); the
+certification of their trajectories against the robot's limits; the certified clearance of the
+executed trajectory."""
+
 TRAJECTORY_SHIFTS = (1e-3, 1e-4, 1e-5)
 """[m] largest sphere displacement allowed between a retimed trajectory and its sampled chords:
 1 mm first, then finer (about 3x more samples each) where a path certified close to its
@@ -161,7 +167,10 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
         result.success, result.message = False, why
         return result
     result.goal_index = goal_index if result.goal_index is None else result.goal_index
+    parts = result.info["verify_parts"] = dict.fromkeys(VERIFY_PARTS, 0.0)
+    tick = time.perf_counter()
     cert = scene.certify_path(P, problem.clearance, problem.self_clearance, tolerance=REPORT_TOLERANCE)
+    parts["path_certification"] = time.perf_counter() - tick
     result.info["certificate"] = cert
     if not cert.certified:
         result.success = False
@@ -173,7 +182,7 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
     result.success, result.message = True, "certified"
     if retime:
         trajectory, message = _retime(problem, P, RETIME_CHOICES[retime], cert, velocity_scaling,
-                                      acceleration_scaling)
+                                      acceleration_scaling, parts)
         if trajectory is None:
             result.success, result.message = False, message
         else:
@@ -267,10 +276,12 @@ def _reason(method: str, text: str) -> str:
 
 
 def _retime(problem, P: np.ndarray, methods: tuple, path_certificate, velocity_scaling=None,
-            acceleration_scaling=None) -> tuple[object, str]:
+            acceleration_scaling=None, parts: dict | None = None) -> tuple[object, str]:
     """The first of ``methods`` that retimes ``P``; the executed motion certified
     (:func:`trajectory_clearance`). On failure: one short reason per retimer and how to get the
-    certified path alone."""
+    certified path alone. Adds the seconds of each part to ``parts`` (:data:`VERIFY_PARTS`)."""
+    import time
+
     from drake_mh.errors import DrakeMhError
     from drake_mh.trajectories import retime
 
@@ -279,15 +290,23 @@ def _retime(problem, P: np.ndarray, methods: tuple, path_certificate, velocity_s
     W = P[keep]
     if len(W) < 2:  # the start is the goal: stay there
         return _stationary(robot, W[0], path_certificate)
+    parts = {} if parts is None else parts
     reasons = []
     for method in methods:
+        tick = time.perf_counter()
         try:
             trajectory = retime(W, robot, method, velocity_scaling=velocity_scaling,
                                 acceleration_scaling=acceleration_scaling)
         except DrakeMhError as exc:
+            parts["retiming"] = parts.get("retiming", 0.0) + time.perf_counter() - tick
             reasons.append(_reason(method, exc))
             continue
+        certifying = float(trajectory.info.get("certify_time", 0.0))
+        parts["retiming"] = parts.get("retiming", 0.0) + time.perf_counter() - tick - certifying
+        parts["limit_certification"] = parts.get("limit_certification", 0.0) + certifying
+        tick = time.perf_counter()
         clearance, why = trajectory_clearance(problem, trajectory, path_certificate, W)
+        parts["trajectory_clearance"] = parts.get("trajectory_clearance", 0.0) + time.perf_counter() - tick
         if not np.isnan(clearance):  # +inf: a scene without obstacles or checked self pairs
             trajectory.info["certified_clearance"] = clearance
             return trajectory, ""
