@@ -202,11 +202,15 @@ def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, s
     The path's smallest clearance is at most ``U``, the sphere-model clearance at its waypoints
     and segment midpoints (configurations on it). A segment certified with ``lower >= U -
     tolerance`` already keeps the path's bound within ``tolerance`` of that minimum; only the
-    others are certified again with ``tolerance`` (each then within it of its own minimum, which
-    is at least the path's). Same promise as refining every segment, at a fraction of the cost
-    where most segments keep well clear (measured 0.15 s instead of 7.6 s on a MotionBenchMaker
-    path of the meshed Panda). The bounds stay certified whatever ``U`` is: it only chooses what
-    to refine.
+    others are first certified at the raised clearance ``U - tolerance / 2`` (a plain
+    certificate: pieces are cut only until their bound clears that level, no per-segment minimum
+    is searched), which puts their ``lower`` within ``tolerance`` of ``U``; those that fail it (a
+    configuration on them is below that level, or undecided) are certified again with
+    ``tolerance`` (each then within it of its own minimum, which is at least the path's). Same
+    promise as refining every segment, at a fraction of the cost where most segments keep well
+    clear (measured 0.15 s instead of 7.6 s on a MotionBenchMaker path of the meshed Panda; the
+    raised certificate: about 5-10 ms instead of 90-130 ms on sampled trajectories there). The
+    bounds stay certified whatever ``U`` is: it only chooses what to refine and to which level.
     """
     if not cert.all_certified or not len(cert.lower) or not np.all(np.isfinite(cert.lower)):
         return cert
@@ -215,12 +219,21 @@ def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, s
     refine = np.flatnonzero(cert.lower < upper - tolerance)
     if not len(refine):
         return cert
-    fine = certify_segments(scene, Q[:-1][refine], Q[1:][refine], clearance, self_clearance, tolerance=tolerance,
-                            max_evaluations=max_evaluations)
     lower, evaluations = cert.lower.copy(), cert.evaluations.copy()
-    ok = fine.certified
-    lower[refine[ok]] = np.maximum(lower[refine[ok]], fine.lower[ok])
-    evaluations[refine] += fine.evaluations
+    level = upper - 0.5 * tolerance
+    if level > clearance:
+        raised = certify_segments(scene, Q[:-1][refine], Q[1:][refine], level, self_clearance,
+                                  max_evaluations=max_evaluations)
+        ok = raised.certified
+        lower[refine[ok]] = np.maximum(lower[refine[ok]], raised.lower[ok])
+        evaluations[refine] += raised.evaluations
+        refine = refine[~ok]
+    if len(refine):
+        fine = certify_segments(scene, Q[:-1][refine], Q[1:][refine], clearance, self_clearance,
+                                tolerance=tolerance, max_evaluations=max_evaluations)
+        ok = fine.certified
+        lower[refine[ok]] = np.maximum(lower[refine[ok]], fine.lower[ok])
+        evaluations[refine] += fine.evaluations
     return SegmentCertificate(cert.status, cert.t_stop, lower, cert.lower_self, evaluations, cert.clearance,
                               cert.self_clearance)
 

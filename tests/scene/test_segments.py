@@ -261,3 +261,23 @@ def test_segment_free_checks_one_segment_and_refuses_several():
     with pytest.raises(drake_mh.errors.DrakeMhError, match="numeric"):
         scene.segment_free([[1, 2], [3]], q0)
     assert scene.segment_free(q0, q0) and not scene.segment_free(q0, q1)
+
+
+def test_path_tolerance_on_many_short_segments_agrees_with_dense_sampling():
+    """A finely sampled motion (a retimed trajectory's shape): its segments are refined by a
+    certificate at a raised clearance; the bound must still be within the tolerance of the
+    densely sampled minimum and never above it."""
+    scene = cluttered(2)
+    QA, QB = free_pairs(scene, 5, 40, 0.3)
+    checked = 0
+    for i in range(12):
+        Q = dense(QA[i], QB[i], 121)
+        loose, tight = scene.certify_path(Q), scene.certify_path(Q, tolerance=1e-3)
+        assert loose.certified == tight.certified
+        if not tight.certified:
+            continue
+        sampled = scene.batch_min_distance(np.vstack([dense(a, b, 41) for a, b in zip(Q[:-1], Q[1:])])).min()
+        assert loose.min_clearance <= tight.min_clearance <= sampled + 1e-9
+        assert tight.min_clearance >= sampled - 1e-3 - 1e-9
+        checked += 1
+    assert checked >= 3
