@@ -329,9 +329,9 @@ def _retime(problem, P: np.ndarray, methods: tuple, tight, velocity_scaling=None
         certifying = float(trajectory.info.get("certify_time", 0.0))
         parts["retiming"] = parts.get("retiming", 0.0) + time.perf_counter() - tick - certifying
         parts["limit_certification"] = parts.get("limit_certification", 0.0) + certifying
+        certificate = tight() if _on_certified_path(trajectory, W) else None
         tick = time.perf_counter()
-        clearance, why = trajectory_clearance(problem, trajectory, tight() if _on_certified_path(trajectory, W)
-                                              else None, W)
+        clearance, why = trajectory_clearance(problem, trajectory, certificate, W)
         parts["trajectory_clearance"] = parts.get("trajectory_clearance", 0.0) + time.perf_counter() - tick
         if not np.isnan(clearance):  # +inf: a scene without obstacles or checked self pairs
             trajectory.info["certified_clearance"] = clearance

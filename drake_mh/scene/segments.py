@@ -39,6 +39,13 @@ MIN_PIECE = 1e-9
 MAX_EVALUATIONS = 1 << 16
 """Most configurations evaluated per segment before it is undecided."""
 
+RAISED_TRIES = 4
+"""Certificates at a raised clearance :func:`_tighten` tries before a per-segment minimum search."""
+
+RAISED_PROBES = 33
+"""Evenly spaced configurations of a segment blocked at a raised clearance whose clearances
+:func:`_tighten` reads for the next, lower, level (with the blocking configuration)."""
+
 
 def check_clearance(value, what: str) -> float:
     """``value`` as a finite length >= 0 [m], or :class:`SceneError` naming ``what``."""
@@ -204,8 +211,11 @@ def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, s
     tolerance`` already keeps the path's bound within ``tolerance`` of that minimum; only the
     others are first certified at the raised clearance ``U - tolerance / 2`` (a plain
     certificate: pieces are cut only until their bound clears that level, no per-segment minimum
-    is searched), which puts their ``lower`` within ``tolerance`` of ``U``; those that fail it (a
-    configuration on them is below that level, or undecided) are certified again with
+    is searched), which puts their ``lower`` within ``tolerance`` of ``U``. Where one is blocked
+    (a configuration on it is below that level), the smallest clearance of that configuration and
+    of :data:`RAISED_PROBES` evenly spaced ones of the segment is a smaller value seen: ``U``
+    takes it and the segments not yet certified try again, at most
+    :data:`RAISED_TRIES` times. Those still not certified are certified again with
     ``tolerance`` (each then within it of its own minimum, which is at least the path's). Same
     promise as refining every segment, at a fraction of the cost where most segments keep well
     clear (measured 0.15 s instead of 7.6 s on a MotionBenchMaker path of the meshed Panda; the
@@ -220,14 +230,25 @@ def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, s
     if not len(refine):
         return cert
     lower, evaluations = cert.lower.copy(), cert.evaluations.copy()
-    level = upper - 0.5 * tolerance
-    if level > clearance:
-        raised = certify_segments(scene, Q[:-1][refine], Q[1:][refine], level, self_clearance,
-                                  max_evaluations=max_evaluations)
+    for _ in range(RAISED_TRIES):
+        level = upper - 0.5 * tolerance
+        if not len(refine) or level <= clearance:
+            break
+        QA, QB = Q[:-1][refine], Q[1:][refine]
+        raised = certify_segments(scene, QA, QB, level, self_clearance, max_evaluations=max_evaluations)
         ok = raised.certified
         lower[refine[ok]] = np.maximum(lower[refine[ok]], raised.lower[ok])
         evaluations[refine] += raised.evaluations
+        blocked = raised.status == SK.BLOCKED  # a configuration there is below the level: a new smallest seen
         refine = refine[~ok]
+        if not np.any(blocked):
+            break
+        t = np.c_[raised.t_stop[blocked], np.tile(np.linspace(0.0, 1.0, RAISED_PROBES), (int(np.sum(blocked)), 1))]
+        on = QA[blocked][:, None, :] + t[:, :, None] * (QB[blocked] - QA[blocked])[:, None, :]
+        seen = float(np.min(scene.batch_min_distance(on.reshape(-1, Q.shape[1]))))
+        if not seen < upper:
+            break
+        upper = seen
     if len(refine):
         fine = certify_segments(scene, Q[:-1][refine], Q[1:][refine], clearance, self_clearance,
                                 tolerance=tolerance, max_evaluations=max_evaluations)
