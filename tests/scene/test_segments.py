@@ -156,17 +156,22 @@ def test_tight_lower_bound_with_tolerance():
         assert cert.lower[i] >= sampled - 1e-3 - 1e-9
 
 
-def test_path_tolerance_bounds_the_whole_path_minimum():
+@pytest.mark.parametrize("fine", [False, True])
+def test_path_tolerance_bounds_the_whole_path_minimum(fine):
+    """Paths of three chained segments from the free pairs, or (``fine``) one pair cut into 120
+    short segments, a retimed trajectory's shape, whose segments are refined by certificates at a
+    raised clearance: the bound is within the tolerance of the densely sampled minimum, never above."""
     scene = cluttered(2)
-    QA, QB = free_pairs(scene, 4, 40, 0.3)
+    QA, QB = free_pairs(scene, 5 if fine else 4, 40, 0.3)
     checked = 0
-    for i in range(0, 30, 3):  # paths of three chained segments from the free pairs
-        Q = np.vstack([QA[i], QB[i], QA[i + 1], QB[i + 1]])
+    for i in range(12) if fine else range(0, 30, 3):
+        Q = dense(QA[i], QB[i], 121) if fine else np.vstack([QA[i], QB[i], QA[i + 1], QB[i + 1]])
         loose, tight = scene.certify_path(Q), scene.certify_path(Q, tolerance=1e-3)
         assert loose.certified == tight.certified
         if not tight.certified:
             continue
-        sampled = scene.batch_min_distance(np.vstack([dense(a, b, 801) for a, b in zip(Q[:-1], Q[1:])])).min()
+        points = 41 if fine else 801
+        sampled = scene.batch_min_distance(np.vstack([dense(a, b, points) for a, b in zip(Q[:-1], Q[1:])])).min()
         assert loose.min_clearance <= tight.min_clearance <= sampled + 1e-9
         assert tight.min_clearance >= sampled - 1e-3 - 1e-9
         assert np.all(tight.segments.lower >= loose.segments.lower)
@@ -261,23 +266,3 @@ def test_segment_free_checks_one_segment_and_refuses_several():
     with pytest.raises(drake_mh.errors.DrakeMhError, match="numeric"):
         scene.segment_free([[1, 2], [3]], q0)
     assert scene.segment_free(q0, q0) and not scene.segment_free(q0, q1)
-
-
-def test_path_tolerance_on_many_short_segments_agrees_with_dense_sampling():
-    """A finely sampled motion (a retimed trajectory's shape): its segments are refined by a
-    certificate at a raised clearance; the bound must still be within the tolerance of the
-    densely sampled minimum and never above it."""
-    scene = cluttered(2)
-    QA, QB = free_pairs(scene, 5, 40, 0.3)
-    checked = 0
-    for i in range(12):
-        Q = dense(QA[i], QB[i], 121)
-        loose, tight = scene.certify_path(Q), scene.certify_path(Q, tolerance=1e-3)
-        assert loose.certified == tight.certified
-        if not tight.certified:
-            continue
-        sampled = scene.batch_min_distance(np.vstack([dense(a, b, 41) for a, b in zip(Q[:-1], Q[1:])])).min()
-        assert loose.min_clearance <= tight.min_clearance <= sampled + 1e-9
-        assert tight.min_clearance >= sampled - 1e-3 - 1e-9
-        checked += 1
-    assert checked >= 3
