@@ -137,6 +137,7 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
     import time
 
     from drake_mh.errors import InvalidArgument
+    from drake_mh.scene.segments import refine_path
 
     check_retime(retime)
     check_scaling(velocity_scaling, acceleration_scaling)
@@ -192,8 +193,7 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
         (computed once, where a reported clearance is the path's)."""
         if not refined:
             tick = time.perf_counter()
-            refined.append(scene.certify_path(P, problem.clearance, problem.self_clearance,
-                                              tolerance=REPORT_TOLERANCE))
+            refined.append(refine_path(scene, P, cert, REPORT_TOLERANCE))
             result.info["certificate"] = refined[0]
             parts["path_certification"] += time.perf_counter() - tick
         return refined[0]

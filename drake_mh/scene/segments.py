@@ -311,6 +311,33 @@ def certify_path(scene, Q, clearance: float = 0.0, self_clearance: float = 0.0, 
         cert = SegmentCertificate(*(np.concatenate([getattr(p, f) for p in parts])
                                     for f in ("status", "t_stop", "lower", "lower_self", "evaluations")),
                                   parts[0].clearance, parts[0].self_clearance)
+    return _path_certificate(cert)
+
+
+def _path_certificate(cert: SegmentCertificate) -> PathCertificate:
     bad = np.flatnonzero(~cert.certified)
     first = int(bad[0]) if len(bad) else None
     return PathCertificate(cert, first is None, cert.min_clearance, first)
+
+
+def refine_path(scene, Q, certificate: PathCertificate, tolerance: float,
+                max_evaluations: int = MAX_EVALUATIONS) -> PathCertificate:
+    """``certificate``, from :func:`certify_path` on the same ``Q`` without ``durations`` or
+    ``tolerance``, refined as ``certify_path(scene, Q, ..., tolerance=tolerance)`` would refine
+    it (the same bounds), without certifying its segments again.
+
+    Raises:
+        SceneError: ``certificate`` is not one of ``Q``'s segments; bad ``tolerance``.
+    """
+    Q = _as_rows(scene.robot, Q, "Q")
+    if Q.shape[0] == 1:
+        Q = np.vstack([Q, Q])
+    segments = certificate.segments
+    if len(segments.status) != Q.shape[0] - 1:
+        raise SceneError(f"the certificate holds {len(segments.status)} segments, Q {Q.shape[0] - 1}: certify Q itself")
+    if not (isinstance(tolerance, (int, float, np.number)) and not isinstance(tolerance, bool) and tolerance > 0):
+        raise SceneError(f"tolerance must be a length > 0 in metres, got {tolerance!r}")
+    if not np.isfinite(tolerance):
+        return certificate
+    return _path_certificate(_tighten(scene, Q, segments, segments.clearance, segments.self_clearance,
+                                      float(tolerance), max_evaluations))

@@ -8,6 +8,7 @@ import pytest
 import drake_mh
 from drake_mh.errors import SceneError
 from drake_mh.scene import Box, Cylinder, Scene, Sphere
+from drake_mh.scene.segments import refine_path
 from references import FreshDrake, dense_path
 from test_collision_free import PANDA, cluttered
 
@@ -266,3 +267,23 @@ def test_segment_free_checks_one_segment_and_refuses_several():
     with pytest.raises(drake_mh.errors.DrakeMhError, match="numeric"):
         scene.segment_free([[1, 2], [3]], q0)
     assert scene.segment_free(q0, q0) and not scene.segment_free(q0, q1)
+
+
+def test_refining_a_path_certificate_gives_the_refined_certificate():
+    scene = cluttered(2)
+    QA, QB = free_pairs(scene, 4, 40, 0.3)
+    checked = 0
+    for i in range(0, 30, 3):
+        Q = np.vstack([QA[i], QB[i], QA[i + 1], QB[i + 1]])
+        loose = scene.certify_path(Q)
+        if not loose.certified:
+            continue
+        refined, tight = refine_path(scene, Q, loose, 1e-3), scene.certify_path(Q, tolerance=1e-3)
+        np.testing.assert_allclose(refined.segments.lower, tight.segments.lower, rtol=0, atol=1e-12)
+        assert refined.min_clearance >= loose.min_clearance
+        checked += 1
+    assert checked >= 3
+    with pytest.raises(SceneError, match="segments"):
+        refine_path(scene, Q[:3], loose, 1e-3)
+    with pytest.raises(SceneError, match="tolerance"):
+        refine_path(scene, Q, loose, 0.0)
