@@ -198,9 +198,10 @@ def compare(before: str, problems: int = PROBLEMS, retime: str = "toppra") -> st
         for label in ("before", "after"):
             mine = by.get(label, [])
             rows.append([robot, name, label, f"{sum(r['success'] for r in mine)}/{len(mine)}", *_cells(mine)])
-    for label in ("before", "after"):
-        mine = [r for r in records if r["code"] == label]
-        rows.append(["all", "all", label, f"{sum(r['success'] for r in mine)}/{len(mine)}", *_cells(mine)])
+    for robot, group in [*group_by(records, "robot").items(), ("all", records)]:
+        for label in ("before", "after"):
+            mine = [r for r in group if r["code"] == label]
+            rows.append([robot, "all", label, f"{sum(r['success'] for r in mine)}/{len(mine)}", *_cells(mine)])
     lines = [f"retime={retime!r}; before: {os.path.abspath(before)}, after: {here}; median / p95 [ms]", ""]
     lines += markdown_table(["robot", "set", "code", "verified", *(label for _, label in COLUMNS)], rows)
     lines += ["", cpu_and_load(records)]
