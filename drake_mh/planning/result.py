@@ -25,7 +25,8 @@ class MotionResult:
         message: why it failed, or a summary.
         planning_time: wall-clock seconds of planning (neither goal IK nor verification).
         cpu_time: CPU seconds of planning.
-        verify_time: wall-clock seconds of the verification and retiming.
+        verify_time: wall-clock seconds of the verification and retiming (its parts:
+            ``info["verify_parts"]``, :data:`drake_mh.planning.verify.VERIFY_PARTS`).
         min_clearance: certified lower bound of the obstacle clearance along the executed
             motion [m] (NaN when not certified).
         path_length: ``Σ ||q_{i+1} - q_i||`` [rad].

@@ -18,6 +18,7 @@ same answers for every method; their time is reported apart, as ``goal_time``).
 
 from __future__ import annotations
 
+import functools
 import numbers
 import time
 
@@ -74,17 +75,30 @@ def prepare_motion_method(method, problem: MotionProblem, **options) -> float:
     Raises:
         UnknownMethod: no such method.
     """
-    import inspect
-
     function = get_motion_method(method) if isinstance(method, str) else method
     prepare = getattr(function, "prepare", None)
     start = time.perf_counter()
     if prepare is not None:
-        parameters = inspect.signature(prepare).parameters
-        if not any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values()):
-            options = {k: v for k, v in options.items() if k in parameters}
+        try:
+            names = _named_options(prepare)
+        except TypeError:  # an unhashable callable: read its signature each time
+            names = _named_options.__wrapped__(prepare)
+        if names is not None:
+            options = {k: v for k, v in options.items() if k in names}
         prepare(problem, **options)
     return time.perf_counter() - start
+
+
+@functools.lru_cache(maxsize=256)
+def _named_options(prepare) -> frozenset | None:
+    """The parameter names of ``prepare``, or ``None`` when it takes ``**options`` (read once per
+    function: ``inspect.signature`` is slow)."""
+    import inspect
+
+    parameters = inspect.signature(prepare).parameters
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values()):
+        return None
+    return frozenset(parameters)
 
 
 def _goal_ik(problem: MotionProblem):

@@ -41,6 +41,12 @@ from drake_mh.planning.result import MotionResult
 REPORT_TOLERANCE = 1e-3
 """[m] the certified minimum clearance is refined to within this of the smallest value seen."""
 
+VERIFY_PARTS = ("path_certification", "retiming", "limit_certification", "trajectory_clearance")
+"""The parts of ``verify_time`` timed in ``info["verify_parts"]`` ([s] each, every retimer tried
+summed): the path's collision certificate; the retimers' solves (a failed one included); the
+certification of their trajectories against the robot's limits; the certified clearance of the
+executed trajectory."""
+
 TRAJECTORY_SHIFTS = (1e-3, 1e-4, 1e-5)
 """[m] largest sphere displacement allowed between a retimed trajectory and its sampled chords:
 1 mm first, then finer (about 3x more samples each) where a path certified close to its
@@ -112,6 +118,12 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
         velocity_scaling, acceleration_scaling: MoveIt's scaling factors in (0, 1] for the
             retiming (:func:`drake_mh.trajectories.retime`; ``None``: the robot's defaults).
 
+    ``info["certificate"]`` is the path's :class:`~drake_mh.scene.segments.PathCertificate`;
+    its clearance is refined to :data:`REPORT_TOLERANCE` where it is the reported
+    ``min_clearance`` (no trajectory, one on the certified segments, a stationary one), else it
+    is a valid, coarser bound (the sampled trajectory's certificate is then the one refined).
+    ``info["verify_parts"]``: the seconds of each of :data:`VERIFY_PARTS`.
+
     A one-row path (the start already reaches the goal) gets a stationary trajectory of zero
     duration, certified like any other (no velocity, acceleration or jerk; the torque that holds
     the robot against gravity).
@@ -125,6 +137,7 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
     import time
 
     from drake_mh.errors import InvalidArgument
+    from drake_mh.scene.segments import refine_path
 
     check_retime(retime)
     check_scaling(velocity_scaling, acceleration_scaling)
@@ -161,7 +174,10 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
         result.success, result.message = False, why
         return result
     result.goal_index = goal_index if result.goal_index is None else result.goal_index
-    cert = scene.certify_path(P, problem.clearance, problem.self_clearance, tolerance=REPORT_TOLERANCE)
+    parts = result.info["verify_parts"] = dict.fromkeys(VERIFY_PARTS, 0.0)
+    tick = time.perf_counter()
+    cert = scene.certify_path(P, problem.clearance, problem.self_clearance)  # tightened where it is reported
+    parts["path_certification"] = time.perf_counter() - tick
     result.info["certificate"] = cert
     if not cert.certified:
         result.success = False
@@ -169,19 +185,34 @@ def verify_motion(problem, path, method: str, result: MotionResult | None = None
                          f"{cert.segments.reason(cert.first_failure)}"
         result.verify_time = time.perf_counter() - start
         return result
-    result.min_clearance = cert.min_clearance
+
+    refined = []
+
+    def tight():
+        """The path's certificate with its clearance refined to :data:`REPORT_TOLERANCE`
+        (computed once, where a reported clearance is the path's)."""
+        if not refined:
+            tick = time.perf_counter()
+            refined.append(refine_path(scene, P, cert, REPORT_TOLERANCE))
+            result.info["certificate"] = refined[0]
+            parts["path_certification"] += time.perf_counter() - tick
+        return refined[0]
+
     result.success, result.message = True, "certified"
-    if retime:
-        trajectory, message = _retime(problem, P, RETIME_CHOICES[retime], cert, velocity_scaling,
-                                      acceleration_scaling)
+    if not retime:
+        result.min_clearance = tight().min_clearance
+    else:
+        trajectory, message = _retime(problem, P, RETIME_CHOICES[retime], tight, velocity_scaling,
+                                      acceleration_scaling, parts)
         if trajectory is None:
+            result.min_clearance = tight().min_clearance
             result.success, result.message = False, message
         else:
             result.trajectory, result.duration = trajectory, float(trajectory.end_time - trajectory.start_time)
             result.limits = trajectory.info.get("enforced_limits")
             result.max_jerk = _max_jerk(trajectory)
             result.jerk_limited = _jerk_limited(trajectory)
-            result.min_clearance = trajectory.info.get("certified_clearance", result.min_clearance)
+            result.min_clearance = trajectory.info["certified_clearance"]
             result.message = ("certified; the start is the goal: a stationary trajectory of zero duration"
                               if trajectory.method == "stationary" else f"certified; retimed with {trajectory.method}")
     result.verify_time = time.perf_counter() - start
@@ -266,11 +297,16 @@ def _reason(method: str, text: str) -> str:
     return text if len(text) <= REASON_CHARACTERS else text[:REASON_CHARACTERS - 1] + "…"
 
 
-def _retime(problem, P: np.ndarray, methods: tuple, path_certificate, velocity_scaling=None,
-            acceleration_scaling=None) -> tuple[object, str]:
+def _retime(problem, P: np.ndarray, methods: tuple, tight, velocity_scaling=None,
+            acceleration_scaling=None, parts: dict | None = None) -> tuple[object, str]:
     """The first of ``methods`` that retimes ``P``; the executed motion certified
-    (:func:`trajectory_clearance`). On failure: one short reason per retimer and how to get the
-    certified path alone."""
+    (:func:`trajectory_clearance`). ``tight()``: the path's certificate refined to
+    :data:`REPORT_TOLERANCE`, asked for only where the trajectory takes the path's clearance (on
+    the certified segments, or stationary). On failure: one short reason per retimer and how to
+    get the certified path alone. Adds the seconds of each part to ``parts``
+    (:data:`VERIFY_PARTS`)."""
+    import time
+
     from drake_mh.errors import DrakeMhError
     from drake_mh.trajectories import retime
 
@@ -278,16 +314,25 @@ def _retime(problem, P: np.ndarray, methods: tuple, path_certificate, velocity_s
     keep = np.r_[True, np.any(np.abs(np.diff(P, axis=0)) > 1e-12, axis=1)]  # repeated rows break splines
     W = P[keep]
     if len(W) < 2:  # the start is the goal: stay there
-        return _stationary(robot, W[0], path_certificate)
+        return _stationary(robot, W[0], tight())
+    parts = {} if parts is None else parts
     reasons = []
     for method in methods:
+        tick = time.perf_counter()
         try:
             trajectory = retime(W, robot, method, velocity_scaling=velocity_scaling,
                                 acceleration_scaling=acceleration_scaling)
         except DrakeMhError as exc:
+            parts["retiming"] = parts.get("retiming", 0.0) + time.perf_counter() - tick
             reasons.append(_reason(method, exc))
             continue
-        clearance, why = trajectory_clearance(problem, trajectory, path_certificate, W)
+        certifying = float(trajectory.info.get("certify_time", 0.0))
+        parts["retiming"] = parts.get("retiming", 0.0) + time.perf_counter() - tick - certifying
+        parts["limit_certification"] = parts.get("limit_certification", 0.0) + certifying
+        certificate = tight() if _on_certified_path(trajectory, W) else None
+        tick = time.perf_counter()
+        clearance, why = trajectory_clearance(problem, trajectory, certificate, W)
+        parts["trajectory_clearance"] = parts.get("trajectory_clearance", 0.0) + time.perf_counter() - tick
         if not np.isnan(clearance):  # +inf: a scene without obstacles or checked self pairs
             trajectory.info["certified_clearance"] = clearance
             return trajectory, ""

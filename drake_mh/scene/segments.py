@@ -39,6 +39,13 @@ MIN_PIECE = 1e-9
 MAX_EVALUATIONS = 1 << 16
 """Most configurations evaluated per segment before it is undecided."""
 
+RAISED_TRIES = 4
+"""Certificates at a raised clearance :func:`_tighten` tries before a per-segment minimum search."""
+
+RAISED_PROBES = 33
+"""Evenly spaced configurations of a segment blocked at a raised clearance whose clearances
+:func:`_tighten` reads for the next, lower, level (with the blocking configuration)."""
+
 
 def check_clearance(value, what: str) -> float:
     """``value`` as a finite length >= 0 [m], or :class:`SceneError` naming ``what``."""
@@ -202,11 +209,18 @@ def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, s
     The path's smallest clearance is at most ``U``, the sphere-model clearance at its waypoints
     and segment midpoints (configurations on it). A segment certified with ``lower >= U -
     tolerance`` already keeps the path's bound within ``tolerance`` of that minimum; only the
-    others are certified again with ``tolerance`` (each then within it of its own minimum, which
-    is at least the path's). Same promise as refining every segment, at a fraction of the cost
-    where most segments keep well clear (measured 0.15 s instead of 7.6 s on a MotionBenchMaker
-    path of the meshed Panda). The bounds stay certified whatever ``U`` is: it only chooses what
-    to refine.
+    others are first certified at the raised clearance ``U - tolerance / 2`` (a plain
+    certificate: pieces are cut only until their bound clears that level, no per-segment minimum
+    is searched), which puts their ``lower`` within ``tolerance`` of ``U``. Where one is blocked
+    (a configuration on it is below that level), the smallest clearance of that configuration and
+    of :data:`RAISED_PROBES` evenly spaced ones of the segment is a smaller value seen: ``U``
+    takes it (a segment whose ``lower`` is within ``tolerance`` of it is done) and the segments
+    not yet certified try again, at most :data:`RAISED_TRIES` times. Those still not certified are certified again with
+    ``tolerance`` (each then within it of its own minimum, which is at least the path's). Same
+    promise as refining every segment, at a fraction of the cost where most segments keep well
+    clear (measured 0.15 s instead of 7.6 s on a MotionBenchMaker path of the meshed Panda; the
+    raised certificate: about 5-10 ms instead of 90-130 ms on sampled trajectories there). The
+    bounds stay certified whatever ``U`` is: it only chooses what to refine and to which level.
     """
     if not cert.all_certified or not len(cert.lower) or not np.all(np.isfinite(cert.lower)):
         return cert
@@ -215,12 +229,33 @@ def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, s
     refine = np.flatnonzero(cert.lower < upper - tolerance)
     if not len(refine):
         return cert
-    fine = certify_segments(scene, Q[:-1][refine], Q[1:][refine], clearance, self_clearance, tolerance=tolerance,
-                            max_evaluations=max_evaluations)
     lower, evaluations = cert.lower.copy(), cert.evaluations.copy()
-    ok = fine.certified
-    lower[refine[ok]] = np.maximum(lower[refine[ok]], fine.lower[ok])
-    evaluations[refine] += fine.evaluations
+    for _ in range(RAISED_TRIES):
+        level = upper - 0.5 * tolerance
+        if not len(refine) or level <= clearance:
+            break
+        QA, QB = Q[:-1][refine], Q[1:][refine]
+        raised = certify_segments(scene, QA, QB, level, self_clearance, max_evaluations=max_evaluations)
+        ok = raised.certified
+        lower[refine[ok]] = np.maximum(lower[refine[ok]], raised.lower[ok])
+        evaluations[refine] += raised.evaluations
+        blocked = raised.status == SK.BLOCKED  # a configuration there is below the level: a new smallest seen
+        refine = refine[~ok]
+        if not np.any(blocked):
+            break
+        t = np.c_[raised.t_stop[blocked], np.tile(np.linspace(0.0, 1.0, RAISED_PROBES), (int(np.sum(blocked)), 1))]
+        on = QA[blocked][:, None, :] + t[:, :, None] * (QB[blocked] - QA[blocked])[:, None, :]
+        seen = float(np.min(scene.batch_min_distance(on.reshape(-1, Q.shape[1]))))
+        if not seen < upper:
+            break
+        upper = seen
+        refine = refine[lower[refine] < upper - tolerance]  # those already within it of the new smallest are done
+    if len(refine):
+        fine = certify_segments(scene, Q[:-1][refine], Q[1:][refine], clearance, self_clearance,
+                                tolerance=tolerance, max_evaluations=max_evaluations)
+        ok = fine.certified
+        lower[refine[ok]] = np.maximum(lower[refine[ok]], fine.lower[ok])
+        evaluations[refine] += fine.evaluations
     return SegmentCertificate(cert.status, cert.t_stop, lower, cert.lower_self, evaluations, cert.clearance,
                               cert.self_clearance)
 
@@ -277,6 +312,33 @@ def certify_path(scene, Q, clearance: float = 0.0, self_clearance: float = 0.0, 
         cert = SegmentCertificate(*(np.concatenate([getattr(p, f) for p in parts])
                                     for f in ("status", "t_stop", "lower", "lower_self", "evaluations")),
                                   parts[0].clearance, parts[0].self_clearance)
+    return _path_certificate(cert)
+
+
+def _path_certificate(cert: SegmentCertificate) -> PathCertificate:
     bad = np.flatnonzero(~cert.certified)
     first = int(bad[0]) if len(bad) else None
     return PathCertificate(cert, first is None, cert.min_clearance, first)
+
+
+def refine_path(scene, Q, certificate: PathCertificate, tolerance: float,
+                max_evaluations: int = MAX_EVALUATIONS) -> PathCertificate:
+    """``certificate``, from :func:`certify_path` on the same ``Q`` without ``durations`` or
+    ``tolerance``, refined as ``certify_path(scene, Q, ..., tolerance=tolerance)`` would refine
+    it (the same bounds), without certifying its segments again.
+
+    Raises:
+        SceneError: ``certificate`` is not one of ``Q``'s segments; bad ``tolerance``.
+    """
+    Q = _as_rows(scene.robot, Q, "Q")
+    if Q.shape[0] == 1:
+        Q = np.vstack([Q, Q])
+    segments = certificate.segments
+    if len(segments.status) != Q.shape[0] - 1:
+        raise SceneError(f"the certificate holds {len(segments.status)} segments, Q {Q.shape[0] - 1}: certify Q itself")
+    if not (isinstance(tolerance, (int, float, np.number)) and not isinstance(tolerance, bool) and tolerance > 0):
+        raise SceneError(f"tolerance must be a length > 0 in metres, got {tolerance!r}")
+    if not np.isfinite(tolerance):
+        return certificate
+    return _path_certificate(_tighten(scene, Q, segments, segments.clearance, segments.self_clearance,
+                                      float(tolerance), max_evaluations))

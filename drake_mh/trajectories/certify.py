@@ -234,14 +234,16 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
     excess = np.zeros(nq)
     order = max(_ORDER[q] for q in quantities)
     D = trajectory.derivatives(T.ravel(), order)  # once for every quantity
+    jobs = []
     for quantity in quantities:
         norm = _normal(robot, limits, quantity, scale)
         r = _normalized(D, robot, quantity, norm, torque_backend).reshape(P, K, nq)
         flat = r.reshape(P * K, nq)
         idx = np.argmax(flat, axis=0)
-        worst = flat[idx, np.arange(nq)].copy()
         times[quantity] = T.ravel()[idx].copy()
-        _refine(trajectory, robot, quantity, T, r, lo, hi, norm, torque_backend, worst, times[quantity])
+        jobs.append((quantity, r, norm, flat[idx, np.arange(nq)].copy(), times[quantity]))
+    _refine(trajectory, robot, jobs, T, lo, hi, torque_backend)
+    for quantity, _, norm, worst, _ in jobs:
         if quantity != "torque":  # polynomial between breaks: a bound, not a sample (bound.py)
             worst = np.maximum(worst, kinematic_bound(trajectory, _ORDER[quantity], norm, breaks[:-1], breaks[1:],
                                                       worst, samples=(tau, D[_ORDER[quantity]].reshape(P, K, nq))))
@@ -271,11 +273,6 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
 _ORDER = {"position": 0, "velocity": 1, "acceleration": 2, "jerk": 3, "torque": 2}
 
 
-def _normalized_at(trajectory, robot, quantity: str, t: np.ndarray, norm, backend: str) -> np.ndarray:
-    """``(len(t), nq)`` normalized values of ``quantity`` at times ``t`` (:func:`_normal`)."""
-    return _normalized(trajectory.derivatives(t, _ORDER[quantity]), robot, quantity, norm, backend)
-
-
 def _normalized(D, robot, quantity: str, norm, backend: str) -> np.ndarray:
     """``|x - centre| / half`` from precomputed derivatives ``D = [q, q', ...]`` (each ``(M, nq)``)."""
     centre, half = norm
@@ -303,8 +300,8 @@ def _normal(robot, limits, quantity: str, scale: float) -> tuple[np.ndarray, np.
 _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
 
 
-def _refine(trajectory, robot, quantity, T, r, lo, hi, norm, backend, best, best_t,
-            threshold: float = 0.9, per_joint: int = 8, iterations: int = 8) -> None:
+def _refine(trajectory, robot, jobs, T, lo, hi, backend, threshold: float = 0.9, per_joint: int = 8,
+            iterations: int = 8) -> None:
     """Sharpen the ratios between samples (golden-section search around local maxima).
 
     Dense samples miss a peak's top by ``O(c Δt²)`` (seen: 9e-6 at 20 gridpoints). Sampled
@@ -314,32 +311,49 @@ def _refine(trajectory, robot, quantity, T, r, lo, hi, norm, backend, best, best
     (inside the piece) and refined; the error then drops by ``0.618^(2·iterations)``. Ranking
     by sampled value is not enough: a 1.001x peak whose samples fall on its flanks reads 0.999
     and ranks below two 0.9995x peaks sampled at their tops (test
-    ``test_peak_sampled_on_its_flanks_is_found``). Updates ``best``/``best_t`` in place.
+    ``test_peak_sampled_on_its_flanks_is_found``).
+
+    ``jobs``: one ``(quantity, r (P, K, nq) sampled ratios, norm, best (nq,), best_t (nq,))``
+    per quantity; every quantity's searches run together (one evaluation of the trajectory per
+    step for all), each exactly as it would alone. Updates each ``best``/``best_t`` in place.
     """
-    P, K, nq = r.shape
-    left = np.concatenate([np.full((P, 1, nq), -np.inf), r[:, :-1]], axis=1)
-    right = np.concatenate([r[:, 1:], np.full((P, 1, nq), -np.inf)], axis=1)
-    is_peak = (r >= left) & (r >= right)
-    is_peak &= (r >= threshold) & np.isfinite(r)
-    p_idx, k_idx, J = np.nonzero(is_peak)  # candidate peaks: piece, sample, joint
-    if not J.size:
+    P, K, nq = T.shape[0], T.shape[1], robot.nq
+    found = []  # per quantity: (quantity, norm, best, best_t, J, a, b)
+    for quantity, r, norm, best, best_t in jobs:
+        left = np.concatenate([np.full((P, 1, nq), -np.inf), r[:, :-1]], axis=1)
+        right = np.concatenate([r[:, 1:], np.full((P, 1, nq), -np.inf)], axis=1)
+        is_peak = (r >= left) & (r >= right)
+        is_peak &= (r >= threshold) & np.isfinite(r)
+        p_idx, k_idx, J = np.nonzero(is_peak)  # candidate peaks: piece, sample, joint
+        if not J.size:
+            continue
+        # parabola through (left, centre, right) samples (uniform spacing within a piece): vertex value
+        r0, r1, r2 = left[p_idx, k_idx, J], r[p_idx, k_idx, J], right[p_idx, k_idx, J]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            curvature = r0 - 2.0 * r1 + r2
+            vertex = r1 - (r2 - r0) ** 2 / (8.0 * curvature)
+        estimate = np.where(np.isfinite(r0) & np.isfinite(r2) & (curvature < 0), vertex, r1)
+        order = np.lexsort((-estimate, J))  # by joint, highest estimate first
+        rank = np.arange(order.size) - np.searchsorted(J[order], J[order])
+        keep = order[rank < per_joint]
+        p_idx, k_idx, J = p_idx[keep], k_idx[keep], J[keep]
+        a = np.where(k_idx > 0, T[p_idx, np.maximum(k_idx - 1, 0)], lo[p_idx])
+        b = np.where(k_idx < K - 1, T[p_idx, np.minimum(k_idx + 1, K - 1)], hi[p_idx])
+        found.append((quantity, norm, best, best_t, J, a, b))
+    if not found:
         return
-    # parabola through (left, centre, right) samples (uniform spacing within a piece): vertex value
-    r0, r1, r2 = left[p_idx, k_idx, J], r[p_idx, k_idx, J], right[p_idx, k_idx, J]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        curvature = r0 - 2.0 * r1 + r2
-        vertex = r1 - (r2 - r0) ** 2 / (8.0 * curvature)
-    estimate = np.where(np.isfinite(r0) & np.isfinite(r2) & (curvature < 0), vertex, r1)
-    order = np.lexsort((-estimate, J))  # by joint, highest estimate first
-    rank = np.arange(order.size) - np.searchsorted(J[order], J[order])
-    keep = order[rank < per_joint]
-    p_idx, k_idx, J = p_idx[keep], k_idx[keep], J[keep]
-    a = np.where(k_idx > 0, T[p_idx, np.maximum(k_idx - 1, 0)], lo[p_idx])
-    b = np.where(k_idx < K - 1, T[p_idx, np.minimum(k_idx + 1, K - 1)], hi[p_idx])
-    rows = np.arange(len(J))
+    J = np.concatenate([x[4] for x in found])
+    a, b = np.concatenate([x[5] for x in found]), np.concatenate([x[6] for x in found])
+    ends = np.cumsum([0] + [len(x[4]) for x in found])
+    order = max(_ORDER[x[0]] for x in found)
 
     def f(t):
-        return _normalized_at(trajectory, robot, quantity, t, norm, backend)[rows, J]
+        D = trajectory.derivatives(t, order)
+        out = np.empty(len(t))
+        for (quantity, norm, *_), i0, i1 in zip(found, ends[:-1], ends[1:]):
+            part = [d[i0:i1] for d in D]
+            out[i0:i1] = _normalized(part, robot, quantity, norm, backend)[np.arange(i1 - i0), J[i0:i1]]
+        return out
 
     c, d = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
     fc, fd = f(c), f(d)
@@ -351,12 +365,14 @@ def _refine(trajectory, robot, quantity, T, r, lo, hi, norm, backend, best, best
         f_new = f(t_new)
         fc, fd, c, d = (np.where(keep_left, f_new, fd), np.where(keep_left, fc, f_new),
                         np.where(keep_left, c_new, d), np.where(keep_left, c, d_new))
-    for t_best, f_best in ((c, fc), (d, fd)):
-        for j in np.unique(J):
-            mine = np.flatnonzero(J == j)
-            i = mine[np.argmax(f_best[mine])]
-            if f_best[i] > best[j]:
-                best[j], best_t[j] = f_best[i], t_best[i]
+    for (_, _, best, best_t, *_), i0, i1 in zip(found, ends[:-1], ends[1:]):
+        Jq = J[i0:i1]
+        for t_best, f_best in ((c[i0:i1], fc[i0:i1]), (d[i0:i1], fd[i0:i1])):
+            for j in np.unique(Jq):
+                mine = np.flatnonzero(Jq == j)
+                i = mine[np.argmax(f_best[mine])]
+                if f_best[i] > best[j]:
+                    best[j], best_t[j] = f_best[i], t_best[i]
 
 
 def _batch_dynamics(robot):

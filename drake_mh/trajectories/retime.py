@@ -128,7 +128,8 @@ def retime(path, robot, method: str = "toppra", *, limits=None, velocity_scaling
     Returns:
         A :class:`Trajectory`; ``trajectory.info`` holds ``certificate``, ``enforced_limits``
         (:class:`~drake_mh.robot.limits.JointLimits`), ``limits`` (the enforced quantities),
-        ``attempts``, ``solve_time`` [s] (last attempt, without certification), ``gridpoints``.
+        ``attempts``, ``solve_time`` [s] (last attempt, without certification), ``certify_time``
+        [s] (the certifications and time scalings of every attempt), ``gridpoints``.
 
     Raises:
         UnknownMethod: ``method`` not in ``RETIMERS``.
@@ -162,7 +163,7 @@ def retime(path, robot, method: str = "toppra", *, limits=None, velocity_scaling
             if q in factors:
                 factors[q] *= 1.0 - _FIRST_MARGIN
     quantities = ("position",) + limits
-    attempts = 0
+    attempts, certifying = 0, 0.0
     while True:
         attempts += 1
         start = time.perf_counter()
@@ -174,8 +175,9 @@ def retime(path, robot, method: str = "toppra", *, limits=None, velocity_scaling
         cert = certify(traj, robot, quantities=_REPORTED, scale=scale, enforced=quantities, limits=table)
         if not cert.ok(quantities, tol):
             traj, cert = _slow_down(traj, robot, cert, quantities, tol)
+        certifying += time.perf_counter() - start - solve_time
         traj.info.update(certificate=cert, attempts=attempts, solve_time=solve_time, limits=limits,
-                         factors=dict(factors), enforced_limits=table)
+                         factors=dict(factors), enforced_limits=table, certify_time=certifying)
         _log.debug("%s attempt %d: ratios %s", method, attempts,
                    {q: round(cert.max_ratio((q,)), 6) for q in quantities})
         if cert.ok(quantities, tol):

@@ -59,13 +59,44 @@ def timing_from_gridpoints(ss: np.ndarray, sd: np.ndarray) -> PPoly:
 
 
 
+def propose_gridpoints(spline, max_err_threshold: float = 1e-3, max_iteration: int = 100,
+                       max_seg_length: float = 0.05, min_nb_points: int = 100) -> np.ndarray:
+    """toppra's ``interpolator.propose_gridpoints`` on a scipy spline, one pass at a time in
+    arrays: the same gridpoints (the same midpoints split for the same reasons, in the same
+    order), without a Python call per interval.
+
+    Each pass halves every interval longer than ``max_seg_length`` or whose estimated
+    interpolation error ``0.5 max_j |p_j''(mid)| h²`` exceeds ``max_err_threshold``; then every
+    interval is halved until there are ``min_nb_points``.
+
+    Raises:
+        ValueError: as toppra's, when the passes do not settle within ``max_iteration``.
+    """
+    gp = np.array([spline.x[0], spline.x[-1]], dtype=float)
+    iteration = 0
+    for iteration in range(max_iteration):
+        mid = 0.5 * (gp[:-1] + gp[1:])
+        h = gp[1:] - gp[:-1]
+        long = h > max_seg_length
+        split = long.copy()
+        check = np.flatnonzero(~long)
+        if len(check):
+            err = np.max(np.abs(0.5 * spline(mid[check], nu=2) * h[check, None] ** 2), axis=1)
+            split[check] = err > max_err_threshold
+        if not np.any(split):
+            break
+        gp = np.sort(np.r_[gp, mid[split]])
+    while len(gp) < min_nb_points:
+        gp = np.sort(np.r_[gp, 0.5 * (gp[:-1] + gp[1:])])
+    if iteration == max_iteration - 1:
+        raise ValueError("Unable to find a good gridpoint for this path.")
+    return gp
+
+
 def _gridpoints(spline, knots: np.ndarray, gridpoints: int | None) -> np.ndarray:
     s_end = float(spline.x[-1])
     if gridpoints is None:
-        import toppra
-
-        gp = toppra.interpolator.propose_gridpoints(_ToppraPath(spline), max_err_threshold=1e-3,
-                                                    min_nb_points=100)
+        gp = propose_gridpoints(spline, max_err_threshold=1e-3, min_nb_points=100)
     else:
         if int(gridpoints) < 2:
             raise InvalidArgument(f"gridpoints must be >= 2, got {gridpoints}")

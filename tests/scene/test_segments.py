@@ -8,6 +8,7 @@ import pytest
 import drake_mh
 from drake_mh.errors import SceneError
 from drake_mh.scene import Box, Cylinder, Scene, Sphere
+from drake_mh.scene.segments import refine_path
 from references import FreshDrake, dense_path
 from test_collision_free import PANDA, cluttered
 
@@ -156,17 +157,22 @@ def test_tight_lower_bound_with_tolerance():
         assert cert.lower[i] >= sampled - 1e-3 - 1e-9
 
 
-def test_path_tolerance_bounds_the_whole_path_minimum():
+@pytest.mark.parametrize("fine", [False, True])
+def test_path_tolerance_bounds_the_whole_path_minimum(fine):
+    """Paths of three chained segments from the free pairs, or (``fine``) one pair cut into 120
+    short segments, a retimed trajectory's shape, whose segments are refined by certificates at a
+    raised clearance: the bound is within the tolerance of the densely sampled minimum, never above."""
     scene = cluttered(2)
-    QA, QB = free_pairs(scene, 4, 40, 0.3)
+    QA, QB = free_pairs(scene, 5 if fine else 4, 40, 0.3)
     checked = 0
-    for i in range(0, 30, 3):  # paths of three chained segments from the free pairs
-        Q = np.vstack([QA[i], QB[i], QA[i + 1], QB[i + 1]])
+    for i in range(12) if fine else range(0, 30, 3):
+        Q = dense(QA[i], QB[i], 121) if fine else np.vstack([QA[i], QB[i], QA[i + 1], QB[i + 1]])
         loose, tight = scene.certify_path(Q), scene.certify_path(Q, tolerance=1e-3)
         assert loose.certified == tight.certified
         if not tight.certified:
             continue
-        sampled = scene.batch_min_distance(np.vstack([dense(a, b, 801) for a, b in zip(Q[:-1], Q[1:])])).min()
+        points = 41 if fine else 801
+        sampled = scene.batch_min_distance(np.vstack([dense(a, b, points) for a, b in zip(Q[:-1], Q[1:])])).min()
         assert loose.min_clearance <= tight.min_clearance <= sampled + 1e-9
         assert tight.min_clearance >= sampled - 1e-3 - 1e-9
         assert np.all(tight.segments.lower >= loose.segments.lower)
@@ -261,3 +267,23 @@ def test_segment_free_checks_one_segment_and_refuses_several():
     with pytest.raises(drake_mh.errors.DrakeMhError, match="numeric"):
         scene.segment_free([[1, 2], [3]], q0)
     assert scene.segment_free(q0, q0) and not scene.segment_free(q0, q1)
+
+
+def test_refining_a_path_certificate_gives_the_refined_certificate():
+    scene = cluttered(2)
+    QA, QB = free_pairs(scene, 4, 40, 0.3)
+    checked = 0
+    for i in range(0, 30, 3):
+        Q = np.vstack([QA[i], QB[i], QA[i + 1], QB[i + 1]])
+        loose = scene.certify_path(Q)
+        if not loose.certified:
+            continue
+        refined, tight = refine_path(scene, Q, loose, 1e-3), scene.certify_path(Q, tolerance=1e-3)
+        np.testing.assert_allclose(refined.segments.lower, tight.segments.lower, rtol=0, atol=1e-12)
+        assert refined.min_clearance >= loose.min_clearance
+        checked += 1
+    assert checked >= 3
+    with pytest.raises(SceneError, match="segments"):
+        refine_path(scene, Q[:3], loose, 1e-3)
+    with pytest.raises(SceneError, match="tolerance"):
+        refine_path(scene, Q, loose, 0.0)
