@@ -30,9 +30,10 @@ Four parts, each a row of the grid (``part``):
   ("not posed").
 
 Full run: 7 MotionBenchMaker sets x 5 problems and 7 generated sets x 3 problems, three forms,
-10 s per plan. ``--quick``: the bracket and the cube, the cloud build, the batched check at
-N = 256, and problem 0 of ``table_pick`` (and of ``mbm/table_pick`` when the archive is set),
-1 s per plan: about two minutes once the kernels are compiled.
+10 s per plan (``DRAKE_MH_FORMS_PROBLEMS=N``: N problems per set of both). ``--quick``: the
+bracket and the cube, the cloud build, the batched check at N = 256, and problem 0 of
+``table_pick`` (and of ``mbm/table_pick`` when the archive is set), 1 s per plan: a few minutes
+once the kernels are compiled.
 
 Run: ``DRAKE_MH_MBM_ARCHIVE=... drake-mh study obstacle_forms [--quick] --workers 1``.
 """
@@ -78,15 +79,23 @@ def _row(part: str, item: str = "-", set_name: str = "-", problem: int = 0, form
     return {"part": part, "item": item, "set": set_name, "problem": problem, "form": form}
 
 
+def _counts() -> tuple[int, int]:
+    """``(MotionBenchMaker problems per set, generated problems per set)``; ``DRAKE_MH_FORMS_PROBLEMS=N``
+    sets both to N."""
+    count = os.environ.get("DRAKE_MH_FORMS_PROBLEMS", "").strip()
+    return (int(count), int(count)) if count.isdigit() and int(count) > 0 else (MBM_PROBLEMS, SET_PROBLEMS)
+
+
 def _grid(quick: bool) -> list[dict]:
+    mbm_count, set_count = _counts()
     rows = [_row("decompose", mesh, form="meshes") for mesh in (QUICK_MESHES if quick else MESHES)]
     rows += [_row("cloud_build", f"{CLOUD_POINTS} points", form="point cloud"), _row("batched", "10 mixed")]
-    problems = [(name, i) for name in (SETS[:1] if quick else SETS) for i in range(1 if quick else SET_PROBLEMS)]
+    problems = [(name, i) for name in (SETS[:1] if quick else SETS) for i in range(1 if quick else set_count)]
     if _mbm_archive():
         from drake_mh.planning.problems import MBM_SETS
 
         problems = [(f"mbm/{name}", i) for name in (MBM_SETS[:1] if quick else MBM_SETS)
-                    for i in range(1 if quick else MBM_PROBLEMS)] + problems
+                    for i in range(1 if quick else mbm_count)] + problems
     rows += [_row("plan", "rrt_connect", name, i, form) for name, i in problems for form in FORMS]
     return rows
 
@@ -183,10 +192,11 @@ def _problem(name: str, index: int):
 
         if name.startswith("mbm/"):
             if name not in _CACHE["mbm"]:
-                _CACHE["mbm"][name] = motionbenchmaker_set(_mbm_archive(), name[4:], robot=MBM_ROBOT, count=MBM_PROBLEMS)
+                _CACHE["mbm"][name] = motionbenchmaker_set(_mbm_archive(), name[4:], robot=MBM_ROBOT,
+                                                           count=_counts()[0])
             found = _CACHE["mbm"][name]
             if index >= len(found):
-                raise LookupError(f"{name}: only {len(found)} of the first {MBM_PROBLEMS} problems are valid for "
+                raise LookupError(f"{name}: only {len(found)} of the first {_counts()[0]} problems are valid for "
                                   f"{MBM_ROBOT} ({len(found.skipped)} skipped: start or goal not certified free)")
             _CACHE["problems"][key] = found[index]
         else:
@@ -284,7 +294,8 @@ def _plan_tables(rows: list[dict]) -> list[str]:
             points = [r["points"] for r in cases if "points" in r]
             table.append([form, f"{len(wins)}/{len(cases)}", str(sum(not r.get("posed", True) for r in cases)),
                           f"{_ms(median(whole))} / {_ms(p95(whole))}", _ms(median(r["whole_cpu"] for r in wins)),
-                          _ms(median(r["plan"] for r in wins), ".2f"), _ms(median(cold)) if cold else "-",
+                          _ms(median(r["plan"] for r in wins), ".2f"), _ms(median(r["verify"] for r in wins)),
+                          _ms(median(cold)) if cold else "-",
                           _ms(median(r["build_warm"] for r in cases), ".2f"),
                           _ms(median(r["build_structure"] for r in cases), ".2f"),
                           f"{median(r['query'] for r in cases) * 1e9:.0f}", f"{median(ratio):.2f}" if ratio else "-",
@@ -293,7 +304,8 @@ def _plan_tables(rows: list[dict]) -> list[str]:
         lines += ["", f"### {family} ({robot}, {len({(r['set'], r['problem']) for r in group})} problems)", ""]
         lines += markdown_table(
             ["obstacles as", "verified", "not posed", "whole call median / p95 [ms]", "whole call CPU median [ms]",
-             "planning median [ms]", "build, cold cache [ms]", "build, warm [ms]", "kernel arrays [ms]",
+             "planning median [ms]", "verification + retiming median [ms]", "build, cold cache [ms]",
+             "build, warm [ms]", "kernel arrays [ms]",
              "batched check [ns/config]", "/ primitives", "cloud points (median)"], table)
     return lines
 
