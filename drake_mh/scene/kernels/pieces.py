@@ -148,10 +148,13 @@ def _points(k, dims):
 def cloud_nearest2(k, dims, x, y, z, bound2):
     """The smallest squared distance [m^2] from (x, y, z) (in W) to a point of cloud k, or
     ``bound2`` if none is nearer (the search skips what cannot be: pass the square of the
-    largest distance that matters, ``inf`` for the exact value). The grid's upper bound
-    (:func:`_cloud_bounds`) starts the search: no point beyond it is visited."""
+    largest distance that matters, ``inf`` for the exact value). The grid's bounds
+    (:func:`_cloud_bounds`) come first: a lower bound beyond ``bound2`` answers at once, and the
+    upper bound starts the search (no point beyond it is visited)."""
     first, N, axes = _points(k, dims)
-    upper = _cloud_bounds(k, dims, x, y, z)[1]
+    lower, upper = _cloud_bounds(k, dims, x, y, z)
+    if lower * lower >= bound2:  # no point nearer than the bound
+        return bound2
     if upper * upper < bound2:  # the nearest point is within upper: the value is the same
         return _nearest2(dims, first, axes, N, x, y, z, upper * upper, -1.0)
     return _nearest2(dims, first, axes, N, x, y, z, bound2, -1.0)
