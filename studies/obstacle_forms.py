@@ -30,7 +30,8 @@ Four parts, each a row of the grid (``part``):
   ("not posed").
 
 Full run: 7 MotionBenchMaker sets x 5 problems and 7 generated sets x 3 problems, three forms,
-10 s per plan (``DRAKE_MH_FORMS_PROBLEMS=N``: N problems per set of both). ``--quick``: the
+10 s per plan (``DRAKE_MH_FORMS_PROBLEMS=N``: N problems per set of both;
+``DRAKE_MH_FORMS_PARTS=batched,cloud_build``: only those parts). ``--quick``: the
 bracket and the cube, the cloud build, the batched check at N = 256, and problem 0 of
 ``table_pick`` (and of ``mbm/table_pick`` when the archive is set), 1 s per plan: a few minutes
 once the kernels are compiled.
@@ -48,7 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_mh.study import Case, Fields, Study
-from drake_mh.study.machine import cpu_model, load_average
+from drake_mh.study.machine import cpu_model, load_average, timed
 from drake_mh.study.report.summary import cpu_and_load, finished, group_by, markdown_table, median, p95
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
@@ -97,18 +98,8 @@ def _grid(quick: bool) -> list[dict]:
         problems = [(f"mbm/{name}", i) for name in (MBM_SETS[:1] if quick else MBM_SETS)
                     for i in range(1 if quick else mbm_count)] + problems
     rows += [_row("plan", "rrt_connect", name, i, form) for name, i in problems for form in FORMS]
-    return rows
-
-
-def _timed(function, rounds: int = 1) -> tuple[float, float]:
-    """Median wall and CPU seconds of ``function()`` over ``rounds``."""
-    wall, cpu = [], []
-    for _ in range(rounds):
-        w, c = time.perf_counter(), time.process_time()
-        function()
-        wall.append(time.perf_counter() - w)
-        cpu.append(time.process_time() - c)
-    return float(np.median(wall)), float(np.median(cpu))
+    parts = {p.strip() for p in os.environ.get("DRAKE_MH_FORMS_PARTS", "").split(",") if p.strip()}
+    return [r for r in rows if r["part"] in parts] if parts else rows
 
 
 # --- parts ----------------------------------------------------------------------------------------
@@ -122,9 +113,9 @@ def _decompose(case: Case) -> dict:
     with temporary_cache():
         mesh = Mesh(DATA / case["item"])
         convex_pieces.cache_clear()
-        wall, cpu = _timed(lambda: convex_pieces(mesh))
+        wall, cpu = timed(lambda: convex_pieces(mesh))
         pieces = convex_pieces(mesh)
-        hit, _ = _timed(lambda: (convex_pieces.cache_clear(), convex_pieces(mesh)), 5)
+        hit, _ = timed(lambda: (convex_pieces.cache_clear(), convex_pieces(mesh)), 5)
     return {"success": True, "faces": len(mesh.faces), "pieces": len(pieces), "excess": float(pieces.excess),
             "build_cold": wall, "build_cold_cpu": cpu, "build_warm": hit}
 
@@ -152,7 +143,7 @@ def _cloud_build(case: Case) -> dict:
     out = {"success": True, "points": CLOUD_POINTS}
     for key, function in (("table", lambda: obstacle_arrays((obstacle,))), ("kd", lambda: kd_build(points)),
                           ("ckdtree", lambda: cKDTree(points)), ("edt", edt)):
-        out[f"{key}_wall"], out[f"{key}_cpu"] = _timed(function, 7)
+        out[f"{key}_wall"], out[f"{key}_cpu"] = timed(function, 7)
     out["build_structure"] = out["table_wall"]
     return out
 
@@ -170,8 +161,8 @@ def _batched(case: Case) -> dict:
     warm = {form: [] for form in FORMS}
     for _ in range(3 if case.quick else 9):
         for form, scene in scenes.items():
-            one[form].append(_timed(lambda: scene.collision_free(Q))[0])
-            warm[form].append(_timed(lambda: [scene.collision_free(Q) for _ in range(20)])[0] / 20)
+            one[form].append(timed(lambda: scene.collision_free(Q))[0])
+            warm[form].append(timed(lambda: [scene.collision_free(Q) for _ in range(20)])[0] / 20)
     out = {"success": True, "n_query": len(Q)}
     for form, scene in scenes.items():
         key = form.replace(" ", "_")
@@ -216,16 +207,16 @@ def _form_scene(problem, form: str) -> tuple:
     if form == "meshes":
         with temporary_cache():
             convex_pieces.cache_clear()
-            out["build_cold"], out["build_cold_cpu"] = _timed(lambda: scene_form(problem.scene, form, margin=margin))
+            out["build_cold"], out["build_cold_cpu"] = timed(lambda: scene_form(problem.scene, form, margin=margin))
         convex_pieces.cache_clear()
         scene_form(problem.scene, form)  # fills the disk cache
         convex_pieces.cache_clear()
     found = {}
-    out["build_warm"], out["build_warm_cpu"] = _timed(lambda: found.setdefault("scene", scene_form(
+    out["build_warm"], out["build_warm_cpu"] = timed(lambda: found.setdefault("scene", scene_form(
         problem.scene, form, margin=margin)))
     scene = found["scene"]
     obstacles = tuple(scene.obstacles.values())
-    out["build_structure"], out["build_structure_cpu"] = _timed(lambda: obstacle_arrays(obstacles), 3)
+    out["build_structure"], out["build_structure_cpu"] = timed(lambda: obstacle_arrays(obstacles), 3)
     if form == "point cloud":
         out["points"] = sum(len(o.shape.points) for o in obstacles)
     return scene, out
@@ -243,7 +234,7 @@ def _plan(case: Case) -> dict:
     Q = base.robot.random_configurations(QUICK_N_QUERY if case.quick else N_QUERY,
                                          rng=np.random.default_rng(case.instance_seed))
     scene.collision_free(Q)
-    wall = [_timed(lambda: scene.collision_free(Q))[0] for _ in range(7)]
+    wall = [timed(lambda: scene.collision_free(Q))[0] for _ in range(7)]
     record.update(query=float(np.median(wall)) / len(Q), colliding=float(1.0 - scene.collision_free(Q).mean()))
     try:
         problem = dataclasses.replace(base, scene=scene)

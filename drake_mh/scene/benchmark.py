@@ -49,9 +49,7 @@ def benchmark_scene(robot, kind: str):
     sampled on their surfaces, radius 0)."""
     import trimesh
 
-    from drake_mh._support.cache import atomic_write_bytes, cache_dir
     from drake_mh.errors import InvalidArgument
-    from drake_mh.geometry.obj_files import obj_bytes
     from drake_mh.scene import Mesh, PointCloud, Scene, Sphere
 
     if kind not in BENCHMARK_SCENES:
@@ -65,17 +63,13 @@ def benchmark_scene(robot, kind: str):
         for name, shape, p, rpy in mixed:
             scene.add(name, shape, p, rpy=rpy)
         return scene
+    if kind == BENCHMARK_SCENES[2]:
+        for name, shape, p, rpy in mixed:
+            scene.add(name, Mesh(mesh_file(shape)), p, rpy=rpy)
+        return scene
     from pydrake.math import RollPitchYaw
 
     meshes = [primitive_mesh(shape) for _, shape, _, _ in mixed]
-    if kind == BENCHMARK_SCENES[2]:
-        for (name, _, p, rpy), mesh in zip(mixed, meshes):
-            path = cache_dir("benchmark_meshes") / f"{name}.obj"
-            data = obj_bytes(mesh.vertices, mesh.faces, f"benchmark obstacle {name}")
-            if not path.is_file() or path.read_bytes() != data:
-                atomic_write_bytes(path, data)
-            scene.add(name, Mesh(path), p, rpy=rpy)
-        return scene
     areas = np.array([m.area for m in meshes])
     counts = np.maximum(1, np.round(CLOUD_POINTS * areas / areas.sum()).astype(int))
     points = []
