@@ -313,34 +313,32 @@ def _parabolas(f, n, d, v, z):
 
 
 @numba.njit(cache=True)
+def _envelope_pass(D, root):
+    """Replace each row of ``D (a, b, n)`` along its last axis (a view) by :func:`_parabolas` of
+    it, square-rooted with ``root``."""
+    a, b, n = D.shape
+    f, d, z = np.empty(n), np.empty(n), np.empty(n + 1)
+    v = np.empty(n, np.int64)
+    for i in range(a):
+        for j in range(b):
+            for l in range(n):
+                f[l] = D[i, j, l]
+            _parabolas(f, n, d, v, z)
+            for l in range(n):
+                D[i, j, l] = np.sqrt(d[l]) if root else d[l]
+
+
+@numba.njit(cache=True)
 def distance_transform(zero):
     """``(nx, ny, nz)`` float64: the Euclidean distance [cells] from each cell to the nearest
     cell where ``zero (nx, ny, nz)`` (bool) is True (``inf`` if none), exact: three passes of
     :func:`_parabolas`, one per axis (the squared distance is separable)."""
-    nx, ny, nz = zero.shape
-    n = max(nx, ny, nz)
-    D = np.empty((nx, ny, nz))
-    f, d, z = np.empty(n), np.empty(n), np.empty(n + 1)
-    v = np.empty(n, np.int64)
-    for i in range(nx):
-        for j in range(ny):
-            for l in range(nz):
-                f[l] = 0.0 if zero[i, j, l] else np.inf
-            _parabolas(f, nz, d, v, z)
-            for l in range(nz):
-                D[i, j, l] = d[l]
-    for i in range(nx):
-        for l in range(nz):
-            for j in range(ny):
-                f[j] = D[i, j, l]
-            _parabolas(f, ny, d, v, z)
-            for j in range(ny):
-                D[i, j, l] = d[j]
-    for j in range(ny):
-        for l in range(nz):
-            for i in range(nx):
-                f[i] = D[i, j, l]
-            _parabolas(f, nx, d, v, z)
-            for i in range(nx):
-                D[i, j, l] = np.sqrt(d[i])
+    D = np.empty(zero.shape)
+    for i in range(zero.shape[0]):
+        for j in range(zero.shape[1]):
+            for l in range(zero.shape[2]):
+                D[i, j, l] = 0.0 if zero[i, j, l] else np.inf
+    _envelope_pass(D, False)  # along z
+    _envelope_pass(D.transpose((0, 2, 1)), False)  # along y
+    _envelope_pass(D.transpose((1, 2, 0)), True)  # along x
     return D
