@@ -37,12 +37,11 @@ Run: ``drake-mh study collision_speed [--quick]`` or ``python studies/collision_
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
 from drake_mh.study import Case, Fields, Study
-from drake_mh.study.machine import cpu_model, load_average
+from drake_mh.study.machine import cpu_model, load_average, timed
 from drake_mh.study.report.summary import cell, cpu_and_load, finished, markdown_table
 
 ROBOTS = ("panda (bundled, capsules)", "panda_hand")  # then drake_mh.robot.examples
@@ -96,17 +95,6 @@ def _drake(scene, boolean: bool):
     return query
 
 
-def _timed(function, rounds: int):
-    """Median wall and CPU seconds of ``function()`` over ``rounds``."""
-    wall, cpu = [], []
-    for _ in range(rounds):
-        w, c = time.perf_counter(), time.process_time()
-        function()
-        wall.append(time.perf_counter() - w)
-        cpu.append(time.process_time() - c)
-    return float(np.median(wall)), float(np.median(cpu))
-
-
 def run(case: Case) -> dict:
     """Time every query on one robot and scene, interleaved."""
     robot = _robot(case["robot"])
@@ -148,7 +136,7 @@ def run(case: Case) -> dict:
     for _ in range(rounds):  # interleaved: each method once per round
         for name, (function, count) in methods.items():
             calls = WARM_CALLS if name.endswith("warm") else 1  # "warm": consecutive calls (a planner's use)
-            wall, cpu = _timed(lambda: [function() for _ in range(calls)], 1)
+            wall, cpu = timed(lambda: [function() for _ in range(calls)], 1)
             samples[name].append((wall / (count * calls), cpu / (count * calls)))
     per_call = {name: (float(np.median([w for w, _ in v])), float(np.median([c for _, c in v])))
                 for name, v in samples.items()}

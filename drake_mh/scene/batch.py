@@ -39,6 +39,7 @@ def obstacle_arrays(obstacles) -> tuple:
     obstacles' rows, then the pieces' planes and the clouds' k-d trees."""
     from drake_mh.geometry.cloud import PointCloud
     from drake_mh.geometry.convex_pieces import convex_pieces
+    from drake_mh.scene.cloud_grid import cloud_entry
     from drake_mh.geometry.mesh import Mesh
     from drake_mh.scene.kernels.pieces import CLOUD, CONVEX
 
@@ -53,7 +54,7 @@ def obstacle_arrays(obstacles) -> tuple:
                 table[M:].reshape(-1)[:M] = offsets
                 rows.append((CONVEX, np.eye(3), R @ centre + p, (M, radius), table))
         elif isinstance(shape, PointCloud):
-            rows.append(_cloud_rows(shape, R, p, CLOUD))
+            rows.append(cloud_entry(shape, R, p, CLOUD))
         elif isinstance(shape, Sphere):
             rows.append((K.SPHERE, R, p, (shape.radius, 0.0, 0.0), None))
         elif isinstance(shape, Box):
@@ -77,40 +78,6 @@ def obstacle_arrays(obstacles) -> tuple:
             tables.append(table)
             start += len(table)
     return kinds, R_WO, p_WO, np.zeros((n, 3)), np.ascontiguousarray(np.concatenate(tables))
-
-
-GRID_CELLS = 65_536
-"""Most cells of a point cloud's grid (:mod:`.kernels.pieces`); the cell is at least 2 cm."""
-
-
-def _cloud_rows(cloud, R: np.ndarray, p: np.ndarray, kind: int) -> tuple:
-    """A point cloud's kernel row and data (:mod:`.kernels.pieces`): its grid of distance
-    bounds, then its points in W in k-d tree order; centred on their bounding box."""
-    from scipy import ndimage
-
-    from drake_mh.scene.kernels.pieces import kd_build
-
-    p_W = np.ascontiguousarray(cloud.points @ R.T + p)
-    low, high = p_W.min(axis=0), p_W.max(axis=0)
-    h = max(0.02, float(np.prod(high - low + 0.02)) ** (1.0 / 3.0) / GRID_CELLS ** (1.0 / 3.0))
-    shape = np.floor((high - low) / h).astype(np.int64) + 1
-    cells = np.minimum(np.floor((p_W - low) / h).astype(np.int64), shape - 1)
-    occupied = np.zeros(shape, bool)
-    occupied[cells[:, 0], cells[:, 1], cells[:, 2]] = True
-    near = ndimage.binary_dilation(occupied, structure=np.ones((3, 3, 3), bool))
-    floor = h * ndimage.distance_transform_edt(~near) if not near.all() else np.zeros(shape)
-    n_cells, N = floor.size, len(p_W)
-    head = 3 + (n_cells + 2) // 3
-    table = np.zeros((head + N + (N + 2) // 3, 3))
-    table[0] = cloud.radius, h, head
-    table[1], table[2] = low, shape
-    table[3:head].reshape(-1)[:n_cells] = np.maximum(floor.reshape(-1) - 1e-9, 0.0)  # round-off of the cells
-    order, axes = kd_build(p_W)
-    table[head:head + N] = p_W[order]
-    table[head + N:].reshape(-1)[:N] = axes
-    centre = 0.5 * (low + high)
-    radius = float(np.sqrt(np.max(np.einsum("ij,ij->i", p_W - centre, p_W - centre)))) + cloud.radius
-    return kind, np.eye(3), centre, (N, radius), table
 
 
 def obstacle_owners(obstacles) -> np.ndarray:

@@ -1,6 +1,7 @@
 """The fixed scenes the collision benchmarks share (``studies/collision_speed.py``,
 ``studies/exact_distance.py``): one ball in front of the arm, or ten mixed obstacles — as
-primitives, as meshes of the same shapes, or as a point cloud sampled from their surfaces."""
+primitives, as meshes of the same shapes, or as a point cloud sampled from their surfaces; and
+any scene of primitives in those three forms (:func:`scene_form`)."""
 
 from __future__ import annotations
 
@@ -48,9 +49,7 @@ def benchmark_scene(robot, kind: str):
     sampled on their surfaces, radius 0)."""
     import trimesh
 
-    from drake_mh._support.cache import atomic_write_bytes, cache_dir
     from drake_mh.errors import InvalidArgument
-    from drake_mh.geometry.obj_files import obj_bytes
     from drake_mh.scene import Mesh, PointCloud, Scene, Sphere
 
     if kind not in BENCHMARK_SCENES:
@@ -64,17 +63,13 @@ def benchmark_scene(robot, kind: str):
         for name, shape, p, rpy in mixed:
             scene.add(name, shape, p, rpy=rpy)
         return scene
+    if kind == BENCHMARK_SCENES[2]:
+        for name, shape, p, rpy in mixed:
+            scene.add(name, Mesh(mesh_file(shape)), p, rpy=rpy)
+        return scene
     from pydrake.math import RollPitchYaw
 
     meshes = [primitive_mesh(shape) for _, shape, _, _ in mixed]
-    if kind == BENCHMARK_SCENES[2]:
-        for (name, _, p, rpy), mesh in zip(mixed, meshes):
-            path = cache_dir("benchmark_meshes") / f"{name}.obj"
-            data = obj_bytes(mesh.vertices, mesh.faces, f"benchmark obstacle {name}")
-            if not path.is_file() or path.read_bytes() != data:
-                atomic_write_bytes(path, data)
-            scene.add(name, Mesh(path), p, rpy=rpy)
-        return scene
     areas = np.array([m.area for m in meshes])
     counts = np.maximum(1, np.round(CLOUD_POINTS * areas / areas.sum()).astype(int))
     points = []
@@ -83,3 +78,89 @@ def benchmark_scene(robot, kind: str):
         points.append(np.asarray(local) @ RollPitchYaw(rpy).ToRotationMatrix().matrix().T + p)
     scene.add("cloud", PointCloud(np.vstack(points), 0.0))
     return scene
+
+
+FORMS = ("primitives", "meshes", "point cloud")
+"""The three forms of a scene's obstacles that :func:`scene_form` builds."""
+
+CLOUD_DENSITY = 1e4
+"""[points / m²] sampled on the obstacles' surfaces by :func:`scene_form` (1 per cm²)."""
+
+CLOUD_RADIUS = 0.0025
+"""[m] radius of the sampled points' balls (VAMP's point radius)."""
+
+
+def _empty_like(scene):
+    from drake_mh.scene import Scene
+
+    return Scene(scene.robot, self_collision=scene.self_collision, sphere_tolerance=scene._sphere_tolerance)
+
+
+def mesh_file(shape) -> str:
+    """Path of an OBJ file of :func:`primitive_mesh` ``(shape)`` in the cache, written once
+    (named by the SHA-256 of its bytes, so equal shapes share a file)."""
+    import hashlib
+
+    from drake_mh._support.cache import atomic_write_bytes, cache_dir
+    from drake_mh.geometry.obj_files import obj_bytes
+
+    mesh = primitive_mesh(shape)
+    data = obj_bytes(mesh.vertices, mesh.faces, f"benchmark {type(shape).__name__}")
+    path = cache_dir("benchmark_meshes") / f"{hashlib.sha256(data).hexdigest()[:24]}.obj"
+    if not path.is_file():
+        atomic_write_bytes(path, data)
+    return str(path)
+
+
+def surface_points(scene, density: float = CLOUD_DENSITY, seed: int = 1) -> np.ndarray:
+    """``(N, 3)`` [m] points in W sampled uniformly on the surfaces of ``scene``'s primitive
+    obstacles (:func:`primitive_mesh`), ``ceil(area * density)`` per obstacle (``density`` in
+    points per m²)."""
+    import trimesh
+
+    points = []
+    for obstacle in scene.obstacles.values():
+        mesh = primitive_mesh(obstacle.shape)
+        count = int(np.ceil(mesh.area * density))
+        local, _ = trimesh.sample.sample_surface(mesh, count, seed=seed)
+        points.append(np.asarray(local) @ obstacle.X_WO[:3, :3].T + obstacle.X_WO[:3, 3])
+    return np.vstack(points) if points else np.zeros((0, 3))
+
+
+def scene_form(scene, form: str, density: float = CLOUD_DENSITY, radius: float = CLOUD_RADIUS,
+               margin: float = 0.0):
+    """A new :class:`drake_mh.scene.Scene` of the same robot with ``scene``'s primitive
+    obstacles given as ``form`` (:data:`FORMS`): ``"primitives"`` (copies), ``"meshes"``
+    (each one a :class:`drake_mh.scene.Mesh` of :func:`mesh_file`, at the obstacle's pose,
+    decomposed as any mesh is), ``"point cloud"`` (one :class:`drake_mh.scene.PointCloud` of
+    :func:`surface_points` with balls of ``radius`` [m], cropped to the robot's reach for
+    clearances up to ``margin`` [m]).
+
+    Raises:
+        InvalidArgument: an unknown form or a scene with an obstacle that is not a primitive.
+    """
+    from pydrake.math import RotationMatrix
+
+    from drake_mh.errors import InvalidArgument, SceneError
+    from drake_mh.scene import Box, Capsule, Cylinder, Mesh, PointCloud, Sphere
+
+    if form not in FORMS:
+        raise InvalidArgument(f"unknown obstacle form {form!r}; choose from {FORMS}")
+    for name, obstacle in scene.obstacles.items():
+        if not isinstance(obstacle.shape, (Sphere, Box, Cylinder, Capsule)):
+            raise InvalidArgument(f"obstacle {name!r} is a {type(obstacle.shape).__name__}, not a primitive; "
+                                  "scene_form converts scenes of spheres, boxes, cylinders and capsules")
+    out = _empty_like(scene)
+    if form == "point cloud":
+        if scene.obstacles:
+            try:
+                cloud = PointCloud(surface_points(scene, density), radius).cropped_to_reach(out, margin=margin)
+            except SceneError:  # no point within the robot's reach: nothing to add
+                return out
+            out.add("cloud", cloud)
+        return out
+    for name, obstacle in scene.obstacles.items():
+        rpy = RotationMatrix(obstacle.X_WO[:3, :3]).ToRollPitchYaw().vector()
+        shape = obstacle.shape if form == "primitives" else Mesh(mesh_file(obstacle.shape))
+        out.add(name, shape, obstacle.X_WO[:3, 3], rpy=rpy)
+    return out

@@ -50,6 +50,19 @@ def _describe(cpuinfo: str) -> str:
     return f"{name} ({', '.join(details)})" if details else name
 
 
+def timed(function, rounds: int = 1) -> tuple[float, float]:
+    """Median wall and CPU (process) seconds of ``function()`` over ``rounds`` calls."""
+    import time
+
+    wall, cpu = [], []
+    for _ in range(rounds):
+        w, c = time.perf_counter(), time.process_time()
+        function()
+        wall.append(time.perf_counter() - w)
+        cpu.append(time.process_time() - c)
+    return float(np.median(wall)), float(np.median(cpu))
+
+
 def load_average() -> float:
     """The 1-minute load average (NaN where the OS has none)."""
     try:

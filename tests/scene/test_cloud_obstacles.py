@@ -37,7 +37,7 @@ def cloud_scene(seed: int, radius: float = 0.01):
 
 
 def test_kd_tree_finds_the_nearest_point_and_the_grid_bounds_it():
-    from drake_mh.scene.kernels.pieces import cloud_floor, cloud_free, cloud_nearest2
+    from drake_mh.scene.kernels.pieces import _cloud_bounds, cloud_floor, cloud_free, cloud_nearest2
 
     rng = np.random.default_rng(0)
     for n in (1, 7, 9, 1000, 20000):
@@ -51,8 +51,39 @@ def test_kd_tree_finds_the_nearest_point_and_the_grid_bounds_it():
             assert cloud_nearest2(0, dims, *x, np.inf) == pytest.approx(exact, rel=1e-12, abs=1e-15)
             assert cloud_nearest2(0, dims, *x, exact * 0.5) == exact * 0.5  # nothing nearer than the bound
             assert cloud_floor(0, dims, *x) <= np.sqrt(exact)  # the grid's value is a lower bound
+            assert _cloud_bounds(0, dims, *x)[1] >= np.sqrt(exact)  # and its upper bound one above
             for reach in (0.5 * np.sqrt(exact), 2.0 * np.sqrt(exact) + 1e-9):
                 assert cloud_free(0, dims, *x, reach) == (np.sqrt(exact) >= reach)
+
+
+def test_grid_distance_transform_equals_scipys():
+    from scipy import ndimage
+
+    from drake_mh.scene.kernels.pieces import distance_transform
+
+    rng = np.random.default_rng(3)
+    for shape, share in (((1, 1, 1), 1.0), ((5, 1, 9), 0.1), ((17, 12, 8), 0.02), ((30, 31, 29), 0.001)):
+        zero = rng.random(shape) < share
+        zero.flat[rng.integers(zero.size)] = True
+        assert np.allclose(distance_transform(zero), ndimage.distance_transform_edt(~zero), rtol=0, atol=1e-12)
+    assert np.all(distance_transform(np.zeros((3, 4, 5), bool)) == np.inf)
+
+
+def test_kd_build_orders_the_points_into_a_valid_tree():
+    from drake_mh.scene.kernels.pieces import _LEAF, kd_build
+
+    rng = np.random.default_rng(4)
+    P = rng.normal(size=(5000, 3)) * [1.0, 0.2, 0.05]
+    order, axes, tree = kd_build(P)
+    assert np.array_equal(np.sort(order), np.arange(len(P))) and np.array_equal(tree, P[order])
+    stack = [(0, len(P))]
+    while stack:  # every median splits its range on its axis
+        lo, hi = stack.pop()
+        if hi - lo <= _LEAF:
+            continue
+        mid, a = (lo + hi) // 2, axes[(lo + hi) // 2]
+        assert np.all(tree[lo:mid, a] <= tree[mid, a]) and np.all(tree[mid + 1:hi, a] >= tree[mid, a])
+        stack += [(lo, mid), (mid + 1, hi)]
 
 
 @settings(max_examples=4, deadline=None)

@@ -24,11 +24,16 @@ REFERENCE = PointDistance(PANDA)
 
 
 def mesh_scene(seed: int):
-    """The bin and the (doubled) bracket near the Panda, posed from ``seed``."""
+    """The bin and the (doubled) bracket near the Panda, posed from ``seed``; poses that leave
+    the arm no free configuration among 400 random ones (an obstacle over its base) are drawn
+    again."""
     rng = np.random.default_rng(seed)
-    scene = Scene(PANDA)
-    scene.add("bin", BIN, rng.uniform([0.3, -0.3, 0.1], [0.6, 0.3, 0.5]), rpy=rng.uniform(-3, 3, 3))
-    scene.add("bracket", BRACKET, rng.uniform([-0.6, -0.6, 0.2], [0.0, -0.2, 0.8]), rpy=rng.uniform(-3, 3, 3))
+    while True:
+        scene = Scene(PANDA)
+        scene.add("bin", BIN, rng.uniform([0.3, -0.3, 0.1], [0.6, 0.3, 0.5]), rpy=rng.uniform(-3, 3, 3))
+        scene.add("bracket", BRACKET, rng.uniform([-0.6, -0.6, 0.2], [0.0, -0.2, 0.8]), rpy=rng.uniform(-3, 3, 3))
+        if scene.collision_free(PANDA.random_configurations(400, rng=rng)).mean() > 0.1:
+            break
     points = np.vstack([surface_samples(o.shape, o.X_WO) for o in scene.obstacles.values()])
     return scene, points
 

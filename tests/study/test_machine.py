@@ -43,3 +43,12 @@ def test_without_x86_fields_the_name_stands_alone():
 
 def test_this_machine_is_described():
     assert cpu_model().strip()
+
+
+def test_timed_calls_the_function_once_per_round_and_returns_medians():
+    from drake_mh.study.machine import timed
+
+    calls = []
+    wall, cpu = timed(lambda: calls.append(sum(range(10_000))), 5)
+    assert len(calls) == 5
+    assert wall >= 0.0 and cpu >= 0.0

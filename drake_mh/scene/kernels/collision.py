@@ -385,10 +385,25 @@ def _compact_centres(c, offsets, r, Rc, pc, ccx, ccy, ccz):
 @numba.njit(cache=True, fastmath=FASTMATH)
 def _spheres_sd(c, s0, s1, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, s_offset, s_radius, ccx, ccy, ccz, sd, sc):
     """``sc[i] = min(sc[i], sd_k(c_s) - r_s)`` over spheres ``s0 .. s1-1`` for the ``c``
-    compacted lanes of pose ``(Rc, pc)`` (obstacles at ``tc``), SIMD across the lanes."""
+    compacted lanes of pose ``(Rc, pc)`` (obstacles at ``tc``), SIMD across the lanes. For a
+    point cloud, each sphere's nearest-point search looks no farther than the distance that
+    could still lower ``sc[i]`` (the minimum stays exact)."""
+    cloud = kinds[k] == CLOUD
+    rho = cloud_radius(k, dims) if cloud else 0.0
+    vx, vy, vz = v_WO[k, 0], v_WO[k, 1], v_WO[k, 2]
     for s in range(s0, s1):
         _compact_centres(c, s_offset, s, Rc, pc, ccx, ccy, ccz)
-        _obstacle_sd(c, k, kinds, R_WO, p_WO, v_WO, dims, tc, ccx, ccy, ccz, sd)
+        if cloud:
+            for i in range(c):
+                reach = sc[i] + s_radius[s] + rho  # a point nearer than this lowers sc[i]
+                if reach <= 0.0:  # sd_k - r_s >= -rho - r_s > sc[i]: cannot lower it
+                    sd[i] = np.inf
+                    continue
+                bound2 = reach * reach if reach < np.inf else np.inf
+                sd[i] = math.sqrt(cloud_nearest2(k, dims, ccx[i] - vx * tc[i], ccy[i] - vy * tc[i],
+                                                 ccz[i] - vz * tc[i], bound2)) - rho
+        else:
+            _obstacle_sd(c, k, kinds, R_WO, p_WO, v_WO, dims, tc, ccx, ccy, ccz, sd)
         for i in range(c):
             sc[i] = min(sc[i], sd[i] - s_radius[s])
 

@@ -50,6 +50,9 @@ CONVEX, CLOUD = 4, 5
 _LEAF = 8
 """Ranges of at most this many points are scanned, not split further."""
 
+_UPPER = 2.0 * np.sqrt(3.0)
+"""[cells] a grid cell's upper bound exceeds its lower bound by this (:func:`_cloud_bounds`)."""
+
 
 @numba.njit(cache=True, fastmath=FASTMATH)
 def convex_value(k, dims, x, y, z):
@@ -145,15 +148,26 @@ def _points(k, dims):
 def cloud_nearest2(k, dims, x, y, z, bound2):
     """The smallest squared distance [m^2] from (x, y, z) (in W) to a point of cloud k, or
     ``bound2`` if none is nearer (the search skips what cannot be: pass the square of the
-    largest distance that matters, ``inf`` for the exact value)."""
+    largest distance that matters, ``inf`` for the exact value). The grid's bounds
+    (:func:`_cloud_bounds`) come first: a lower bound beyond ``bound2`` answers at once, and the
+    upper bound starts the search (no point beyond it is visited)."""
     first, N, axes = _points(k, dims)
+    lower, upper = _cloud_bounds(k, dims, x, y, z)
+    if lower * lower >= bound2:  # no point nearer than the bound
+        return bound2
+    if upper * upper < bound2:  # the nearest point is within upper: the value is the same
+        return _nearest2(dims, first, axes, N, x, y, z, upper * upper, -1.0)
     return _nearest2(dims, first, axes, N, x, y, z, bound2, -1.0)
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def cloud_floor(k, dims, x, y, z):
-    """A lower bound [m] of the distance from (x, y, z) (in W) to every point of cloud k: its
-    grid cell's value, or the distance to the grid's box outside it (module docstring)."""
+def _cloud_bounds(k, dims, x, y, z):
+    """``(lower, upper)`` [m]: bounds of the distance from (x, y, z) (in W) to the nearest point
+    of cloud k from its grid (module docstring). Inside the grid, ``lower`` is the cell's value
+    ``D`` (at most the centre distance to the nearest cell of the dilated occupied set) and
+    ``upper = D + 2 sqrt(3) h``: that dilated cell lies within one cell of an occupied one, so
+    some point is within half the query cell's diagonal + ``D`` + one cell diagonal + half the
+    occupied cell's diagonal. Outside the grid, the distance to its box and ``inf``."""
     s = int(dims[k, 0])
     h = dims[s, 1]
     ox, oy, oz = dims[s + 1, 0], dims[s + 1, 1], dims[s + 1, 2]
@@ -163,18 +177,29 @@ def cloud_floor(k, dims, x, y, z):
         gx = max(ox - x, 0.0, x - ox - nx * h)
         gy = max(oy - y, 0.0, y - oy - ny * h)
         gz = max(oz - z, 0.0, z - oz - nz * h)
-        return np.sqrt(gx * gx + gy * gy + gz * gz)
+        return np.sqrt(gx * gx + gy * gy + gz * gz), np.inf
     c = (int(fx) * ny + int(fy)) * nz + int(fz)
-    return dims[s + 3 + c // 3, c % 3]
+    lower = dims[s + 3 + c // 3, c % 3]
+    return lower, (lower + _UPPER * h) * (1.0 + 1e-9) + 1e-9
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def cloud_floor(k, dims, x, y, z):
+    """A lower bound [m] of the distance from (x, y, z) (in W) to every point of cloud k: its
+    grid cell's value, or the distance to the grid's box outside it (module docstring)."""
+    return _cloud_bounds(k, dims, x, y, z)[0]
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
 def cloud_free(k, dims, x, y, z, reach):
     """Whether every point of cloud k is at least ``reach`` [m] (> 0) from (x, y, z) (in W):
-    the grid's bound first, the k-d tree (stopping at the first point nearer) where it cannot
-    tell."""
-    if cloud_floor(k, dims, x, y, z) >= reach:
+    the grid's bounds first (free above the lower, not free below the upper), the k-d tree
+    (stopping at the first point nearer) where they cannot tell."""
+    lower, upper = _cloud_bounds(k, dims, x, y, z)
+    if lower >= reach:
         return True
+    if upper < reach:
+        return False
     first, N, axes = _points(k, dims)
     lim = reach * reach
     return _nearest2(dims, first, axes, N, x, y, z, lim, lim) >= lim
@@ -187,19 +212,22 @@ def cloud_radius(k, dims):
 
 
 @numba.njit(cache=True)
-def _select(P, idx, lo, hi, nth, axis):
-    """Reorder ``idx[lo:hi]`` so that ``idx[nth]`` holds the point with the ``nth``-smallest
-    coordinate ``axis``, the smaller before it and the larger after it (Hoare's selection)."""
+def _select(W, idx, lo, hi, nth, axis):
+    """Reorder the rows ``W[lo:hi]`` (and ``idx[lo:hi]`` with them) so that row ``nth`` holds the
+    point with the ``nth``-smallest coordinate ``axis``, the smaller before it and the larger
+    after it (Hoare's selection, on the rows themselves: contiguous reads)."""
     while hi - lo > 1:
-        a, b, c = P[idx[lo], axis], P[idx[(lo + hi) >> 1], axis], P[idx[hi - 1], axis]
+        a, b, c = W[lo, axis], W[(lo + hi) >> 1, axis], W[hi - 1, axis]
         pivot = max(min(a, b), min(max(a, b), c))  # median of three
         i, j = lo, hi - 1
         while i <= j:
-            while P[idx[i], axis] < pivot:
+            while W[i, axis] < pivot:
                 i += 1
-            while P[idx[j], axis] > pivot:
+            while W[j, axis] > pivot:
                 j -= 1
             if i <= j:
+                for u in range(3):
+                    W[i, u], W[j, u] = W[j, u], W[i, u]
                 idx[i], idx[j] = idx[j], idx[i]
                 i += 1
                 j -= 1
@@ -213,13 +241,22 @@ def _select(P, idx, lo, hi, nth, axis):
 
 @numba.njit(cache=True)
 def kd_build(P):
-    """``(order (N,), axes (N,))``: the implicit k-d tree of points ``P (N, 3)`` (module
-    docstring): ``P[order]`` in tree order, ``axes[mid]`` the split axis of the range whose
-    median is at ``mid`` (the axis of the range's widest extent)."""
+    """``(order (N,), axes (N,), tree (N, 3))``: the implicit k-d tree of points ``P (N, 3)``
+    (module docstring): ``tree = P[order]``, the points in tree order, ``axes[mid]`` the split axis of the range whose
+    median is at ``mid``: the widest side of a box that holds the range (the root's bounding
+    box, cut at each median above; any axis gives a valid tree, the widest a balanced search)."""
     N = P.shape[0]
+    W = P.copy()
     idx = np.arange(N)
     axes = np.zeros(N, np.int64)
     stack = np.empty((64, 2), np.int64)
+    boxes = np.empty((64, 6))
+    for a in range(3):
+        boxes[0, a], boxes[0, 3 + a] = np.inf, -np.inf
+    for j in range(N):
+        for a in range(3):
+            boxes[0, a] = min(boxes[0, a], W[j, a])
+            boxes[0, 3 + a] = max(boxes[0, 3 + a], W[j, a])
     stack[0, 0], stack[0, 1] = 0, N
     top = 1
     while top > 0:
@@ -229,16 +266,79 @@ def kd_build(P):
             continue
         axis, widest = 0, -1.0
         for a in range(3):
-            low, high = np.inf, -np.inf
-            for j in range(lo, hi):
-                v = P[idx[j], a]
-                low, high = min(low, v), max(high, v)
-            if high - low > widest:
-                axis, widest = a, high - low
+            if boxes[top, 3 + a] - boxes[top, a] > widest:
+                axis, widest = a, boxes[top, 3 + a] - boxes[top, a]
         mid = (lo + hi) >> 1
-        _select(P, idx, lo, hi, mid, axis)
+        _select(W, idx, lo, hi, mid, axis)
         axes[mid] = axis
+        cut = W[mid, axis]
+        for u in range(6):
+            boxes[top + 1, u] = boxes[top, u]
+        boxes[top, 3 + axis] = cut  # the lower half, kept in place
+        boxes[top + 1, axis] = cut  # the upper half
         stack[top, 0], stack[top, 1] = lo, mid
         stack[top + 1, 0], stack[top + 1, 1] = mid + 1, hi
         top += 2
-    return idx, axes
+    return idx, axes, W
+
+
+@numba.njit(cache=True)
+def _parabolas(f, n, d, v, z):
+    """``d[q] = min_p ((q - p)^2 + f[p])`` over the ``p < n`` with a finite ``f[p]`` (``inf``
+    if none): the lower envelope of parabolas (Felzenszwalb & Huttenlocher, Theory of Computing
+    8, 2012, Algorithm 1), ``v``, ``z`` its scratch."""
+    k = -1
+    for q in range(n):
+        if f[q] == np.inf:
+            continue
+        while k >= 0:
+            p = v[k]
+            s = ((f[q] + q * q) - (f[p] + p * p)) / (2.0 * (q - p))
+            if s <= z[k]:
+                k -= 1
+            else:
+                break
+        k += 1
+        v[k] = q
+        z[k] = -np.inf if k == 0 else ((f[q] + q * q) - (f[v[k - 1]] + v[k - 1] * v[k - 1])) / (2.0 * (q - v[k - 1]))
+    if k < 0:
+        for q in range(n):
+            d[q] = np.inf
+        return
+    j = 0
+    for q in range(n):
+        while j < k and z[j + 1] < q:
+            j += 1
+        d[q] = (q - v[j]) * (q - v[j]) + f[v[j]]
+
+
+@numba.njit(cache=True)
+def _envelope_pass(D, root):
+    """Replace each row of ``D (a, b, n)`` along its last axis (a view) by :func:`_parabolas` of
+    it, square-rooted with ``root``."""
+    a, b, n = D.shape
+    f, d, z = np.empty(n), np.empty(n), np.empty(n + 1)
+    v = np.empty(n, np.int64)
+    for i in range(a):
+        for j in range(b):
+            for l in range(n):
+                f[l] = D[i, j, l]
+            _parabolas(f, n, d, v, z)
+            for l in range(n):
+                D[i, j, l] = np.sqrt(d[l]) if root else d[l]
+
+
+@numba.njit(cache=True)
+def distance_transform(zero):
+    """``(nx, ny, nz)`` float64: the Euclidean distance [cells] from each cell to the nearest
+    cell where ``zero (nx, ny, nz)`` (bool) is True (``inf`` if none), exact: three passes of
+    :func:`_parabolas`, one per axis (the squared distance is separable)."""
+    D = np.empty(zero.shape)
+    for i in range(zero.shape[0]):
+        for j in range(zero.shape[1]):
+            for l in range(zero.shape[2]):
+                D[i, j, l] = 0.0 if zero[i, j, l] else np.inf
+    _envelope_pass(D, False)  # along z
+    _envelope_pass(D.transpose((0, 2, 1)), False)  # along y
+    _envelope_pass(D.transpose((1, 2, 0)), True)  # along x
+    return D
