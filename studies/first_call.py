@@ -19,6 +19,9 @@ The families a first plan needs (:data:`drake_mh.study.warmup.FIRST_PLAN`: ``Mot
 Cases run one at a time (their compile times would share the cores otherwise); the CPU model
 and the 1-minute load average are recorded (shared machines: CPU seconds hold better than wall).
 
+``DRAKE_MH_FIRST_CALL_GROUPS=a,b`` restricts both grids to those families (names of
+``drake-mh warmup --list``; an unknown name is an error that lists them).
+
 Run: ``drake-mh study first_call [--quick]`` or ``python studies/first_call.py [--quick]``.
 """
 
@@ -35,6 +38,18 @@ from pathlib import Path
 from drake_mh.study import Case, Fields, Study
 from drake_mh.study.machine import cpu_model, load_average
 from drake_mh.study.warmup import FIRST_PLAN, GROUPS
+
+def _groups(families) -> list[str]:
+    """``families``, or those of ``DRAKE_MH_FIRST_CALL_GROUPS`` (comma-separated) among them."""
+    from drake_mh.errors import InvalidArgument
+
+    chosen = [g.strip() for g in os.environ.get("DRAKE_MH_FIRST_CALL_GROUPS", "").split(",") if g.strip()]
+    unknown = sorted(set(chosen) - set(GROUPS))
+    if unknown:
+        raise InvalidArgument(f"DRAKE_MH_FIRST_CALL_GROUPS: unknown famil{'y' if len(unknown) == 1 else 'ies'} "
+                              f"{', '.join(unknown)}; choose among {', '.join(GROUPS)}")
+    return [g for g in families if g in chosen] if chosen else list(families)
+
 
 PROBE_TIMEOUT = 1800.0
 """[s] the longest one probe process may take (a family that compiles for longer fails the case)."""
@@ -125,8 +140,8 @@ def summarize(records: list[dict]) -> str:
 study = Study(
     name="first_call",
     run=run,
-    grid={"group": list(GROUPS)},
-    quick_grid={"group": list(FIRST_PLAN)},
+    grid={"group": _groups(GROUPS)},
+    quick_grid={"group": _groups(FIRST_PLAN)},
     fields=Fields(method="group", success="success", time="time", error="error", rank=False, error_unit=""),
     description=(
         "Compile time of every kernel family and entry point from an empty numba cache, load time from the "
@@ -137,4 +152,6 @@ study = Study(
 )
 
 if __name__ == "__main__":
-    study.main()
+    from drake_mh.cli import run_script
+
+    run_script(study)

@@ -172,4 +172,6 @@ study = Study(
 )
 
 if __name__ == "__main__":
-    study.main()
+    from drake_mh.cli import run_script
+
+    run_script(study)
