@@ -1,4 +1,4 @@
-"""IK against the peers a user would pick instead, measured in the same run (issue 17).
+"""IK against the peers a user would pick instead, measured in the same run.
 
 The TRAC-IK protocol (its README): a random configuration within the joint limits -> FK -> full
 6-D pose IK at 1e-5 m / 1e-5 rad, 5 ms timeout, mean time including failures, no collision
