@@ -1,24 +1,18 @@
-"""Obstacles around a robot, with exact distances from Drake and batched conservative ones.
+"""Obstacles around a robot, with exact distances and batched conservative ones.
 
-A :class:`Scene` owns its own Drake context of the robot's diagram. Obstacles (spheres, boxes,
-cylinders with a pose and an optional linear velocity) are registered *in that context* as
-anchored geometry of the robot's obstacle source, so they are added, moved and removed
-without rebuilding the diagram. Exact signed distances robot-link vs obstacle — and, if
-asked, robot self-distances (Drake already filters adjacent links) — come from
-:mod:`drake_mh.scene.exact`: compiled closed forms, segment searches and a certified GJK for
-link geometry vs obstacle pairs (Drake 1.51's GJK was measured up to 16 mm optimistic there,
-and 10-20x slower from Python), Drake's ``QueryObject.ComputeSignedDistancePairwiseClosestPoints``
-for the other self pairs and Drake's penetration depth where the exact methods do not hold.
+A :class:`Scene` owns its own Drake context of the robot's diagram. Obstacles (primitives,
+meshes and point clouds, each at a pose with an optional linear velocity) are registered *in
+that context* as anchored geometry, so they are added, moved and removed without rebuilding the
+diagram; the robot's self-collision filter lives there too (:mod:`drake_mh.scene.self_filter`).
+Exact signed distances come from :mod:`drake_mh.scene.exact` (closed forms, segment searches
+and a certified GJK where Drake's was measured optimistic; Drake's query for the other pairs).
 
 For populations, :meth:`Scene.batch_min_distance` uses the robot's
-:class:`drake_mh.geometry.spheres.SphereModel` and the obstacles' closed-form signed distances. Its
-guarantee (``d`` the exact distance, ``m`` the model's): ``m <= d`` everywhere, penetration
-included (where a sphere reports penetration, :mod:`drake_mh.scene.penetration` replaces the value by
-a lower bound of the exact one), and ``d - bound <= m`` where ``d >= 0`` (exception in
-:mod:`drake_mh.geometry.spheres`).
-
-A robot without collision geometry has no clearance: every query that needs one raises
-:class:`drake_mh.errors.SceneError` instead of answering ``inf`` (which would read as "clear").
+:class:`drake_mh.geometry.spheres.SphereModel`: with ``d`` the exact distance and ``m`` the
+model's, ``m <= d`` everywhere, penetration included (:mod:`drake_mh.scene.penetration`), and
+``d - bound <= m`` where ``d >= 0`` (:mod:`drake_mh.geometry.spheres`). A robot without
+collision geometry has no clearance: a query that needs one raises
+:class:`drake_mh.errors.SceneError` instead of answering ``inf``.
 """
 
 from __future__ import annotations
@@ -34,7 +28,8 @@ from drake_mh.geometry.convex_pieces import convex_pieces
 from drake_mh.geometry.mesh import Mesh
 from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere, as_shape
 from drake_mh.geometry.spheres import DEFAULT_TOLERANCE, SphereModel
-from drake_mh.scene.obstacle import Obstacle
+from drake_mh.scene.obstacle import Obstacle, rotation_rpy, vector3
+from drake_mh.scene.self_filter import filter_self_pairs
 
 __all__ = ["Scene", "Obstacle", "DistancePair", "Sphere", "Box", "Cylinder", "Capsule", "Mesh", "PointCloud"]
 
@@ -42,38 +37,13 @@ _F8, _NDARRAY, _INF = np.dtype(np.float64), np.ndarray, float("inf")  # Scene.co
 
 
 @functools.cache
-def _segments():
-    """:mod:`drake_mh.scene.segments`, imported on first use (it loads the segment kernels): a
-    ``from ... import`` in a method costs about 0.7 µs a call, 15 % of a short segment's check."""
-    from drake_mh.scene import segments
+def _module(name: str):
+    """``drake_mh.scene.<name>`` (``segments``, ``penetration``), imported on first use (segments
+    loads the segment kernels): a ``from ... import`` in a method costs about 0.7 µs a call, 15 %
+    of a short segment's check."""
+    import importlib
 
-    return segments
-
-
-@functools.cache
-def _penetration():
-    """:mod:`drake_mh.scene.penetration`, imported on first use (as :func:`_segments`)."""
-    from drake_mh.scene import penetration
-
-    return penetration
-
-
-def _vector3(value, what: str) -> np.ndarray:
-    """``value`` as a new ``(3,)`` float array (a copy: an obstacle keeps it, the caller's array may change)."""
-    try:  # numpy raises ValueError on ragged nested lists, in iscomplexobj too
-        arr = None if isinstance(value, (str, bytes)) or np.iscomplexobj(value) \
-            else np.array(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        arr = None
-    if arr is None or arr.shape != (3,) or not np.all(np.isfinite(arr)):
-        raise SceneError(f"{what} must be 3 finite numbers, got {value!r}")
-    return arr
-
-
-def _rotation(rpy) -> np.ndarray:
-    from pydrake.math import RollPitchYaw
-
-    return RollPitchYaw(_vector3(rpy, "rpy [rad]")).ToRotationMatrix().matrix()
+    return importlib.import_module(f"drake_mh.scene.{name}")
 
 
 class Scene:
@@ -94,7 +64,7 @@ class Scene:
 
     def __init__(self, robot, self_collision: bool = False, ignore_link_pairs=(),
                  sphere_tolerance: float = DEFAULT_TOLERANCE, keep_always_close: bool = False):
-        from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, Role
+        from pydrake.geometry import Role
 
         from drake_mh.robot import Robot
 
@@ -108,7 +78,6 @@ class Scene:
         self._sg_context = robot.scene_graph.GetMyMutableContextFromRoot(self._context)
         self._obstacles: dict[str, Obstacle] = {}
         self._ids: dict[str, object] = {}
-        self._self_link_pairs: list = []  # link pairs Drake's filter keeps (self_collision only)
         self._obstacle_arrays = None  # the obstacles as the compiled kernels read them (batch.py)
         self._free_function = None
         self._free_one = None  # its one-configuration entry and buffer (batch.CollisionModel.free_function)
@@ -117,37 +86,12 @@ class Scene:
         self._polytopes = None  # the obstacles' polytopes for its penetration correction (penetration.py)
         self._owners = None  # the obstacle of each kernel obstacle (a mesh has one per piece)
         self._q_shape, self._nq = (robot.nq,), robot.nq
-        self._self_capsule_pairs: list = []
-        self._always_close: tuple = ()
         inspector = robot.scene_graph.model_inspector()
         self._robot_ids = [g for g in inspector.GetAllGeometryIds(Role.kProximity)
                            if inspector.GetFrameId(g) != inspector.world_frame_id()]
-        manager = robot.scene_graph.collision_filter_manager(self._sg_context)
-        if not self.self_collision:
-            manager.Apply(CollisionFilterDeclaration().ExcludeWithin(GeometrySet(self._robot_ids)))
-        else:
-            for a, b in ignore_link_pairs:
-                ga, gb = (self._link_geometries(link) for link in (a, b))
-                manager.Apply(CollisionFilterDeclaration().ExcludeBetween(GeometrySet(ga), GeometrySet(gb)))
-            # capsule-capsule self pairs: closed form (Drake's value was up to 1.1e-5 m optimistic, and
-            # its capsule-capsule query can hang on collinear axes), so they leave Drake's query
-            query_inspector = robot.scene_graph.get_query_output_port().Eval(self._sg_context).inspector()
-            self._self_link_pairs = self._unfiltered_link_pairs(query_inspector)
-            if not keep_always_close and self._robot_ids:
-                from drake_mh.scene.always_close import always_close_pairs
-
-                self._always_close = always_close_pairs(robot, self.sphere_model, self._self_link_pairs)
-                for a, b in self._always_close:
-                    ga, gb = (self._link_geometries(link) for link in (a, b))
-                    manager.Apply(CollisionFilterDeclaration().ExcludeBetween(GeometrySet(ga), GeometrySet(gb)))
-                dropped = {frozenset(pair) for pair in self._always_close}
-                self._self_link_pairs = [p for p in self._self_link_pairs if frozenset(p) not in dropped]
-                query_inspector = robot.scene_graph.get_query_output_port().Eval(self._sg_context).inspector()
-            capsules = sorted(self._capsule_links, key=lambda g: g.get_value())
-            self._self_capsule_pairs = [(a, b) for i, a in enumerate(capsules) for b in capsules[i + 1:]
-                                        if not query_inspector.CollisionFiltered(a, b)]
-            for a, b in self._self_capsule_pairs:
-                manager.Apply(CollisionFilterDeclaration().ExcludeBetween(GeometrySet([a]), GeometrySet([b])))
+        self._self_link_pairs, self._always_close, self._self_capsule_pairs = filter_self_pairs(
+            robot, self._sg_context, self._robot_ids, self.self_collision, ignore_link_pairs, keep_always_close,
+            lambda: self.sphere_model, lambda: self._capsule_links)
 
     @property
     def always_close_pairs(self) -> tuple:
@@ -159,27 +103,6 @@ class Scene:
     def self_link_pairs(self) -> tuple:
         """``((link_a, link_b), ...)`` checked for self-collision (empty without ``self_collision``)."""
         return tuple(self._self_link_pairs)
-
-    def _unfiltered_link_pairs(self, inspector) -> list:
-        """``[(link_a, link_b)]`` with a geometry pair that Drake's collision filter keeps."""
-        plant = self.robot.plant
-        link = {g: plant.GetBodyFromFrameId(inspector.GetFrameId(g)).name() for g in self._robot_ids}
-        pairs = set()
-        for i, a in enumerate(self._robot_ids):
-            for b in self._robot_ids[i + 1:]:
-                if link[a] != link[b] and not inspector.CollisionFiltered(a, b):
-                    pairs.add(tuple(sorted((link[a], link[b]))))
-        return sorted(pairs)
-
-    def _link_geometries(self, link: str) -> list:
-        from drake_mh.errors import FrameNotFound
-
-        if not self.robot.plant.HasBodyNamed(link):
-            raise FrameNotFound(link, self.robot.link_names(), what="link")
-        body = self.robot.plant.GetBodyByName(link)
-        frame_id = self.robot.plant.GetBodyFrameIdOrThrow(body.index())
-        inspector = self.robot.scene_graph.model_inspector()
-        return [g for g in self._robot_ids if inspector.GetFrameId(g) == frame_id]
 
     # --- obstacles ----------------------------------------------------------------------
 
@@ -217,9 +140,9 @@ class Scene:
         elif not isinstance(shape, PointCloud):
             shape = as_shape(shape)
         X_WO = np.eye(4)
-        X_WO[:3, :3] = _rotation(rpy)
-        X_WO[:3, 3] = _vector3(position, "position [m]")
-        velocity_W = _vector3(velocity, "velocity [m/s]")  # every check before anything is registered
+        X_WO[:3, :3] = rotation_rpy(rpy)
+        X_WO[:3, 3] = vector3(position, "position [m]")
+        velocity_W = vector3(velocity, "velocity [m/s]")  # every check before anything is registered
         self._ids[name] = self._register(name, shape, X_WO)
         obstacle = Obstacle(name, shape, X_WO, velocity_W)
         self._obstacles[name] = obstacle
@@ -296,10 +219,10 @@ class Scene:
         old = self._get(name)
         X_WO = old.X_WO.copy()
         if position is not None:
-            X_WO[:3, 3] = _vector3(position, "position [m]")
+            X_WO[:3, 3] = vector3(position, "position [m]")
         if rpy is not None:
-            X_WO[:3, :3] = _rotation(rpy)
-        vel = old.velocity_W if velocity is None else _vector3(velocity, "velocity [m/s]")
+            X_WO[:3, :3] = rotation_rpy(rpy)
+        vel = old.velocity_W if velocity is None else vector3(velocity, "velocity [m/s]")
         # SceneGraph.ChangeShape(context, ..., X_FG) keeps the old pose for queries (Drake 1.51),
         # so the anchored geometry is re-registered at the new pose instead.
         self._unregister(self._ids[name])
@@ -342,7 +265,7 @@ class Scene:
         """
         self._require_geometry()
         if not (isinstance(max_distance, (int, float, np.number)) and not isinstance(max_distance, bool)
-                and max_distance >= 0):  # NaN fails this too (it gave [] before)
+                and max_distance >= 0):  # NaN fails this too
             raise SceneError(f"max_distance must be a number >= 0 [m] (inf for all pairs), got {max_distance!r}")
         return self._exact.distances(q, float(max_distance))
 
@@ -356,11 +279,8 @@ class Scene:
         """Smallest exact signed distance [m] over all pairs (link-obstacle, and link-link with
         ``self_collision``).
 
-        Exact as :meth:`distances` (:mod:`drake_mh.scene.exact`: closed forms and segment
-        searches for sphere and capsule links, a certified GJK — at most 1e-10 m below the truth —
-        for box, cylinder, ellipsoid and convex-mesh links, Drake's penetration depth where those
-        do not hold), without building the pairs: pairs are refined in the order of a cheap lower
-        bound until it reaches the minimum.
+        Exact as :meth:`distances` (:mod:`drake_mh.scene.exact`), without building the pairs:
+        they are refined in the order of a cheap lower bound until it reaches the minimum.
 
         Returns:
             The distance; ``inf`` when there is nothing to collide with (no obstacle, and no
@@ -406,17 +326,17 @@ class Scene:
 
     @functools.cached_property
     def _compiled_cores(self):
-        return self.robot.batch.compile_points(*_penetration().core_points(self.sphere_model))
+        return self.robot.batch.compile_points(*_module("penetration").core_points(self.sphere_model))
 
     @functools.cached_property
     def _core_arrays(self) -> tuple:
         """The sphere model's geometries as the penetration correction reads them."""
-        return _penetration().core_arrays(self.sphere_model)
+        return _module("penetration").core_arrays(self.sphere_model)
 
     def _correct_penetrations(self, Q, values) -> None:
         """``values (n, K)`` in place, for ``Q (n, nq)``: the negative ones corrected where the
         sphere model's value can be too shallow (:func:`drake_mh.scene.penetration.correct_clearances`)."""
-        _penetration().correct_clearances(values, self.robot.batch.points(np.ascontiguousarray(Q),
+        _module("penetration").correct_clearances(values, self.robot.batch.points(np.ascontiguousarray(Q),
                                                                            *self._compiled_cores),
                                           *self._core_arrays, *self.obstacle_arrays[:3], self.obstacle_arrays[4],
                                           *self._obstacle_polytopes)
@@ -426,7 +346,7 @@ class Scene:
         """The obstacles' polytopes as the penetration correction reads them (rebuilt after
         add/move/remove)."""
         if self._polytopes is None:
-            self._polytopes = _penetration().obstacle_polytopes(self._obstacles.values())
+            self._polytopes = _module("penetration").obstacle_polytopes(self._obstacles.values())
         return self._polytopes
 
     def sphere_centres(self, Q) -> np.ndarray:
@@ -566,7 +486,7 @@ class Scene:
             self._require_geometry()
         if type(clearance) is not float or type(self_clearance) is not float \
                 or not (0.0 <= clearance < _INF and 0.0 <= self_clearance < _INF):
-            check_clearance = _segments().check_clearance
+            check_clearance = _module("segments").check_clearance
             clearance = check_clearance(clearance, "clearance")
             self_clearance = check_clearance(self_clearance, "self_clearance")
         free = self._free()
@@ -602,17 +522,17 @@ class Scene:
                 raise SceneError(f"segment_free checks one segment: {name} must be one configuration "
                                  f"({self._nq},), got shape {np.shape(q)}; certify several segments with "
                                  "certify_segments(QA, QB)")
-        return bool(_segments().certify_segments(self, q_a, q_b, clearance, self_clearance).certified[0])
+        return bool(_module("segments").certify_segments(self, q_a, q_b, clearance, self_clearance).certified[0])
 
     def certify_segments(self, QA, QB, clearance: float = 0.0, self_clearance: float = 0.0, **options):
         """Certify many straight segments ``QA[i] -> QB[i]``: see
         :func:`drake_mh.scene.segments.certify_segments`."""
-        return _segments().certify_segments(self, QA, QB, clearance, self_clearance, **options)
+        return _module("segments").certify_segments(self, QA, QB, clearance, self_clearance, **options)
 
     def certify_path(self, Q, clearance: float = 0.0, self_clearance: float = 0.0, **options):
         """Certify the piecewise-linear joint-space motion through the rows of ``Q (M, nq)``:
         see :func:`drake_mh.scene.segments.certify_path`."""
-        return _segments().certify_path(self, Q, clearance, self_clearance, **options)
+        return _module("segments").certify_path(self, Q, clearance, self_clearance, **options)
 
     def batch_min_distance(self, Q) -> np.ndarray:
         """Conservative minimum clearance ``(N,)`` to the obstacles [m] (``inf`` if there is none).
