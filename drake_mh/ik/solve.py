@@ -29,14 +29,12 @@ import time
 import weakref
 from collections.abc import Callable
 
-import numpy as np
-
 from drake_mh._support.registry import Registry
 from drake_mh.errors import InvalidArgument, InvalidIKProblem
 from drake_mh.ik.problem import IKProblem
 from drake_mh.ik.result import IKResult, verify
 from drake_mh.optim import available_methods
-from drake_mh.optim.base import make_rng
+from drake_mh.optim.base import MAX_BUDGET, check_timeout, make_rng
 
 __all__ = ["solve_ik", "prepare", "available_ik_methods", "METHODS", "IKMethod", "GRADIENT_METHODS",
            "DEFAULT_LOCAL_BUDGET"]
@@ -125,10 +123,6 @@ def available_ik_methods() -> list[str]:
     return METHODS.names()
 
 
-MAX_BUDGET = 10**12
-"""Largest ``budget`` (kernels count it in 64-bit integers)."""
-
-
 def _check_limits(budget, timeout):
     if budget is not None:
         try:
@@ -139,16 +133,7 @@ def _check_limits(budget, timeout):
             raise InvalidArgument(f"budget must be an integer >= 1 and <= {MAX_BUDGET:.0e} (evaluations, or solver "
                                   f"starts for Drake's solvers) or None; got {str(budget)[:40]}")
         budget = int(budget)
-    if timeout is not None:
-        try:
-            seconds = float(timeout) if isinstance(timeout, numbers.Real) else float("nan")  # "1" is not a number
-        except OverflowError:  # an int beyond a double
-            seconds = float("nan")
-        if isinstance(timeout, bool) or not 0 < seconds < np.inf:
-            raise InvalidArgument(f"timeout must be a positive, finite number of seconds or None; "
-                                  f"got {str(timeout)[:40]}")
-        timeout = seconds
-    return budget, timeout
+    return budget, check_timeout(timeout)
 
 
 def _check_config(name: str, method: IKMethod, config) -> None:

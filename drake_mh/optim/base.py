@@ -219,6 +219,26 @@ def check_seed(seed: Any, what: str = "seed") -> int:
     return int(seed)
 
 
+MAX_BUDGET = 10**12
+"""Largest budget of the IK methods and planners (kernels count it in 64-bit integers, with
+headroom for their products)."""
+
+
+def check_timeout(timeout: Any) -> float | None:
+    """``timeout`` [s] as a float in ``(0, inf)``, or ``None`` (no limit); :class:`InvalidArgument`
+    for text (``"1"``), a bool, NaN, inf, a number <= 0 or an int beyond a double."""
+    if timeout is None:
+        return None
+    try:
+        seconds = float(timeout) if isinstance(timeout, numbers.Real) else float("nan")
+    except OverflowError:  # an int beyond a double
+        seconds = float("nan")
+    if isinstance(timeout, bool) or not 0 < seconds < float("inf"):
+        raise InvalidArgument(f"timeout must be a positive, finite number of seconds or None (no limit); "
+                              f"got {str(timeout)[:40]!r}")
+    return seconds
+
+
 def check_budget(budget: Any) -> int:
     """Returns ``budget`` as an ``int >= 1`` or raises :class:`InvalidArgument`."""
     try:

@@ -29,10 +29,9 @@ from drake_mh.errors import InvalidArgument, InvalidMotionProblem
 from drake_mh.planning.methods import METHODS
 from drake_mh.planning.problem import MotionProblem
 from drake_mh.planning.result import MotionResult
+from drake_mh.optim.base import MAX_BUDGET, check_timeout
 from drake_mh.planning.verify import check_retime, check_scaling, reaches_goal, verify_motion
 
-MAX_BUDGET = 10**12
-"""Largest ``budget`` (kernels count it in 64-bit integers, with headroom for their products)."""
 
 
 def register(name: str, description: str):
@@ -214,15 +213,7 @@ def solve_motion(problem: MotionProblem, method: str = "rrt_connect", seed=0, ti
     if not isinstance(problem, MotionProblem):
         raise InvalidArgument(f"problem must be a drake_mh.planning.MotionProblem, got {type(problem).__name__}")
     function = METHODS.get(method)
-    seconds = None if timeout is None else float("nan")
-    if isinstance(timeout, numbers.Real) and not isinstance(timeout, bool):
-        try:
-            seconds = float(timeout)
-        except OverflowError:  # an int beyond a double
-            pass
-    if timeout is not None and not 0 < seconds < np.inf:
-        raise InvalidArgument(f"timeout must be a finite number of seconds > 0, or None (no limit); "
-                              f"got {str(timeout)[:40]!r}")
+    seconds = check_timeout(timeout)
     if budget is not None and (isinstance(budget, bool) or not isinstance(budget, numbers.Integral)
                                or not 1 <= budget <= MAX_BUDGET):
         raise InvalidArgument(f"budget must be an integer in [1, {MAX_BUDGET:.0e}] or None, got {budget!r}")
