@@ -19,7 +19,7 @@ The families a first plan needs (:data:`drake_mh.study.warmup.FIRST_PLAN`: ``Mot
 Cases run one at a time (their compile times would share the cores otherwise); the CPU model
 and the 1-minute load average are recorded (shared machines: CPU seconds hold better than wall).
 
-``DRAKE_MH_FIRST_CALL_GROUPS=a,b`` restricts both grids to those families (names of
+``DRAKE_MH_FIRST_CALL_GROUPS=a,b`` measures those families instead, in both grids (names of
 ``drake-mh warmup --list``; an unknown name is an error that lists them).
 
 Run: ``drake-mh study first_call [--quick]`` or ``python studies/first_call.py [--quick]``.
@@ -40,7 +40,8 @@ from drake_mh.study.machine import cpu_model, load_average
 from drake_mh.study.warmup import FIRST_PLAN, GROUPS
 
 def _groups(families) -> list[str]:
-    """``families``, or those of ``DRAKE_MH_FIRST_CALL_GROUPS`` (comma-separated) among them."""
+    """``families``, or instead those of ``DRAKE_MH_FIRST_CALL_GROUPS`` (comma-separated), in the order of
+    :data:`~drake_mh.study.warmup.GROUPS`."""
     from drake_mh.errors import InvalidArgument
 
     chosen = [g.strip() for g in os.environ.get("DRAKE_MH_FIRST_CALL_GROUPS", "").split(",") if g.strip()]
@@ -48,7 +49,7 @@ def _groups(families) -> list[str]:
     if unknown:
         raise InvalidArgument(f"DRAKE_MH_FIRST_CALL_GROUPS: unknown famil{'y' if len(unknown) == 1 else 'ies'} "
                               f"{', '.join(unknown)}; choose among {', '.join(GROUPS)}")
-    return [g for g in families if g in chosen] if chosen else list(families)
+    return [g for g in GROUPS if g in chosen] if chosen else list(families)
 
 
 PROBE_TIMEOUT = 1800.0
