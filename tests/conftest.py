@@ -1,6 +1,9 @@
-"""Fixtures shared by every test folder: the bundled robots, loaded once per session."""
+"""Fixtures shared by every test folder: the bundled robots, loaded once per session; the number
+of pytest-xdist workers of ``-n auto``."""
 
 from __future__ import annotations
+
+import os
 
 import pytest
 
@@ -30,3 +33,13 @@ def planar12():
 @pytest.fixture(scope="session")
 def planar2r():
     return drake_mh.load_robot("planar2r")
+
+
+def pytest_xdist_auto_num_workers(config):
+    """``-n auto``: one worker per CPU this process may use, at most 4 (each worker holds Drake's
+    plants and compiles or loads the kernels it needs: more workers mostly repeat that work)."""
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cpus = os.cpu_count() or 1
+    return max(1, min(cpus, 4))

@@ -110,3 +110,11 @@ def test_readme_block_runs_and_prints_what_it_claims(label, code, tmp_path):
         assert "timeout=0.005" in code
         code = code.replace("timeout=0.005", "timeout=0.05")
     CHECKS[label](_run(code, tmp_path))   # blocks write files (motion.json, cell.yaml): never into the checkout
+
+
+def test_ci_runs_the_readme_test_command():
+    """CI (``.ci/run``) runs exactly the README's set-up line for the tests."""
+    commands = re.findall(r"```bash\n(python3 -m venv[^\n]*)\n```", README.read_text())
+    tests_line = [c for c in commands if "pytest" in c]
+    assert len(tests_line) == 1, commands
+    assert tests_line[0] in (ROOT / ".ci" / "run").read_text().splitlines()

@@ -73,6 +73,11 @@ def _browser(tmp_path):
     return webdriver.Chrome(service=Service(DRIVER), options=options)
 
 
+COMPILE_WAIT = 1800.0
+"""[s] the wait for the app's solutions and plan: from an empty kernel cache the app compiles its IK,
+planning and verification kernels for minutes first (each wait ends as soon as its condition holds)."""
+
+
 def _wait(predicate, timeout, what):
     end = time.monotonic() + timeout
     while time.monotonic() < end:
@@ -138,7 +143,7 @@ def test_app_in_headless_chromium(tmp_path):
 
     driver = _browser(tmp_path)
     status = tmp_path / "status.json"
-    app = subprocess.Popen([sys.executable, "-m", "drake_mh", "app", "--port", "0", "--max-seconds", "240",
+    app = subprocess.Popen([sys.executable, "-m", "drake_mh", "app", "--port", "0", "--max-seconds", "3600",
                             "--method", "pso", "--budget", "4000", "--status-file", str(status)],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                            preexec_fn=_default_sigint)
@@ -180,7 +185,7 @@ def test_app_in_headless_chromium(tmp_path):
         assert not before["solutions"] and before["page_url"] == match.group(1)
 
         _button(driver, "Generate / Regenerate solutions").click()
-        generated = _wait(lambda: (s := _status(status)).get("solutions") and s, 180, "generated solutions")
+        generated = _wait(lambda: (s := _status(status)).get("solutions") and s, COMPILE_WAIT, "generated solutions")
         _wait(lambda: "generated" in _status_text(driver), 30, "the status box to say so")
         _button(driver, "Run").click()
         _wait(lambda: _status(status).get("mode") == "run", 30, "run mode")
@@ -209,8 +214,8 @@ def test_app_in_headless_chromium(tmp_path):
 
         # plan from where the arm is to the goal point: a verdict in the status, in the file and on the page
         driver.execute_script("arguments[0].click();", _button(driver, "Plan to goal pose"))
-        planned = _wait(lambda: (s := _status(status)).get("plan") and not s["planning"] and s, 180,
-                        "a planning verdict")                        # 180 s: kernels may compile first
+        planned = _wait(lambda: (s := _status(status)).get("plan") and not s["planning"] and s, COMPILE_WAIT,
+                        "a planning verdict")
         assert planned["plan"]["goal"] == "pose" and planned["plan_method"] == "rrt_connect_smooth"
         _wait(lambda: any(w in _status_text(driver) for w in ("goal pose", "stays where it is")), 30, "the verdict")
 
