@@ -21,7 +21,7 @@ def _blocking_sphere():
 
 def _plan(*args):
     return subprocess.run([sys.executable, "-m", "drake_mh", "plan", "--robot", "seed000_6dof", *args],
-                          capture_output=True, text=True, timeout=300)
+                          capture_output=True, text=True, timeout=1800)
 
 
 def _drake_clearance_along(robot, path, sphere) -> float:
@@ -89,8 +89,8 @@ def test_show_plays_it_in_meshcat_until_max_seconds():
 def test_retime_ruckig_limits_the_jerk_toppra_says_it_does_not():
     base = [sys.executable, "-m", "drake_mh", "plan", "--goal-q", "1", "0", "0", "-2", "0", "2", "0.5",
             "--sphere", "0.5", "0.3", "0.3", "0.1"]
-    toppra = subprocess.run(base, capture_output=True, text=True, timeout=300)
-    ruckig = subprocess.run(base + ["--retime", "ruckig", "--json"], capture_output=True, text=True, timeout=300)
+    toppra = subprocess.run(base, capture_output=True, text=True, timeout=1800)
+    ruckig = subprocess.run(base + ["--retime", "ruckig", "--json"], capture_output=True, text=True, timeout=1800)
     assert toppra.returncode == 0 and "jerk not limited" in toppra.stdout, toppra.stderr
     assert ruckig.returncode == 0, ruckig.stderr
     data = json.loads(ruckig.stdout)

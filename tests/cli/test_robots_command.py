@@ -67,7 +67,7 @@ def test_ik_command_end_to_end_on_a_mesh_robot(tmp_path):
     result = subprocess.run(
         [sys.executable, "-m", "drake_mh", "ik", "--robot", _path("panda"), "--ee-frame",
          "panda_hand_tcp", "--position", *map(repr, p.tolist()), "--json"],
-        capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path)
+        capture_output=True, text=True, timeout=1800, env=env, cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert data["success"] and len(data["q"]) == 7
@@ -75,7 +75,7 @@ def test_ik_command_end_to_end_on_a_mesh_robot(tmp_path):
     np.testing.assert_allclose(robot.fk(data["q"])[:3, 3], p, atol=1e-3)
     bad = subprocess.run(
         [sys.executable, "-m", "drake_mh", "ik", "--robot", _path("panda"), "--position", "0.4", "0",
-         "0.5"], capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path)
+         "0.5"], capture_output=True, text=True, timeout=1800, env=env, cwd=tmp_path)
     assert bad.returncode == 2 and "tip links" in bad.stderr and "Traceback" not in bad.stderr
 
 
