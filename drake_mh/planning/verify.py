@@ -9,18 +9,25 @@ A path ``(M, nq)`` succeeds when
    every segment, not only the waypoints);
 3. it retimes into a trajectory certified against the robot's velocity, acceleration and torque
    limits (:func:`drake_mh.trajectories.retime`: toppra, else ruckig; or the one method asked for
-   with ``retime="toppra"`` / ``"ruckig"``) whose *executed* motion is certified too. toppra's cubic spline leaves the chords (ruckig's motion stays on them, to
-   rounding, but is certified the same way), so the trajectory itself is certified: sampled
-   every ``Δt``, the straight segments between the
-   samples are certified, and between two samples a joint deviates from that segment by at most
-   ``δ_j = Δt² a_j / 8`` (the linear-interpolation error bound), ``a_j`` the certified bound of
-   its acceleration (the trajectory's certificate: a Bernstein bound of ``|q̈_j|``, whether or
-   not the robot declares an acceleration limit). A sphere then moves at most
-   ``max_c Σ_j reach[c, j] δ_j`` (:attr:`~drake_mh.scene.batch.CollisionModel.reach`) from the
-   certified segments; ``Δt`` is chosen so that this is :data:`TRAJECTORY_SHIFTS` (1 mm, finer if needed), and the
-   trajectory's certified clearance is the segments' minus it. ruckig's trajectories move
-   exactly along the certified straight segments, so they take the path's certificate
-   (:data:`ON_PATH_ALLOWANCE`) without sampling.
+   with ``retime="toppra"`` / ``"ruckig"``) whose *executed* motion is certified too.
+
+   toppra's trajectory is ``q(t) = p(s(t))``: its cubic spline ``p`` through the waypoints
+   (:func:`drake_mh.trajectories.paths.joint_path`) leaves the chords, but whatever the timing it
+   passes only through the spline's configurations. So the spline is certified *before* toppra
+   solves (:func:`spline_clearance`): sampled in its parameter ``s``, piece by piece, the
+   straight segments between the samples are certified, and between two samples a joint
+   deviates from that segment by at most ``δ_j = Δs² a_j / 8`` (the linear-interpolation error
+   bound), ``a_j`` the largest ``|p_j''|`` on the piece (linear on a cubic piece: the larger end
+   value). A sphere then moves at most ``max_c Σ_j reach[c, j] δ_j``
+   (:attr:`~drake_mh.scene.batch.CollisionModel.reach`) from the certified segments; ``Δs`` is
+   chosen so that this is :data:`TRAJECTORY_SHIFTS` (1 mm, finer if needed), and the spline's
+   certified clearance is the segments' minus it. A spline that is not clear is refused without
+   timing it (ruckig is tried next); an accepted one gives its clearance to the trajectory once
+   the trajectory is checked to run on exactly that spline with a time law whose range
+   (Bernstein bounds) stays in its domain (:func:`timed_on_spline`). Any other trajectory is
+   sampled in time the same way (:func:`trajectory_clearance`: ``a_j`` the certified bound of
+   its acceleration). ruckig's trajectories move exactly along the certified straight segments,
+   so they take the path's certificate (:data:`ON_PATH_ALLOWANCE`) without sampling.
 
 Jerk: toppra's time law has piecewise-constant ``s̈``, so its acceleration steps at every
 gridpoint and its jerk is unbounded there. On a robot that declares jerk limits (the Panda:
@@ -358,8 +365,9 @@ def timed_on_spline(trajectory, spline) -> np.ndarray | None:
     under a time law.
 
     ``trajectory`` qualifies when its path is ``spline`` itself (the same breakpoints and
-    coefficients) and its time law's range, bounded by Bernstein coefficients, stays in the
-    domain up to ``1e-9`` of its length; a configuration ``e`` beyond an end is within
+    coefficients) and its time law's range, bounded by Bernstein coefficients (plus ``1e-12`` of
+    the domain's length for rounding), stays in the domain up to ``1e-9`` of its length; a
+    configuration ``e`` beyond an end is within
     ``e |p'| + e² |p''| / 2 + e³ |p'''| / 6`` of the end's (Taylor, exact for a cubic end piece).
     """
     path, timing = trajectory.path, trajectory.timing
@@ -368,7 +376,7 @@ def timed_on_spline(trajectory, spline) -> np.ndarray | None:
         return None
     x0, x1 = float(spline.x[0]), float(spline.x[-1])
     lo, hi = _range_bounds(timing)
-    beyond = max(x0 - lo, hi - x1, 0.0)
+    beyond = max(x0 - lo, hi - x1, 0.0) + 1e-12 * (x1 - x0)  # with room for rounding
     if beyond > 1e-9 * (x1 - x0):
         return None
     step = np.zeros(spline.c.shape[2])
