@@ -407,8 +407,9 @@ def _reason(method: str, text: str) -> str:
 
 def _retime(problem, P: np.ndarray, methods: tuple, tight, velocity_scaling=None,
             acceleration_scaling=None, parts: dict | None = None) -> tuple[object, str]:
-    """The first of ``methods`` that retimes ``P``; the executed motion certified
-    (:func:`trajectory_clearance`). ``tight()``: the path's certificate refined to
+    """The first of ``methods`` that retimes ``P``; the executed motion certified (toppra: its
+    spline by :func:`spline_clearance` before solving, then :func:`timed_on_spline`; otherwise
+    :func:`trajectory_clearance`). ``tight()``: the path's certificate refined to
     :data:`REPORT_TOLERANCE`, asked for only where the trajectory takes the path's clearance (on
     the certified segments, or stationary). On failure: one short reason per retimer and how to
     get the certified path alone. Adds the seconds of each part to ``parts``
