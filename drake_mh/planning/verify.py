@@ -454,13 +454,13 @@ def _retime(problem, P: np.ndarray, methods: tuple, tight, velocity_scaling=None
         certifying = float(trajectory.info.get("certify_time", 0.0))
         parts["retiming"] += time.perf_counter() - tick - certifying
         parts["limit_certification"] += certifying
+        certificate = tight() if _on_certified_path(trajectory, W) else None  # timed as the path's
         tick = time.perf_counter()
         step = None if spline is None else timed_on_spline(trajectory, spline)
         if step is not None:  # the executed motion stays on the certified spline
             reach = problem.scene.collision_model.reach
             clearance, why = spline_bound - float(np.max(reach @ step, initial=0.0)), ""
         else:
-            certificate = tight() if _on_certified_path(trajectory, W) else None
             clearance, why = trajectory_clearance(problem, trajectory, certificate, W)
         parts["trajectory_clearance"] += time.perf_counter() - tick
         if not np.isnan(clearance):  # +inf: a scene without obstacles or checked self pairs
