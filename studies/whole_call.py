@@ -4,8 +4,9 @@ What a user waits for is the whole call, not the search alone. Every case is one
 ``solve_motion(problem, "rrt_connect", seed=...)`` (its first call per robot and retimer in a
 process runs once untimed, and each retimer once on its path: compilation, imports, program
 builds) with one ``retime`` choice (the study's "method"): ``toppra`` (the default,
-``retime=True``: toppra, ruckig where toppra's spline or trajectory cannot be certified), ``ruckig`` (jerk-limited, on the straight segments) and ``none``
-(``retime=False``: the certified path alone). Problems: the generated ``bookshelf_small``,
+``retime=True``: toppra, ruckig where toppra's spline or trajectory cannot be certified),
+``ruckig`` (jerk-limited, on the straight segments) and ``none`` (``retime=False``: the
+certified path alone). Problems: the generated ``bookshelf_small``,
 ``table_pick`` and ``cage`` sets of the capsule Panda
 (:func:`drake_mh.planning.problems.problem_set`) and, with ``DRAKE_MH_MBM_ARCHIVE`` set to the
 ``vamp-planner`` source distribution, the original MotionBenchMaker Panda problems (robot: the
