@@ -2,10 +2,11 @@
 
 What a user waits for is the whole call, not the search alone. Every case is one warm
 ``solve_motion(problem, "rrt_connect", seed=...)`` (its first call per robot and retimer in a
-process runs once untimed: compilation, program builds) with one ``retime`` choice (the study's
-"method"): ``toppra`` (the default, ``retime=True``: toppra, ruckig where toppra's trajectory
-cannot be certified), ``ruckig`` (jerk-limited, on the straight segments) and ``none``
-(``retime=False``: the certified path alone). Problems: the generated ``bookshelf_small``,
+process runs once untimed, and each retimer once on its path: compilation, imports, program
+builds) with one ``retime`` choice (the study's "method"): ``toppra`` (the default,
+``retime=True``: toppra, ruckig where toppra's spline or trajectory cannot be certified),
+``ruckig`` (jerk-limited, on the straight segments) and ``none`` (``retime=False``: the
+certified path alone). Problems: the generated ``bookshelf_small``,
 ``table_pick`` and ``cage`` sets of the capsule Panda
 (:func:`drake_mh.planning.problems.problem_set`) and, with ``DRAKE_MH_MBM_ARCHIVE`` set to the
 ``vamp-planner`` source distribution, the original MotionBenchMaker Panda problems (robot: the
@@ -85,6 +86,22 @@ def _problem(robot: str, name: str, index: int, count: int = PROBLEMS):
     return found[index]
 
 
+def _warm_retimers(robot, path) -> None:
+    """Run each retimer once on ``path`` (untimed): the warm-up call may not reach one (its
+    verification can refuse toppra's spline before solving), and its first call in a process
+    imports and builds what later calls reuse."""
+    from drake_mh.errors import DrakeMhError
+    from drake_mh.trajectories import retime
+
+    if path is None or len(path) < 2:
+        return
+    for method in ("toppra", "ruckig"):
+        try:
+            retime(path, robot, method)
+        except DrakeMhError:  # a path that cannot be retimed warms what it reached
+            continue
+
+
 def measure(robot: str, name: str, index: int, retime="toppra", seed: int = 0, count: int = PROBLEMS) -> dict:
     """One warm whole call: wall and CPU seconds around it, the search, the verification and its
     parts (NaN where a checkout does not time a part)."""
@@ -92,7 +109,8 @@ def measure(robot: str, name: str, index: int, retime="toppra", seed: int = 0, c
 
     problem = _problem(robot, name, index, count)
     if (robot, retime) not in _CACHE["warm"]:  # compile / build once per process, untimed
-        solve_motion(problem, "rrt_connect", seed=seed, timeout=TIMEOUT, retime=RETIMES[retime])
+        warm = solve_motion(problem, "rrt_connect", seed=seed, timeout=TIMEOUT, retime=RETIMES[retime])
+        _warm_retimers(problem.robot, warm.path)
         _CACHE["warm"].add((robot, retime))
     load = load_average()
     wall, cpu = time.perf_counter(), time.process_time()

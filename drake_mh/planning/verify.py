@@ -9,18 +9,25 @@ A path ``(M, nq)`` succeeds when
    every segment, not only the waypoints);
 3. it retimes into a trajectory certified against the robot's velocity, acceleration and torque
    limits (:func:`drake_mh.trajectories.retime`: toppra, else ruckig; or the one method asked for
-   with ``retime="toppra"`` / ``"ruckig"``) whose *executed* motion is certified too. toppra's cubic spline leaves the chords (ruckig's motion stays on them, to
-   rounding, but is certified the same way), so the trajectory itself is certified: sampled
-   every ``Δt``, the straight segments between the
-   samples are certified, and between two samples a joint deviates from that segment by at most
-   ``δ_j = Δt² a_j / 8`` (the linear-interpolation error bound), ``a_j`` the certified bound of
-   its acceleration (the trajectory's certificate: a Bernstein bound of ``|q̈_j|``, whether or
-   not the robot declares an acceleration limit). A sphere then moves at most
-   ``max_c Σ_j reach[c, j] δ_j`` (:attr:`~drake_mh.scene.batch.CollisionModel.reach`) from the
-   certified segments; ``Δt`` is chosen so that this is :data:`TRAJECTORY_SHIFTS` (1 mm, finer if needed), and the
-   trajectory's certified clearance is the segments' minus it. ruckig's trajectories move
-   exactly along the certified straight segments, so they take the path's certificate
-   (:data:`ON_PATH_ALLOWANCE`) without sampling.
+   with ``retime="toppra"`` / ``"ruckig"``) whose *executed* motion is certified too.
+
+   toppra's trajectory is ``q(t) = p(s(t))``: its cubic spline ``p`` through the waypoints
+   (:func:`drake_mh.trajectories.paths.joint_path`) leaves the chords, but whatever the timing it
+   passes only through the spline's configurations. So the spline is certified *before* toppra
+   solves (:func:`spline_clearance`): sampled in its parameter ``s``, piece by piece, the
+   straight segments between the samples are certified, and between two samples a joint
+   deviates from that segment by at most ``δ_j = Δs² a_j / 8`` (the linear-interpolation error
+   bound), ``a_j`` the largest ``|p_j''|`` on the piece (linear on a cubic piece: the larger end
+   value). A sphere then moves at most ``max_c Σ_j reach[c, j] δ_j``
+   (:attr:`~drake_mh.scene.batch.CollisionModel.reach`) from the certified segments; ``Δs`` is
+   chosen so that this is :data:`TRAJECTORY_SHIFTS` (1 mm, finer if needed), and the spline's
+   certified clearance is the segments' minus it. A spline that is not clear is refused without
+   timing it (ruckig is tried next); an accepted one gives its clearance to the trajectory once
+   the trajectory is checked to run on exactly that spline with a time law whose range
+   (Bernstein bounds) stays in its domain (:func:`timed_on_spline`). Any other trajectory is
+   sampled in time the same way (:func:`trajectory_clearance`: ``a_j`` the certified bound of
+   its acceleration). ruckig's trajectories move exactly along the certified straight segments,
+   so they take the path's certificate (:data:`ON_PATH_ALLOWANCE`) without sampling.
 
 Jerk: toppra's time law has piecewise-constant ``s̈``, so its acceleration steps at every
 gridpoint and its jerk is unbounded there. On a robot that declares jerk limits (the Panda:
@@ -278,6 +285,107 @@ def trajectory_clearance(problem, trajectory, path_certificate=None, W=None) -> 
     return float("nan"), why
 
 
+def _chord_samples(spline, per_piece_ds2: np.ndarray, target: float) -> tuple[np.ndarray, float]:
+    """Parameters ``s`` sampling every piece of ``spline`` so finely that the sphere shift
+    ``per_piece_ds2[i] · Δs²`` between two samples is at most ``target`` [m]; both ends of every
+    piece included. Returns ``(s, largest shift)``."""
+    x = np.asarray(spline.x, dtype=float)
+    h = np.diff(x)
+    n = np.maximum(1, np.ceil(h * np.sqrt(per_piece_ds2 / target))).astype(int)
+    piece = np.repeat(np.arange(len(h)), n)
+    step = np.repeat(h / n, n)
+    first = np.repeat(np.cumsum(n) - n, n)
+    s = np.r_[x[piece] + (np.arange(len(piece)) - first) * step, x[-1]]
+    return s, float(np.max(per_piece_ds2 * (h / n) ** 2))
+
+
+def spline_clearance(problem, spline) -> tuple[float, str]:
+    """Certified lower bound of the obstacle clearance over **every configuration of the cubic
+    joint spline** ``s -> q`` on its whole domain ``[spline.x[0], spline.x[-1]]`` [m] (NaN and
+    the reason where it cannot be certified with the problem's clearances).
+
+    A retimed trajectory ``q(t) = spline(s(t))`` whose time law keeps ``s(t)`` in that domain
+    passes only through these configurations, whatever its timing, so the bound is its executed
+    motion's (:func:`timed_on_spline`). Sampling is in ``s``, piece by piece: on a piece the
+    second derivative of a cubic is linear, so ``|p_j''| <= a_ij``, the larger of its two end
+    values, and between samples ``Δs`` apart joint ``j`` deviates from the straight chord by at
+    most ``δ_j = Δs² a_ij / 8`` (the linear-interpolation error bound). A sphere then moves at
+    most ``max_c Σ_j reach[c, j] δ_j`` (:attr:`~drake_mh.scene.batch.CollisionModel.reach`, rows
+    of links and of link pairs) from the certified chords; each piece's ``Δs`` keeps this within
+    :data:`TRAJECTORY_SHIFTS` (1 mm, finer if needed), and the clearance is the chords' certified
+    one (refined to :data:`REPORT_TOLERANCE`) less the largest shift. The samples themselves are
+    checked first, in one batch: a sample that is not free at the problem's clearances under the
+    sphere model refuses the spline at once (no finer sampling can certify it).
+
+    Raises:
+        InvalidArgument: ``spline`` is not a cubic (or lower degree) ``PPoly`` of ``(nq,)``.
+    """
+    from drake_mh.errors import InvalidArgument
+
+    scene = problem.scene
+    c = np.asarray(getattr(spline, "c", np.empty(0)), dtype=float)
+    if c.ndim != 3 or c.shape[0] > 4 or c.shape[2] != problem.robot.nq:
+        raise InvalidArgument(f"spline must be a cubic PPoly s -> q ({problem.robot.nq},), got coefficients {c.shape}")
+    c = np.concatenate([np.zeros((4 - c.shape[0],) + c.shape[1:]), c])  # c[0] y³ + c[1] y² + c[2] y + c[3]
+    h = np.diff(np.asarray(spline.x, dtype=float))[:, None]
+    a_bound = np.maximum(np.abs(2.0 * c[1]), np.abs(6.0 * c[0] * h + 2.0 * c[1]))  # (pieces, nq)
+    per_ds2 = np.max((a_bound / 8.0) @ scene.collision_model.reach.T, axis=1)  # sphere shift per Δs²
+    why = ""
+    for target in TRAJECTORY_SHIFTS:
+        s, shift = _chord_samples(spline, per_ds2, target)
+        Q = spline(s)
+        if not np.all(scene.collision_free(Q, problem.clearance, problem.self_clearance)):  # cheap: first
+            return float("nan"), (f"the spline through the waypoints passes configurations closer than the "
+                                  f"clearance ({problem.clearance * 1e3:.1f} mm) under the sphere model")
+        path = scene.certify_path(Q, problem.clearance + shift, problem.self_clearance + shift,
+                                  tolerance=REPORT_TOLERANCE)
+        if path.certified:
+            return path.min_clearance - shift, ""
+        why = (f"the spline through the waypoints is not certified at {problem.clearance * 1e3:.1f} mm + "
+               f"{shift * 1e3:.3f} mm between its {len(s)} samples: {path.segments.reason(path.first_failure)}")
+    return float("nan"), why
+
+
+def _range_bounds(timing) -> tuple[float, float]:
+    """Lower and upper bound of a scalar ``PPoly`` over its whole domain: the extreme Bernstein
+    coefficients of its pieces (convex-hull property of the Bernstein basis)."""
+    from math import comb
+
+    c = np.asarray(timing.c, dtype=float)  # (k + 1, pieces), highest power first
+    k = c.shape[0] - 1
+    h = np.diff(np.asarray(timing.x, dtype=float))
+    a = [c[k - m] * h ** m for m in range(k + 1)]  # power-basis coefficients on [0, 1]
+    b = np.array([sum(comb(i, m) / comb(k, m) * a[m] for m in range(i + 1)) for i in range(k + 1)])
+    return float(np.min(b)), float(np.max(b))
+
+
+def timed_on_spline(trajectory, spline) -> np.ndarray | None:
+    """Per joint ``(nq,)``, how far [rad] ``trajectory``'s executed configurations can be from
+    ``spline``'s configurations on its domain; ``None`` where ``trajectory`` is not ``spline``
+    under a time law.
+
+    ``trajectory`` qualifies when its path is ``spline`` itself (the same breakpoints and
+    coefficients) and its time law's range, bounded by Bernstein coefficients (plus ``1e-12`` of
+    the domain's length for rounding), stays in the domain up to ``1e-9`` of its length; a
+    configuration ``e`` beyond an end is within
+    ``e |p'| + e² |p''| / 2 + e³ |p'''| / 6`` of the end's (Taylor, exact for a cubic end piece).
+    """
+    path, timing = trajectory.path, trajectory.timing
+    same = path is spline or (np.array_equal(path.x, spline.x) and np.array_equal(path.c, spline.c))
+    if timing is None or not same:
+        return None
+    x0, x1 = float(spline.x[0]), float(spline.x[-1])
+    lo, hi = _range_bounds(timing)
+    beyond = max(x0 - lo, hi - x1, 0.0) + 1e-12 * (x1 - x0)  # with room for rounding
+    if beyond > 1e-9 * (x1 - x0):
+        return None
+    step = np.zeros(spline.c.shape[2])
+    for end in (x0, x1):
+        d1, d2, d3 = (np.abs(np.asarray(spline(end, nu=k), dtype=float)) for k in (1, 2, 3))
+        step = np.maximum(step, beyond * d1 + beyond ** 2 * d2 / 2.0 + beyond ** 3 * d3 / 6.0)
+    return step
+
+
 def check_scaling(velocity_scaling, acceleration_scaling) -> None:
     """Raise :class:`~drake_mh.errors.InvalidArgument` unless both factors are ``None`` or a
     number in (0, 1]."""
@@ -299,8 +407,9 @@ def _reason(method: str, text: str) -> str:
 
 def _retime(problem, P: np.ndarray, methods: tuple, tight, velocity_scaling=None,
             acceleration_scaling=None, parts: dict | None = None) -> tuple[object, str]:
-    """The first of ``methods`` that retimes ``P``; the executed motion certified
-    (:func:`trajectory_clearance`). ``tight()``: the path's certificate refined to
+    """The first of ``methods`` that retimes ``P``; the executed motion certified (toppra: its
+    spline by :func:`spline_clearance` before solving, then :func:`timed_on_spline`; otherwise
+    :func:`trajectory_clearance`). ``tight()``: the path's certificate refined to
     :data:`REPORT_TOLERANCE`, asked for only where the trajectory takes the path's clearance (on
     the certified segments, or stationary). On failure: one short reason per retimer and how to
     get the certified path alone. Adds the seconds of each part to ``parts``
@@ -309,6 +418,7 @@ def _retime(problem, P: np.ndarray, methods: tuple, tight, velocity_scaling=None
 
     from drake_mh.errors import DrakeMhError
     from drake_mh.trajectories import retime
+    from drake_mh.trajectories.paths import joint_path
 
     robot = problem.robot
     keep = np.r_[True, np.any(np.abs(np.diff(P, axis=0)) > 1e-12, axis=1)]  # repeated rows break splines
@@ -316,23 +426,43 @@ def _retime(problem, P: np.ndarray, methods: tuple, tight, velocity_scaling=None
     if len(W) < 2:  # the start is the goal: stay there
         return _stationary(robot, W[0], tight())
     parts = {} if parts is None else parts
+    for part in VERIFY_PARTS:
+        parts.setdefault(part, 0.0)
     reasons = []
     for method in methods:
+        spline = spline_bound = None
+        if method == "toppra":  # its geometric path first: a spline that is not clear is never timed
+            tick = time.perf_counter()
+            try:
+                spline, _ = joint_path(W, robot, method)  # the spline retime(W, robot, "toppra") times
+            except DrakeMhError as exc:
+                spline, why = None, str(exc)
+            else:
+                spline_bound, why = spline_clearance(problem, spline)
+            parts["trajectory_clearance"] += time.perf_counter() - tick
+            if spline is None or np.isnan(spline_bound):
+                reasons.append(_reason(method, why))
+                continue
         tick = time.perf_counter()
         try:
             trajectory = retime(W, robot, method, velocity_scaling=velocity_scaling,
                                 acceleration_scaling=acceleration_scaling)
         except DrakeMhError as exc:
-            parts["retiming"] = parts.get("retiming", 0.0) + time.perf_counter() - tick
+            parts["retiming"] += time.perf_counter() - tick
             reasons.append(_reason(method, exc))
             continue
         certifying = float(trajectory.info.get("certify_time", 0.0))
-        parts["retiming"] = parts.get("retiming", 0.0) + time.perf_counter() - tick - certifying
-        parts["limit_certification"] = parts.get("limit_certification", 0.0) + certifying
-        certificate = tight() if _on_certified_path(trajectory, W) else None
+        parts["retiming"] += time.perf_counter() - tick - certifying
+        parts["limit_certification"] += certifying
+        certificate = tight() if _on_certified_path(trajectory, W) else None  # timed as the path's
         tick = time.perf_counter()
-        clearance, why = trajectory_clearance(problem, trajectory, certificate, W)
-        parts["trajectory_clearance"] = parts.get("trajectory_clearance", 0.0) + time.perf_counter() - tick
+        step = None if spline is None else timed_on_spline(trajectory, spline)
+        if step is not None:  # the executed motion stays on the certified spline
+            reach = problem.scene.collision_model.reach
+            clearance, why = spline_bound - float(np.max(reach @ step, initial=0.0)), ""
+        else:
+            clearance, why = trajectory_clearance(problem, trajectory, certificate, W)
+        parts["trajectory_clearance"] += time.perf_counter() - tick
         if not np.isnan(clearance):  # +inf: a scene without obstacles or checked self pairs
             trajectory.info["certified_clearance"] = clearance
             return trajectory, ""
