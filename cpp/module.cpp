@@ -20,11 +20,15 @@ using One = nb::ndarray<const double, nb::ndim<1>, nb::device::cpu>;
 using BoolOut = nb::ndarray<nb::numpy, bool, nb::ndim<1>>;
 
 static void init_checker(dmh::CollisionChecker* self, Ints ints, Floats floats) {
-    dmh::Packed check;
-    if (!dmh::unpack(ints.data(), (int64_t)ints.shape(0), floats.data(), (int64_t)floats.shape(0), check))
-        throw nb::value_error("the packed buffers do not hold a collision model (drake_mh.scene.kernels.packing.pack)");
     new (self) dmh::CollisionChecker(std::vector<int64_t>(ints.data(), ints.data() + ints.shape(0)),
                                      std::vector<double>(floats.data(), floats.data() + floats.shape(0)));
+    if (!self->ok() || !self->primitives()) {
+        const bool ok = self->ok();
+        self->~CollisionChecker();
+        if (!ok) throw nb::value_error("the packed buffers do not hold a collision model (drake_mh.scene.kernels.packing.pack)");
+        throw nb::value_error("the compiled check takes spheres, boxes, cylinders and capsules only: the scene holds a "
+                              "mesh piece or a point cloud (use the numba kernels)");
+    }
 }
 
 using F64Out = nb::ndarray<nb::numpy, double>;
