@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 #include "spheres.hpp"
@@ -24,6 +25,7 @@ struct Buffer {
 
 class CollisionChecker {
 public:
+    std::mutex busy;  // held by a call: the workspace is the object's own
     static constexpr int64_t LANES = 128;  // configurations per block (a multiple of W)
 
     CollisionChecker(std::vector<int64_t> ints, std::vector<double> floats)

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 #include "kinematics.hpp"
@@ -12,6 +13,7 @@ namespace dmh {
 
 class Kinematics {
 public:
+    std::mutex busy;  // held by a call: the workspace is the object's own
     static constexpr int64_t BLOCK = 64;
 
     Kinematics(std::vector<int64_t> ints, std::vector<double> floats) : ints_(std::move(ints)), floats_(std::move(floats)) {

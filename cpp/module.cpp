@@ -3,6 +3,7 @@
 #include <nanobind/ndarray.h>
 
 #include <cstdint>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -62,7 +63,11 @@ NB_MODULE(_native, m) {
             if ((int64_t)Q.shape(1) != self.nq()) throw nb::value_error("Q must have shape (N, nq)");
             double* R = new double[N * F * 9 + 1];
             double* p = new double[N * F * 3 + 1];
-            self.moving_frames(Q.data(), (int64_t)N, R, p);
+            {
+                nb::gil_scoped_release unlocked;
+                std::lock_guard<std::mutex> one_call(self.busy);
+                self.moving_frames(Q.data(), (int64_t)N, R, p);
+            }
             return nb::make_tuple(owned(R, {N, F, 3, 3}), owned(p, {N, F, 3}));
         }, "Q"_a, "R_WF (N, F, 3, 3) and p_WF (N, F, 3) of finite Q (N, nq).")
         .def("fk_jacobian", [](dmh::Kinematics& self, Batch Q, int64_t anchor, Floats ER, Floats Ep,
@@ -73,7 +78,11 @@ NB_MODULE(_native, m) {
                 throw nb::value_error("Q (N, nq), ER (9,), Ep (3,), on_path (F,), anchor < F");
             double* T = new double[N * 16 + 1];
             double* J = want_jac ? new double[N * 6 * nq + 1] : nullptr;
-            self.fk_jacobian(Q.data(), (int64_t)N, anchor, ER.data(), Ep.data(), on_path.data(), T, J);
+            {
+                nb::gil_scoped_release unlocked;
+                std::lock_guard<std::mutex> one_call(self.busy);
+                self.fk_jacobian(Q.data(), (int64_t)N, anchor, ER.data(), Ep.data(), on_path.data(), T, J);
+            }
             if (!want_jac) return nb::make_tuple(owned(T, {N, 4, 4}), nb::none());
             return nb::make_tuple(owned(T, {N, 4, 4}), owned(J, {N, 6, nq}));
         }, "Q"_a, "anchor"_a, "ER"_a, "Ep"_a, "on_path"_a, "want_jac"_a,
@@ -82,7 +91,7 @@ NB_MODULE(_native, m) {
     nb::class_<dmh::CollisionChecker>(m, "CollisionChecker",
         "The boolean sphere-model check of a scene's packed arrays (drake_mh.scene.kernels.packing.pack):\n"
         "the answers of drake_mh.scene.kernels.collision.collision_free. Holds copies of the buffers and\n"
-        "its own workspace (one call at a time: calls hold the GIL).")
+        "its own workspace: calls on one checker run one at a time; a batched call releases the GIL.")
         .def("__init__", &init_checker, "ints"_a, "floats"_a)
         .def_prop_ro("nq", &dmh::CollisionChecker::nq)
         .def("free", [](dmh::CollisionChecker& self, Batch Q, double clearance, double self_clearance) -> nb::object {
@@ -90,12 +99,19 @@ NB_MODULE(_native, m) {
             if (nq != self.nq()) throw nb::value_error("Q must have shape (N, nq)");
             bool* out = new bool[N > 0 ? N : 1];
             nb::capsule owner(out, [](void* p) noexcept { delete[] static_cast<bool*>(p); });
-            if (!self.free_batch(Q.data(), N, nq, clearance, self_clearance, out)) return nb::none();
+            bool finite;
+            {
+                nb::gil_scoped_release unlocked;
+                std::lock_guard<std::mutex> one_call(self.busy);
+                finite = self.free_batch(Q.data(), N, nq, clearance, self_clearance, out);
+            }
+            if (!finite) return nb::none();
             return nb::cast(BoolOut(out, {(size_t)N}, owner));
         }, "Q"_a, "clearance"_a, "self_clearance"_a,
         "(N,) bool for Q (N, nq) C-contiguous float64, clearances > 0 [m]; None if Q is not finite.")
         .def("free_one", [](dmh::CollisionChecker& self, One q, double clearance, double self_clearance) -> int {
             if ((int64_t)q.shape(0) != self.nq()) return -3;
+            std::lock_guard<std::mutex> one_call(self.busy);  // (the GIL is held: a short call)
             return self.free_one(q.data(), (int64_t)q.stride(0), clearance, self_clearance);
         }, "q"_a, "clearance"_a, "self_clearance"_a,
         "One configuration q (nq,) float64 (any stride): 1 free, 0 not, -1 not finite, -2 a clearance\n"
