@@ -32,7 +32,7 @@ public:
         : ints_(std::move(ints)), floats_(std::move(floats)) {
         ok_ = unpack(ints_.data(), (int64_t)ints_.size(), floats_.data(), (int64_t)floats_.size(), s_);
         if (!ok_) return;
-        for (int64_t k = 0; k < s_.K; ++k) primitives_ = primitives_ && s_.kinds[k] >= SPHERE && s_.kinds[k] <= CAPSULE;
+        for (int64_t k = 0; k < s_.K; ++k) ok_ = ok_ && s_.kinds[k] >= SPHERE && s_.kinds[k] <= CLOUD;
         nq_ = 0;
         for (int64_t k = 0; k < s_.chain.F; ++k) nq_ = std::max(nq_, s_.chain.qidx[k] + 1);
         const int64_t F = s_.chain.F, L = LANES;
@@ -48,8 +48,6 @@ public:
     }
 
     bool ok() const { return ok_; }
-    // Whether every obstacle is a primitive (sphere, box, cylinder, capsule): the kinds ported here.
-    bool primitives() const { return primitives_; }
     int64_t nq() const { return nq_; }
 
     // out[n] for the N configurations Q (N, nq) (row-major); false (nothing written) if Q holds
@@ -75,7 +73,7 @@ private:
     std::vector<int64_t> ints_;
     std::vector<double> floats_;
     Packed s_;
-    bool ok_ = false, primitives_ = true;
+    bool ok_ = false;
     int64_t nq_ = 0;
     Buffer q_, R_, p_, Gc_, alive_, pbuf_, R1_, p1_, gc1_;
 
@@ -115,8 +113,8 @@ private:
                 }
                 if (!any(close)) continue;
                 for (int64_t v = 0; v < nv; ++v) {  // the link's bounding sphere vs the obstacle's shape
-                    const vi hit =
-                        alive[v] & ~obstacle_free_v(s_, k, reach, load(gx + v * W), load(gy + v * W), load(gz + v * W));
+                    const vi hit = alive[v] & ~obstacle_free_v(s_, k, reach, load(gx + v * W), load(gy + v * W),
+                                                               load(gz + v * W), alive[v]);
                     if (!any(hit)) continue;
                     vi lane = alive[v];
                     for (int i = 0; i < W; ++i) {

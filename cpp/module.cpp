@@ -23,12 +23,9 @@ using BoolOut = nb::ndarray<nb::numpy, bool, nb::ndim<1>>;
 static void init_checker(dmh::CollisionChecker* self, Ints ints, Floats floats) {
     new (self) dmh::CollisionChecker(std::vector<int64_t>(ints.data(), ints.data() + ints.shape(0)),
                                      std::vector<double>(floats.data(), floats.data() + floats.shape(0)));
-    if (!self->ok() || !self->primitives()) {
-        const bool ok = self->ok();
+    if (!self->ok()) {
         self->~CollisionChecker();
-        if (!ok) throw nb::value_error("the packed buffers do not hold a collision model (drake_mh.scene.kernels.packing.pack)");
-        throw nb::value_error("the compiled check takes spheres, boxes, cylinders and capsules only: the scene holds a "
-                              "mesh piece or a point cloud (use the numba kernels)");
+        throw nb::value_error("the packed buffers do not hold a collision model (drake_mh.scene.kernels.packing.pack)");
     }
 }
 

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "packed.hpp"
+#include "pieces.hpp"
 
 namespace dmh {
 
@@ -30,7 +31,8 @@ inline void lane_point(int64_t a, const double* o, const double* R, const double
     z = pa[2 * L] + Ra[6 * L] * o0 + Ra[7 * L] * o1 + Ra[8 * L] * o2;
 }
 
-// Whether point (x, y, z) is at least reach from obstacle k (squared distances).
+// Whether point (x, y, z) is at least reach from obstacle k (squared distances; a mesh piece
+// and a cloud: pieces.hpp).
 inline bool point_free(const Packed& s, int64_t k, double reach, double x, double y, double z) {
     const int64_t kind = s.kinds[k];
     const double* pw = s.p_WO + 3 * k;
@@ -39,6 +41,8 @@ inline bool point_free(const Packed& s, int64_t k, double reach, double x, doubl
     const double dx = x - pw[0], dy = y - pw[1], dz = z - pw[2];
     const double d0 = d[0];
     if (kind == SPHERE) return dx * dx + dy * dy + dz * dz >= (reach + d0) * (reach + d0);
+    if (kind == CONVEX) return convex_free(s, k, dx, dy, dz, reach);
+    if (kind == CLOUD) return cloud_free(s, k, x, y, z, reach + cloud_radius(s, k));
     const double u = Rw[0] * dx + Rw[3] * dy + Rw[6] * dz;
     const double v = Rw[1] * dx + Rw[4] * dy + Rw[7] * dz;
     double w = Rw[2] * dx + Rw[5] * dy + Rw[8] * dz;
@@ -55,8 +59,9 @@ inline bool point_free(const Packed& s, int64_t k, double reach, double x, doubl
     return u * u + v * v + w * w >= (reach + d0) * (reach + d0);
 }
 
-// alive &= the W points (x, y, z) are at least reach from obstacle k (as _obstacle_free).
-inline vi obstacle_free_v(const Packed& s, int64_t k, double reach, vd x, vd y, vd z) {
+// Whether the W points (x, y, z) are at least reach from obstacle k (as _obstacle_free); a mesh
+// piece or a cloud is tested only in the lanes set in alive (the others read free).
+inline vi obstacle_free_v(const Packed& s, int64_t k, double reach, vd x, vd y, vd z, vi alive) {
     const int64_t kind = s.kinds[k];
     const double* pw = s.p_WO + 3 * k;
     const double* Rw = s.R_WO + 9 * k;
@@ -65,6 +70,11 @@ inline vi obstacle_free_v(const Packed& s, int64_t k, double reach, vd x, vd y, 
     if (kind == SPHERE) {
         const double lim = (reach + d[0]) * (reach + d[0]);
         return dx * dx + dy * dy + dz * dz >= lim;
+    }
+    if (kind == CONVEX || kind == CLOUD) {  // one lane at a time (the scalar tests)
+        vi free;
+        for (int i = 0; i < W; ++i) free[i] = !alive[i] || point_free(s, k, reach, x[i], y[i], z[i]) ? -1 : 0;
+        return free;
     }
     const vd u = Rw[0] * dx + Rw[3] * dy + Rw[6] * dz;
     const vd v = Rw[1] * dx + Rw[4] * dy + Rw[7] * dz;

@@ -1,7 +1,7 @@
 """The compiled core (drake_mh._native, C++): its sphere-model check gives the numba kernels'
 boolean answers, batched and one configuration at a time, on random and near-contact
-configurations of scenes with every primitive kind and with self-collision; its batched forward
-kinematics gives Drake's poses and Jacobians."""
+configurations of scenes with every primitive kind, with self-collision, with meshes and with a
+point cloud; its batched forward kinematics gives Drake's poses and Jacobians."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import drake_mh
-from drake_mh.scene import Box, Capsule, Cylinder, PointCloud, Scene, Sphere
+from drake_mh.scene import Box, Capsule, Cylinder, Scene, Sphere
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("drake_mh._native") is None,
                                 reason="the compiled core drake_mh._native is not built (pip install . builds it)")
@@ -116,13 +116,27 @@ def test_native_check_reports_bad_input():
         native().CollisionChecker(ints[:-1], floats)
 
 
-def test_native_check_refuses_point_clouds():
-    scene = Scene(PANDA)
-    scene.add("cloud", PointCloud(np.random.default_rng(0).uniform(-0.1, 0.1, (50, 3)), 0.01), [0.5, 0.0, 0.5])
-    model = scene.collision_model
-    ints, floats = model.packed(scene.obstacle_arrays, model.pair_arrays)
-    with pytest.raises(ValueError, match="point cloud"):
-        native().CollisionChecker(ints, floats)
+@pytest.mark.parametrize("form", ["10 mixed as meshes", "10 mixed as a point cloud"])
+def test_native_check_gives_the_numba_answers_for_meshes_and_clouds(form):
+    """Convex pieces of meshes and a point cloud (their data in the shape table)."""
+    from drake_mh.scene.benchmark import benchmark_scene
+
+    scene = benchmark_scene(PANDA, form)
+    batch, entry, buffer, checker = checkers(scene)
+    Q = np.random.default_rng(5).uniform(PANDA.lower, PANDA.upper, (300, PANDA.nq))
+    for clearance in (0.0, 0.02, 0.1):
+        c = max(clearance, 1e-12)
+        expected = batch(Q, c, c)
+        assert 0.05 < expected.mean() < 0.95
+        np.testing.assert_array_equal(checker.free(Q, c, c), expected)
+        for q in Q[:100]:
+            assert checker.free_one(q, clearance, clearance) == entry(q, clearance, clearance, buffer)
+        free, hit = np.flatnonzero(expected)[:20], np.flatnonzero(~expected)[:20]
+        n = min(len(free), len(hit))
+        B = near_contact(batch, Q[free[:n]], Q[hit[:n]], c, c)
+        expected_B = batch(B, c, c)
+        assert 0.2 < expected_B.mean() < 0.8
+        np.testing.assert_array_equal(checker.free(B, c, c), expected_B)
 
 
 @pytest.mark.parametrize("name", ["panda", "prismatic chain", "tree"])
