@@ -45,6 +45,16 @@ static void init_kinematics(dmh::Kinematics* self, Ints ints, Floats floats) {
                                std::vector<double>(floats.data(), floats.data() + floats.shape(0)));
 }
 
+static int free_one(dmh::CollisionChecker& self, One q, double clearance, double self_clearance) {
+    if ((int64_t)q.shape(0) != self.nq()) return -3;
+    std::lock_guard<std::mutex> one_call(self.busy);  // (the GIL is held: a short call)
+    return self.free_one(q.data(), (int64_t)q.stride(0), clearance, self_clearance);
+}
+
+static const char* FREE_ONE =
+    "One configuration q (nq,) float64 (any stride): 1 free, 0 not, -1 not finite, -2 a clearance\n"
+    "not in [0, inf), -3 a wrong size.";
+
 NB_MODULE(_native, m) {
     m.doc() = "drake_mh's compiled core (C++): the sphere-model collision check and its forward kinematics.";
     m.attr("simd_width") = dmh::W;
@@ -106,11 +116,11 @@ NB_MODULE(_native, m) {
             return nb::cast(BoolOut(out, {(size_t)N}, owner));
         }, "Q"_a, "clearance"_a, "self_clearance"_a,
         "(N,) bool for Q (N, nq) C-contiguous float64, clearances > 0 [m]; None if Q is not finite.")
-        .def("free_one", [](dmh::CollisionChecker& self, One q, double clearance, double self_clearance) -> int {
-            if ((int64_t)q.shape(0) != self.nq()) return -3;
-            std::lock_guard<std::mutex> one_call(self.busy);  // (the GIL is held: a short call)
-            return self.free_one(q.data(), (int64_t)q.stride(0), clearance, self_clearance);
-        }, "q"_a, "clearance"_a, "self_clearance"_a,
-        "One configuration q (nq,) float64 (any stride): 1 free, 0 not, -1 not finite, -2 a clearance\n"
-        "not in [0, inf), -3 a wrong size.");
+        .def("free_one", &free_one, "q"_a, "clearance"_a, "self_clearance"_a, FREE_ONE);
+
+    // the (entry, buffer) pair of drake_mh.scene.batch.CollisionModel.free_function's make_one:
+    // entry(q, clearance, self_clearance, buffer), the checker as the buffer
+    m.def("free_one", [](One q, double clearance, double self_clearance, dmh::CollisionChecker& checker) {
+        return free_one(checker, q, clearance, self_clearance);
+    }, "q"_a, "clearance"_a, "self_clearance"_a, "checker"_a, FREE_ONE);
 }
