@@ -4,13 +4,14 @@ Per case, both implementations run in the same process on the same configuration
 in rounds (their order alternating), after every kernel is compiled or loaded:
 
 * ``check`` on a scene of the capsule Panda (47 spheres) and of the Panda with its hand (meshes,
-  778 spheres): :func:`drake_mh.scene.benchmark.benchmark_scene` ``"1 sphere"`` and
-  ``"10 mixed"``, and the ten mixed primitives with the robot's self-collision pairs; numba's
-  bound batched check (:meth:`drake_mh.scene.batch.CollisionModel.free_function`, what
-  :meth:`~drake_mh.scene.Scene.collision_free` calls) against ``CollisionChecker.free``; at
-  ``N = 1`` numba's one-configuration entry point (``make_one``, what a planner's validity
-  callback and the scene's one-configuration path call) against ``CollisionChecker.free_one``,
-  2,000 calls cycling through 200 configurations;
+  778 spheres): :func:`drake_mh.scene.benchmark.benchmark_scene` ``"1 sphere"``, ``"10 mixed"``,
+  the same as meshes and as a point cloud, and the ten mixed primitives with the robot's
+  self-collision pairs; numba's bound batched check
+  (:meth:`drake_mh.scene.batch.CollisionModel.free_function`, what
+  :meth:`~drake_mh.scene.Scene.collision_free` calls with ``DRAKE_MH_COMPILED_CORE=0``) against
+  ``CollisionChecker.free`` (what it calls where the core is built); at ``N = 1`` numba's
+  one-configuration entry point (``make_one``, the scene's one-configuration path) against
+  ``CollisionChecker.free_one``, 2,000 calls cycling through 200 configurations;
 * ``fk`` and ``fk+J``: the end effector's pose (and Jacobian) of ``N`` configurations, numba's
   :func:`drake_mh.kinematics.kernels.fk_jacobian` with its transposition and allocations (as
   :class:`drake_mh.kinematics.BatchKinematics` calls it) against ``Kinematics.fk_jacobian``.
@@ -19,7 +20,8 @@ Reported: ns per configuration (median of rounds, wall and process CPU time), th
 native / numba (below 1: the compiled core is faster) of the medians, of the least wall times
 (the rounds least disturbed by other work) and of the CPU times, the 1-minute load average,
 and whether every answer was identical (booleans) or within 1e-12 (poses). CPU ratios hold
-better than wall ratios on a shared machine. Without the compiled module (not built) a case records only that.
+better than wall ratios on a shared machine. Without the compiled module (not built) a case
+records only that.
 Results: docs/native.md.
 
 Run: ``drake-mh study native_speed [--quick]`` or ``python studies/native_speed.py [--quick]``.
@@ -37,7 +39,7 @@ from drake_mh.study.machine import cpu_model, load_average
 from drake_mh.study.report.summary import cell, cpu_and_load, finished, markdown_table
 
 ROBOTS = ("panda", "panda_hand")  # the bundled capsule Panda (47 spheres); drake_mh.robot.examples' mesh Panda (778)
-SCENES = ("1 sphere", "10 mixed", "10 mixed + self")
+SCENES = ("1 sphere", "10 mixed", "10 mixed + self", "10 mixed as meshes", "10 mixed as a point cloud")
 CASES = SCENES + ("fk", "fk+J")
 SIZES = (1, 64, 1024)
 ROUNDS, QUICK_ROUNDS = 11, 3
@@ -60,7 +62,7 @@ def _scene(robot, name: str):
     from drake_mh.scene import Scene
     from drake_mh.scene.benchmark import benchmark_scene
 
-    if name != SCENES[2]:
+    if name != "10 mixed + self":
         return benchmark_scene(robot, name)
     scene = Scene(robot, self_collision=True)
     for key, obstacle in benchmark_scene(robot, SCENES[1]).obstacles.items():
@@ -180,7 +182,7 @@ study = Study(
     name="native_speed",
     run=run_case,
     grid={"robot": list(ROBOTS), "case": list(CASES), "N": list(SIZES)},
-    quick_grid={"robot": [ROBOTS[0]], "case": [SCENES[2], "fk+J"], "N": [64]},
+    quick_grid={"robot": [ROBOTS[0]], "case": ["10 mixed + self", "fk+J"], "N": [64]},
     fields=Fields(method="case", time="time", rank=False, group_by=("N",)),
     description=(
         "The compiled core (C++, drake_mh._native) against the numba kernels it ports: the sphere-model "
