@@ -81,8 +81,8 @@ NB_MODULE(_native, m) {
                                nb::ndarray<const bool, nb::ndim<1>, nb::c_contig, nb::device::cpu> on_path, bool want_jac) {
             const size_t N = Q.shape(0), nq = (size_t)self.nq();
             if (Q.shape(1) != nq || ER.shape(0) != 9 || Ep.shape(0) != 3 || on_path.shape(0) != (size_t)self.F() ||
-                anchor >= self.F())
-                throw nb::value_error("Q (N, nq), ER (9,), Ep (3,), on_path (F,), anchor < F");
+                anchor < -1 || anchor >= self.F())
+                throw nb::value_error("Q (N, nq), ER (9,), Ep (3,), on_path (F,), -1 <= anchor < F");
             double* T = new double[N * 16 + 1];
             double* J = want_jac ? new double[N * 6 * nq + 1] : nullptr;
             {
