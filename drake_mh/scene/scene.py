@@ -449,8 +449,9 @@ class Scene:
     def _free(self):
         """The compiled boolean query bound to the current obstacles (rebuilt when they change)."""
         arrays = self.obstacle_arrays
-        if self._free_function is None:
-            self._free_function = self.collision_model.free_function(arrays)
+        if self._free_function is None:  # the compiled core's where it is built
+            from drake_mh.scene.compiled_check import free_function
+            self._free_function = free_function(self.collision_model, arrays)
         return self._free_function
 
     def collision_free(self, Q, clearance: float = 0.0, self_clearance: float = 0.0):
@@ -459,11 +460,11 @@ class Scene:
         pair at least ``self_clearance`` apart.
 
         Conservative: ``True`` implies the exact geometry is at least as clear; a configuration
-        up to ``sphere_model.bound`` clearer than asked may read ``False``. Compiled, SIMD across
-        configurations, exits a block of configurations as soon as all of them collide. One
-        float64 ``(nq,)`` configuration with float clearances takes a scalar kernel (same
-        answer, first collision ends it) through its compiled entry point once the scene has
-        bound it on a first such call: about 1 µs per call (docs/collision.md).
+        up to ``sphere_model.bound`` clearer than asked may read ``False``. Compiled (the C++
+        core where built: docs/native.md), SIMD across configurations, exits a block as soon as
+        all of its configurations collide. One float64 ``(nq,)`` configuration with float
+        clearances takes a scalar kernel (same answer, first collision ends it) through its
+        compiled entry point once the scene has bound it: about 1 µs per call (docs/collision.md).
 
         Args:
             Q: ``(N, nq)`` configurations, or one ``(nq,)``.

@@ -1,0 +1,302 @@
+// The sphere model against the obstacles' closed forms, and self-collision sphere pairs: the
+// per-lane (scalar) tests of drake_mh/scene/kernels/collision.py and pairs.py, in the same
+// order with the same operations. Frames are read from R (F, 3, 3, L), p (F, 3, L) at lane b
+// (L = 1: one configuration's R (F, 3, 3), p (F, 3)).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "packed.hpp"
+#include "pieces.hpp"
+
+namespace dmh {
+
+constexpr int64_t SPHERE = 0, BOX = 1, CYLINDER = 2, CAPSULE = 3;
+constexpr double INF = std::numeric_limits<double>::infinity();
+
+// World position of offset o (3,) fixed in moving frame a (-1: the world), lane b.
+inline void lane_point(int64_t a, const double* o, const double* R, const double* p, int64_t L, int64_t b,
+                       double& x, double& y, double& z) {
+    const double o0 = o[0], o1 = o[1], o2 = o[2];
+    if (a < 0) {
+        x = o0, y = o1, z = o2;
+        return;
+    }
+    const double* Ra = R + a * 9 * L + b;
+    const double* pa = p + a * 3 * L + b;
+    x = pa[0] + Ra[0] * o0 + Ra[L] * o1 + Ra[2 * L] * o2;
+    y = pa[L] + Ra[3 * L] * o0 + Ra[4 * L] * o1 + Ra[5 * L] * o2;
+    z = pa[2 * L] + Ra[6 * L] * o0 + Ra[7 * L] * o1 + Ra[8 * L] * o2;
+}
+
+// Whether point (x, y, z) is at least reach from obstacle k (squared distances; a mesh piece
+// and a cloud: pieces.hpp).
+inline bool point_free(const Packed& s, int64_t k, double reach, double x, double y, double z) {
+    const int64_t kind = s.kinds[k];
+    const double* pw = s.p_WO + 3 * k;
+    const double* Rw = s.R_WO + 9 * k;
+    const double* d = s.dims + 3 * k;
+    const double dx = x - pw[0], dy = y - pw[1], dz = z - pw[2];
+    const double d0 = d[0];
+    if (kind == SPHERE) return dx * dx + dy * dy + dz * dz >= (reach + d0) * (reach + d0);
+    if (kind == CONVEX) return convex_free(s, k, dx, dy, dz, reach);
+    if (kind == CLOUD) return cloud_free(s, k, x, y, z, reach + cloud_radius(s, k));
+    const double u = Rw[0] * dx + Rw[3] * dy + Rw[6] * dz;
+    const double v = Rw[1] * dx + Rw[4] * dy + Rw[7] * dz;
+    double w = Rw[2] * dx + Rw[5] * dy + Rw[8] * dz;
+    if (kind == BOX) {
+        const double ox = smax(std::fabs(u) - d0, 0.0), oy = smax(std::fabs(v) - d[1], 0.0),
+                     oz = smax(std::fabs(w) - d[2], 0.0);
+        return ox * ox + oy * oy + oz * oz >= reach * reach;
+    }
+    if (kind == CYLINDER) {
+        const double orr = smax(std::sqrt(u * u + v * v) - d0, 0.0), oa = smax(std::fabs(w) - d[1], 0.0);
+        return orr * orr + oa * oa >= reach * reach;
+    }
+    w = w - smin(smax(w, -d[1]), d[1]);  // CAPSULE
+    return u * u + v * v + w * w >= (reach + d0) * (reach + d0);
+}
+
+// Whether the W points (x, y, z) are at least reach from obstacle k (as _obstacle_free); a mesh
+// piece or a cloud is tested only in the lanes set in alive (the others read free).
+inline vi obstacle_free_v(const Packed& s, int64_t k, double reach, vd x, vd y, vd z, vi alive) {
+    const int64_t kind = s.kinds[k];
+    const double* pw = s.p_WO + 3 * k;
+    const double* Rw = s.R_WO + 9 * k;
+    const double* d = s.dims + 3 * k;
+    const vd dx = x - pw[0], dy = y - pw[1], dz = z - pw[2];
+    if (kind == SPHERE) {
+        const double lim = (reach + d[0]) * (reach + d[0]);
+        return dx * dx + dy * dy + dz * dz >= lim;
+    }
+    if (kind == CONVEX || kind == CLOUD) {  // one lane at a time (the scalar tests)
+        vi free;
+        for (int i = 0; i < W; ++i) free[i] = !alive[i] || point_free(s, k, reach, x[i], y[i], z[i]) ? -1 : 0;
+        return free;
+    }
+    const vd u = Rw[0] * dx + Rw[3] * dy + Rw[6] * dz;
+    const vd v = Rw[1] * dx + Rw[4] * dy + Rw[7] * dz;
+    vd w = Rw[2] * dx + Rw[5] * dy + Rw[8] * dz;
+    const vd zero = splat(0.0);
+    if (kind == BOX) {
+        const vd ox = vmax(vabs(u) - d[0], zero), oy = vmax(vabs(v) - d[1], zero), oz = vmax(vabs(w) - d[2], zero);
+        return ox * ox + oy * oy + oz * oz >= reach * reach;
+    }
+    if (kind == CYLINDER) {
+        const vd orr = vmax(vsqrt(u * u + v * v) - d[0], zero), oa = vmax(vabs(w) - d[1], zero);
+        return orr * orr + oa * oa >= reach * reach;
+    }
+    w = w - vmin(vmax(w, splat(-d[1])), splat(d[1]));  // CAPSULE
+    const double lim = (reach + d[0]) * (reach + d[0]);
+    return u * u + v * v + w * w >= lim;
+}
+
+// Spheres s0 .. s1-1 (frame a) of lane b all at least clearance from obstacle k.
+inline bool range_free(const Packed& s, int64_t b, int64_t a, int64_t s0, int64_t s1, double clearance,
+                       const double* R, const double* p, int64_t L, int64_t k) {
+    for (int64_t i = s0; i < s1; ++i) {
+        double x, y, z;
+        lane_point(a, s.s_offset + 3 * i, R, p, L, b, x, y, z);
+        if (!point_free(s, k, clearance + s.s_radius[i], x, y, z)) return false;
+    }
+    return true;
+}
+
+// The spheres of groups u0 .. u1-1 (frame a) of lane b all at least clearance from obstacle
+// k, a group whose bounding sphere keeps the clearance passed whole.
+__attribute__((noinline)) inline bool groups_free(const Packed& s, int64_t b, int64_t a, int64_t u0, int64_t u1,
+                                                  double clearance, const double* R, const double* p, int64_t L,
+                                                  int64_t k) {
+    for (int64_t u = u0; u < u1; ++u) {
+        double x, y, z;
+        lane_point(a, s.u_offset + 3 * u, R, p, L, b, x, y, z);
+        if (!point_free(s, k, clearance + s.u_radius[u], x, y, z) &&
+            !range_free(s, b, a, s.u_start[u], s.u_start[u + 1], clearance, R, p, L, k))
+            return false;
+    }
+    return true;
+}
+
+// A lower bound of pair i's clearance at the configuration whose coordinate j is q[j * qs],
+// from its floor table, or -inf without one.
+inline double pair_floor(const Packed& s, int64_t i, const double* q, int64_t qs) {
+    const int64_t* meta = s.t_meta + 6 * i;
+    const double* grid = s.t_grid + GRID_COLUMNS * i;
+    const int64_t dims = meta[0];
+    if (dims == 0) return -INF;
+    const int64_t n1 = meta[3];
+    const double x = (q[meta[1] * qs] - grid[0]) * grid[1];
+    if (!(x >= 0.0 && x <= (double)n1)) return -INF;
+    int64_t cell = std::min((int64_t)x, n1 - 1);
+    if (dims == 2) {
+        const int64_t n2 = meta[4];
+        const double y = (q[meta[2] * qs] - grid[2]) * grid[3];
+        if (!(y >= 0.0 && y <= (double)n2)) return -INF;
+        cell = cell * n2 + std::min((int64_t)y, n2 - 1);
+    }
+    return s.t_vals[meta[5] + cell];
+}
+
+// A lower bound of links ga and gb's sphere-pair clearance in lane b: their bounding capsules'
+// distance less 1 um (Ericson, Real-Time Collision Detection 5.1.9).
+inline double capsule_gap(const Packed& s, int64_t b, int64_t ga, int64_t gb, const double* R, const double* p,
+                          int64_t L) {
+    const double* ca = s.g_capsule + 7 * ga;
+    const double* cb = s.g_capsule + 7 * gb;
+    double ax0, ay0, az0, ax1, ay1, az1, bx0, by0, bz0, bx1, by1, bz1;
+    lane_point(s.g_anchor[ga], ca, R, p, L, b, ax0, ay0, az0);
+    lane_point(s.g_anchor[ga], ca + 3, R, p, L, b, ax1, ay1, az1);
+    lane_point(s.g_anchor[gb], cb, R, p, L, b, bx0, by0, bz0);
+    lane_point(s.g_anchor[gb], cb + 3, R, p, L, b, bx1, by1, bz1);
+    const double ux = ax1 - ax0, uy = ay1 - ay0, uz = az1 - az0;
+    const double vx = bx1 - bx0, vy = by1 - by0, vz = bz1 - bz0;
+    const double wx = ax0 - bx0, wy = ay0 - by0, wz = az0 - bz0;
+    const double a = ux * ux + uy * uy + uz * uz;
+    const double e = vx * vx + vy * vy + vz * vz;
+    const double f = vx * wx + vy * wy + vz * wz;
+    const double eps = 1e-18;
+    double t_s, t_t;
+    auto clamp01 = [](double x) { return smin(smax(x, 0.0), 1.0); };
+    if (a <= eps && e <= eps) {
+        t_s = 0.0, t_t = 0.0;
+    } else if (a <= eps) {
+        t_s = 0.0, t_t = clamp01(f / e);
+    } else {
+        const double c = ux * wx + uy * wy + uz * wz;
+        if (e <= eps) {
+            t_s = clamp01(-c / a), t_t = 0.0;
+        } else {
+            const double bb = ux * vx + uy * vy + uz * vz;
+            const double denom = a * e - bb * bb;
+            t_s = denom > 0.0 ? clamp01((bb * f - c * e) / denom) : 0.0;
+            t_t = (bb * t_s + f) / e;
+            if (t_t < 0.0) {
+                t_s = clamp01(-c / a), t_t = 0.0;
+            } else if (t_t > 1.0) {
+                t_s = clamp01((bb - c) / a), t_t = 1.0;
+            }
+        }
+    }
+    const double dx = wx + ux * t_s - vx * t_t;
+    const double dy = wy + uy * t_s - vy * t_t;
+    const double dz = wz + uz * t_s - vz * t_t;
+    return std::sqrt(dx * dx + dy * dy + dz * dz) - ca[6] - cb[6] - 1e-6;
+}
+
+// Append to buf[n:] (rows x, y, z, r) the spheres s0 .. s1-1 (frame a, lane b) closer than
+// bound to the sphere (c, reach); low: with lower, the smallest value of a sphere left out.
+inline int64_t near_spheres(const Packed& s, int64_t b, int64_t a, int64_t s0, int64_t s1, const double* R,
+                            const double* p, int64_t L, double cx, double cy, double cz, double reach, double bound,
+                            bool lower, double* buf, int64_t n, double& low) {
+    low = INF;
+    for (int64_t i = s0; i < s1; ++i) {
+        double x, y, z;
+        lane_point(a, s.s_offset + 3 * i, R, p, L, b, x, y, z);
+        const double lim = bound + s.s_radius[i] + reach;
+        const double dx = x - cx, dy = y - cy, dz = z - cz;
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        if (lim > 0.0 && d2 < lim * lim) {
+            double* r = buf + 4 * n;
+            r[0] = x, r[1] = y, r[2] = z, r[3] = s.s_radius[i];
+            ++n;
+        } else if (lower) {
+            low = smin(low, std::sqrt(d2) - s.s_radius[i] - reach);
+        }
+    }
+    return n;
+}
+
+// near_spheres over the spheres of groups u0 .. u1-1, tested in frame a (pairs.py _near_groups).
+inline int64_t near_groups(const Packed& s, int64_t b, int64_t a, int64_t u0, int64_t u1, const double* R,
+                           const double* p, int64_t L, double cx, double cy, double cz, double reach, double bound,
+                           bool lower, double* buf, int64_t n, double& low) {
+    double lx, ly, lz;
+    const double* Ra = R + a * 9 * L + b;
+    const double* pa = p + a * 3 * L + b;
+    if (a >= 0) {
+        const double dx = cx - pa[0], dy = cy - pa[L], dz = cz - pa[2 * L];
+        lx = Ra[0] * dx + Ra[3 * L] * dy + Ra[6 * L] * dz;
+        ly = Ra[L] * dx + Ra[4 * L] * dy + Ra[7 * L] * dz;
+        lz = Ra[2 * L] * dx + Ra[5 * L] * dy + Ra[8 * L] * dz;
+    } else {
+        lx = cx, ly = cy, lz = cz;
+    }
+    low = INF;
+    for (int64_t u = u0; u < u1; ++u) {
+        const double* uo = s.u_offset + 3 * u;
+        double dx = uo[0] - lx, dy = uo[1] - ly, dz = uo[2] - lz;
+        double d2 = dx * dx + dy * dy + dz * dz;
+        double lim = bound + s.u_radius[u] + reach;
+        if (!(lim > 0.0 && d2 < lim * lim)) {
+            if (lower) low = smin(low, std::sqrt(d2) - s.u_radius[u] - reach);
+            continue;
+        }
+        for (int64_t i = s.u_start[u]; i < s.u_start[u + 1]; ++i) {
+            const double ox = s.s_offset[3 * i], oy = s.s_offset[3 * i + 1], oz = s.s_offset[3 * i + 2];
+            dx = ox - lx, dy = oy - ly, dz = oz - lz;
+            d2 = dx * dx + dy * dy + dz * dz;
+            lim = bound + s.s_radius[i] + reach;
+            if (lim > 0.0 && d2 < lim * lim) {
+                double* r = buf + 4 * n;
+                if (a >= 0) {
+                    r[0] = pa[0] + Ra[0] * ox + Ra[L] * oy + Ra[2 * L] * oz;
+                    r[1] = pa[L] + Ra[3 * L] * ox + Ra[4 * L] * oy + Ra[5 * L] * oz;
+                    r[2] = pa[2 * L] + Ra[6 * L] * ox + Ra[7 * L] * oy + Ra[8 * L] * oz;
+                } else {
+                    r[0] = ox, r[1] = oy, r[2] = oz;
+                }
+                r[3] = s.s_radius[i];
+                ++n;
+            } else if (lower) {
+                low = smin(low, std::sqrt(d2) - s.s_radius[i] - reach);
+            }
+        }
+    }
+    return n;
+}
+
+// The clearance of links ga and gb in lane b where it is below bound (pairs.py pair_clearance):
+// the smallest |c_s - c_t| - r_s - r_t there, else bound (with lower: a lower bound >= bound);
+// returns at once below stop. (ca, cb): the links' bounding-sphere centres; buf (S, 4) scratch.
+__attribute__((noinline)) inline double pair_clearance(const Packed& s, int64_t b, int64_t ga, int64_t gb,
+                                                       double bound, double stop, bool lower, double cax,
+                                                       double cay, double caz, double cbx, double cby, double cbz,
+                                                       const double* R, const double* p, int64_t L, double* buf) {
+    const bool grouped = bound < INF;
+    double low_a, low_b;
+    int64_t na, n;
+    if (grouped)
+        na = near_groups(s, b, s.g_anchor[ga], s.g_ustart[ga], s.g_ustart[ga + 1], R, p, L, cbx, cby, cbz,
+                         s.g_radius[gb], bound, lower, buf, 0, low_a);
+    else
+        na = near_spheres(s, b, s.g_anchor[ga], s.g_start[ga], s.g_start[ga + 1], R, p, L, cbx, cby, cbz,
+                          s.g_radius[gb], bound, lower, buf, 0, low_a);
+    if (na == 0) return lower ? low_a : bound;
+    if (grouped)
+        n = near_groups(s, b, s.g_anchor[gb], s.g_ustart[gb], s.g_ustart[gb + 1], R, p, L, cax, cay, caz,
+                        s.g_radius[ga], bound, lower, buf, na, low_b);
+    else
+        n = near_spheres(s, b, s.g_anchor[gb], s.g_start[gb], s.g_start[gb + 1], R, p, L, cax, cay, caz,
+                         s.g_radius[ga], bound, lower, buf, na, low_b);
+    double best = lower ? smin(low_a, low_b) : bound;
+    for (int64_t i = 0; i < na; ++i) {
+        const double x = buf[4 * i], y = buf[4 * i + 1], z = buf[4 * i + 2], r = buf[4 * i + 3];
+        for (int64_t j = na; j < n; ++j) {
+            const double* t = buf + 4 * j;
+            const double dx = x - t[0], dy = y - t[1], dz = z - t[2];
+            const double d2 = dx * dx + dy * dy + dz * dz;
+            const double lim = best + r + t[3];
+            if (lim > 0.0 && d2 >= lim * lim) continue;
+            const double value = std::sqrt(d2) - r - t[3];
+            if (value < best) {
+                best = value;
+                if (best < stop) return best;
+            }
+        }
+    }
+    return best;
+}
+
+}  // namespace dmh

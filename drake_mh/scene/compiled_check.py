@@ -1,0 +1,57 @@
+"""The scene's boolean collision check in the compiled core, where it is built.
+
+``drake_mh._native`` (C++ in ``cpp/``, built by ``pip install``: docs/native.md) checks the
+sphere model against every obstacle kind and the checked link pairs with the tests of
+:func:`drake_mh.scene.kernels.collision.collision_free` and
+:func:`drake_mh.scene.kernels.entry.collision_free_one`, in the same order: the same answers,
+with nothing compiled at call time. Where the module is not built, or the environment sets
+``DRAKE_MH_COMPILED_CORE=0``, those kernels answer (:meth:`drake_mh.scene.batch.CollisionModel.free_function`).
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+
+__all__ = ["ENVIRONMENT", "compiled_core", "free_function"]
+
+ENVIRONMENT = "DRAKE_MH_COMPILED_CORE"
+"""``0`` in the environment: the kernels of :mod:`drake_mh.scene.kernels` answer even where the
+compiled core is built (read when a scene binds its check)."""
+
+
+def compiled_core():
+    """The module ``drake_mh._native``, or None where it is not built or :data:`ENVIRONMENT` is
+    ``0``. A module that is there but does not load (built for another Python) raises its
+    ``ImportError``."""
+    if os.environ.get(ENVIRONMENT, "1").strip() == "0":
+        return None
+    try:
+        return importlib.import_module("drake_mh._native")
+    except ModuleNotFoundError as error:
+        if error.name != "drake_mh._native":
+            raise
+        return None  # not built: the kernels answer
+
+
+def free_function(model, obstacles: tuple):
+    """``f(Q (N, nq), clearance, self_clearance) -> (N,) bool`` (None if ``Q`` is not finite) with
+    ``f.make_one() -> (entry, buffer)``: the contract of
+    :meth:`drake_mh.scene.batch.CollisionModel.free_function` (``model``'s, against
+    ``obstacles``), answered by the compiled core where it is built, else by that method."""
+    core = compiled_core()
+    if core is None:
+        return model.free_function(obstacles)
+    ints, floats = model.packed(obstacles, model.pair_arrays)
+    checker = core.CollisionChecker(ints, floats)
+    batch, one = checker.free, core.free_one
+
+    def free(Q, clearance, self_clearance):
+        # squared tests need a positive clearance: 1e-12 m stands for "touching is a collision"
+        return batch(Q, max(clearance, 1e-12), max(self_clearance, 1e-12))
+
+    def make_one():  # entry(q, clearance, self_clearance, checker): 1 / 0 / -1 / -2 as the kernel's
+        return one, checker
+
+    free.make_one = make_one
+    return free
