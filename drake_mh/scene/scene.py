@@ -28,6 +28,7 @@ from drake_mh.geometry.convex_pieces import convex_pieces
 from drake_mh.geometry.mesh import Mesh
 from drake_mh.geometry.shapes import Box, Capsule, Cylinder, Sphere, as_shape
 from drake_mh.geometry.spheres import DEFAULT_TOLERANCE, SphereModel
+from drake_mh.scene import compiled_check
 from drake_mh.scene.obstacle import Obstacle, rotation_rpy, vector3
 from drake_mh.scene.self_filter import filter_self_pairs
 
@@ -450,8 +451,7 @@ class Scene:
         """The compiled boolean query bound to the current obstacles (rebuilt when they change)."""
         arrays = self.obstacle_arrays
         if self._free_function is None:  # the compiled core's where it is built
-            from drake_mh.scene.compiled_check import free_function
-            self._free_function = free_function(self.collision_model, arrays)
+            self._free_function = compiled_check.free_function(self.collision_model, arrays)
         return self._free_function
 
     def collision_free(self, Q, clearance: float = 0.0, self_clearance: float = 0.0):
@@ -461,10 +461,9 @@ class Scene:
 
         Conservative: ``True`` implies the exact geometry is at least as clear; a configuration
         up to ``sphere_model.bound`` clearer than asked may read ``False``. Compiled (the C++
-        core where built: docs/native.md), SIMD across configurations, exits a block as soon as
-        all of its configurations collide. One float64 ``(nq,)`` configuration with float
-        clearances takes a scalar kernel (same answer, first collision ends it) through its
-        compiled entry point once the scene has bound it: about 1 µs per call (docs/collision.md).
+        core where built: docs/native.md), SIMD across configurations, a block ends once all its
+        configurations collide. One float64 ``(nq,)`` configuration with float clearances takes a
+        scalar entry point (same answer, first collision ends it): about 1 µs (docs/collision.md).
 
         Args:
             Q: ``(N, nq)`` configurations, or one ``(nq,)``.
