@@ -32,48 +32,73 @@ inline bool convex_free(const Packed& s, int64_t k, double x, double y, double z
     return false;
 }
 
+// Squared distance from (x, y, z) to the bounding box of the range whose median is at mid (rows
+// b0 + 2 mid: its lower corner, b0 + 2 mid + 1: its upper corner): pieces.py _box2.
+inline double box2(const double* d, int64_t b0, int64_t mid, double x, double y, double z) {
+    const double* lo = d + 3 * (b0 + 2 * mid);
+    const double* hi = lo + 3;
+    const double gx = smax(smax(lo[0] - x, 0.0), x - hi[0]);
+    const double gy = smax(smax(lo[1] - y, 0.0), y - hi[1]);
+    const double gz = smax(smax(lo[2] - z, 0.0), z - hi[2]);
+    return gx * gx + gy * gy + gz * gz;
+}
+
 // The smaller of best and the smallest squared distance from (x, y, z) to the points of the
-// implicit k-d tree at rows st .. st+N-1 (split axes from row a0), returning as soon as it is
-// below stop: pieces.py _nearest2 (bit d of path: the side taken at depth d; of pending: its far
-// side still to be tried).
-inline double nearest2(const double* d, int64_t st, int64_t a0, int64_t N, double x, double y, double z, double best,
-                       double stop) {
+// implicit k-d tree at rows st .. st+N-1 (split axes from row a0, the ranges' bounding boxes from
+// row b0), returning as soon as it is below stop: pieces.py _nearest2. Depth first, the side with
+// the nearer box first (the point's side of the split plane where a half is a leaf); a range whose
+// box is no nearer than the best so far is skipped whole, the side beyond the split plane only
+// while the plane is nearer than the best (bit d of path: the side taken at depth d; of pending:
+// its other side still to be tried).
+inline double nearest2(const double* d, int64_t st, int64_t a0, int64_t b0, int64_t N, double x, double y, double z,
+                       double best, double stop) {
     int64_t lo = 0, hi = N, depth = 0;
     uint64_t path = 0, pending = 0;
     while (true) {
-        while (hi - lo > LEAF) {
+        bool leaf = true;
+        while (hi - lo > LEAF) {  // down to a leaf, the nearer side first
             const int64_t mid = (lo + hi) >> 1;
+            if (box2(d, b0, mid, x, y, z) >= best) {  // nothing in this range is nearer
+                leaf = false;
+                break;
+            }
             const double dx = x - cell_of(d, st + mid, 0), dy = y - cell_of(d, st + mid, 1),
                          dz = z - cell_of(d, st + mid, 2);
             best = smin(best, dx * dx + dy * dy + dz * dz);
             if (best < stop) return best;
             const int64_t axis = (int64_t)run_of(d, a0, mid);
             const double diff = axis == 0 ? dx : axis == 1 ? dy : dz;
-            if (diff < 0.0) {
-                hi = mid;
-            } else {
+            bool upper = diff >= 0.0;  // the side of the split plane the point is on
+            if (mid - lo > LEAF && hi - mid - 1 > LEAF)  // two boxes: the nearer first
+                upper = box2(d, b0, (mid + 1 + hi) >> 1, x, y, z) < box2(d, b0, (lo + mid) >> 1, x, y, z);
+            if (upper) {
                 lo = mid + 1;
                 path |= uint64_t(1) << depth;
+            } else {
+                hi = mid;
             }
             pending |= uint64_t(1) << depth;
             ++depth;
         }
-        double other = best;  // two running minima: a shorter dependency chain, the same minimum
-        int64_t j = lo;
-        for (; j + 1 < hi; j += 2) {
-            const double* a = d + 3 * (st + j);
-            const double ax = x - a[0], ay = y - a[1], az = z - a[2];
-            const double bx = x - a[3], by = y - a[4], bz = z - a[5];
-            best = smin(best, ax * ax + ay * ay + az * az);
-            other = smin(other, bx * bx + by * by + bz * bz);
+        if (leaf) {
+            double other = best;  // two running minima: a shorter dependency chain, the same minimum
+            int64_t j = lo;
+            for (; j + 1 < hi; j += 2) {
+                const double* a = d + 3 * (st + j);
+                const double ax = x - a[0], ay = y - a[1], az = z - a[2];
+                const double bx = x - a[3], by = y - a[4], bz = z - a[5];
+                best = smin(best, ax * ax + ay * ay + az * az);
+                other = smin(other, bx * bx + by * by + bz * bz);
+            }
+            if (j < hi) {
+                const double dx = x - cell_of(d, st + j, 0), dy = y - cell_of(d, st + j, 1),
+                             dz = z - cell_of(d, st + j, 2);
+                best = smin(best, dx * dx + dy * dy + dz * dz);
+            }
+            best = smin(best, other);
+            if (best < stop) return best;
         }
-        if (j < hi) {
-            const double dx = x - cell_of(d, st + j, 0), dy = y - cell_of(d, st + j, 1), dz = z - cell_of(d, st + j, 2);
-            best = smin(best, dx * dx + dy * dy + dz * dz);
-        }
-        best = smin(best, other);
-        if (best < stop) return best;
-        while (true) {  // back to the deepest split whose far side can still hold a nearer point
+        while (true) {  // back to the deepest split whose other side can still hold a nearer point
             if (pending == 0) return best;
             int64_t dd = depth - 1;
             while (!((pending >> dd) & 1)) --dd;
@@ -89,8 +114,8 @@ inline double nearest2(const double* d, int64_t st, int64_t a0, int64_t N, doubl
             const int64_t mid = (lo + hi) >> 1;
             const int64_t axis = (int64_t)run_of(d, a0, mid);
             const double diff = (axis == 0 ? x : axis == 1 ? y : z) - cell_of(d, st + mid, axis);
-            if (diff * diff < best) {
-                const uint64_t far = 1 - ((path >> dd) & 1);
+            const uint64_t far = 1 - ((path >> dd) & 1);  // the side not taken: beyond the plane or the point's own
+            if (diff * diff < best || far == (diff >= 0.0 ? 1u : 0u)) {
                 if (far)
                     lo = mid + 1;
                 else
@@ -130,7 +155,8 @@ inline void cloud_bounds(const Packed& s, int64_t k, double x, double y, double 
 inline double cloud_radius(const Packed& s, int64_t k) { return cell_of(s.dims, (int64_t)cell_of(s.dims, k, 0), 0); }
 
 // Whether every point of cloud k is at least reach [m] (> 0) from (x, y, z) (in W): the grid's
-// bounds first, the k-d tree (stopping at the first point nearer) where they cannot tell. Not
+// bounds first, the k-d tree (stopping at the first point nearer, skipping the ranges whose boxes
+// are not nearer) where they cannot tell. Not
 // inlined: its callers' loops stay small (measured: 5-10 % faster checks on a cloud).
 __attribute__((noinline)) inline bool cloud_free(const Packed& s, int64_t k, double x, double y, double z,
                                                  double reach) {
@@ -142,7 +168,7 @@ __attribute__((noinline)) inline bool cloud_free(const Packed& s, int64_t k, dou
     const int64_t st = (int64_t)cell_of(d, k, 0), N = (int64_t)cell_of(d, k, 1);
     const int64_t first = st + (int64_t)cell_of(d, st, 2);
     const double lim = reach * reach;
-    return nearest2(d, first, first + N, N, x, y, z, lim, lim) >= lim;
+    return nearest2(d, first, first + N, first + N + (N + 2) / 3, N, x, y, z, lim, lim) >= lim;
 }
 
 }  // namespace dmh

@@ -14,7 +14,8 @@ def cloud_entry(cloud, R: np.ndarray, p: np.ndarray, kind: int) -> tuple:
     """A point cloud's kernel entry ``(kind, R_WO, p_WO, (N, radius), table)`` for
     :func:`drake_mh.scene.batch.obstacle_arrays`: the cloud's points ``(N, 3)`` posed by
     ``R (3, 3)``, ``p (3,)`` into W; the table holds its grid of distance bounds, then its points
-    in W in k-d tree order (:mod:`drake_mh.scene.kernels.pieces`); ``p_WO`` is the centre of
+    in W in k-d tree order, the split axes and the ranges' bounding boxes
+    (:mod:`drake_mh.scene.kernels.pieces`); ``p_WO`` is the centre of
     their bounding box, ``radius`` [m] its half diagonal + the points' radius (a ball about it
     that holds every point's ball)."""
     from drake_mh.scene.kernels.pieces import distance_transform, kd_build
@@ -40,17 +41,19 @@ def cloud_entry(cloud, R: np.ndarray, p: np.ndarray, kind: int) -> tuple:
     floor = h * distance_transform(near)  # cells of the dilated set: 0
     n_cells, N = floor.size, len(p_W)
     head = 3 + (n_cells + 2) // 3
-    table = np.empty((head + N + (N + 2) // 3, 3))
+    axis_rows = (N + 2) // 3
+    table = np.empty((head + N + axis_rows + 2 * N, 3))
     table[0] = cloud.radius, h, head
     table[1], table[2] = low, shape
     values = table[3:head].reshape(-1)
     np.maximum(floor.reshape(-1) - 1e-9, 0.0, out=values[:n_cells])  # round-off of the cells
     values[n_cells:] = 0.0
-    order, axes, tree = kd_build(p_W)
+    order, axes, tree, boxes = kd_build(p_W)
     table[head:head + N] = tree
-    axis_rows = table[head + N:].reshape(-1)
-    axis_rows[:N] = axes
-    axis_rows[N:] = 0.0
+    axis_values = table[head + N:head + N + axis_rows].reshape(-1)
+    axis_values[:N] = axes
+    axis_values[N:] = 0.0
+    table[head + N + axis_rows:] = boxes.reshape(2 * N, 3)  # each range's box: lower, upper corner
     centre = 0.5 * (low + high)
     radius = 0.5 * float(np.linalg.norm(high - low)) + cloud.radius  # the box's half diagonal
     return kind, np.eye(3), centre, (N, radius), table

@@ -46,7 +46,9 @@ def test_kd_tree_finds_the_nearest_point_and_the_grid_bounds_it():
         scene = Scene(PANDA)
         scene.add("c", PointCloud(points, 0.0))
         dims = scene.obstacle_arrays[4]
-        for x in np.vstack([rng.normal(size=(150, 3)), points[rng.integers(0, n, 50)] + rng.normal(0, 0.03, (50, 3))]):
+        far = rng.normal(size=(30, 3)) * 10.0  # outside the grid: the search prunes by its boxes alone
+        for x in np.vstack([rng.normal(size=(150, 3)), far,
+                            points[rng.integers(0, n, 50)] + rng.normal(0, 0.03, (50, 3))]):
             exact = np.min(np.sum((points - x) ** 2, axis=1))
             assert cloud_nearest2(0, dims, *x, np.inf) == pytest.approx(exact, rel=1e-12, abs=1e-15)
             assert cloud_nearest2(0, dims, *x, exact * 0.5) == exact * 0.5  # nothing nearer than the bound
@@ -74,15 +76,16 @@ def test_kd_build_orders_the_points_into_a_valid_tree():
 
     rng = np.random.default_rng(4)
     P = rng.normal(size=(5000, 3)) * [1.0, 0.2, 0.05]
-    order, axes, tree = kd_build(P)
+    order, axes, tree, boxes = kd_build(P)
     assert np.array_equal(np.sort(order), np.arange(len(P))) and np.array_equal(tree, P[order])
     stack = [(0, len(P))]
-    while stack:  # every median splits its range on its axis
+    while stack:  # every median splits its range on its axis; its box is the range's bounding box
         lo, hi = stack.pop()
         if hi - lo <= _LEAF:
             continue
         mid, a = (lo + hi) // 2, axes[(lo + hi) // 2]
         assert np.all(tree[lo:mid, a] <= tree[mid, a]) and np.all(tree[mid + 1:hi, a] >= tree[mid, a])
+        assert np.array_equal(boxes[mid], np.r_[tree[lo:hi].min(axis=0), tree[lo:hi].max(axis=0)])
         stack += [(lo, mid), (mid + 1, hi)]
 
 
@@ -103,6 +106,30 @@ def test_batched_check_never_calls_a_touching_configuration_free(seed, radius):
         if exact >= 0:
             assert m >= exact - bound - 1e-9
         assert scene.min_distance(q) == pytest.approx(exact, abs=1e-9)
+
+
+@settings(max_examples=3, deadline=None)
+@given(seed=st.integers(0, 10_000), fine_below=st.sampled_from([0.0, 0.03, 0.1, np.inf]))
+def test_link_values_are_exact_below_fine_below_and_lower_bounds_above(seed, fine_below):
+    """Per link (the certified segments' values), against the brute-force distance of every
+    sphere of the link to every point: exact below ``fine_below``, a lower bound of at least
+    ``fine_below`` above it (where the searches stop)."""
+    scene, points, rho = cloud_scene(seed)
+    Q = near_configurations(scene, seed, 60)
+    model = scene.collision_model
+    values = model.clearances(np.ascontiguousarray(Q.T), scene.obstacle_arrays, per_obstacle=False,
+                              fine_below=fine_below)[:, :model.num_links]
+    spheres = scene.sphere_model
+    centres = scene.sphere_centres(Q)  # (N, S, 3)
+    nearest = np.array([[np.sqrt(np.min(np.sum((points - c) ** 2, axis=1))) for c in row] for row in centres])
+    per_sphere = nearest - spheres.radii - rho
+    links = np.asarray(spheres.links)
+    for g, name in enumerate(model.link_names):
+        exact = per_sphere[:, links == name].min(axis=1)
+        assert np.all(values[:, g] <= exact + 1e-9)
+        below = exact < fine_below
+        assert np.allclose(values[below, g], exact[below], rtol=0, atol=1e-9)
+        assert np.all(values[~below, g] >= fine_below - 1e-9)
 
 
 @settings(max_examples=3, deadline=None)

@@ -381,27 +381,41 @@ def _compact_centres(c, offsets, r, Rc, pc, ccx, ccy, ccz):
         ccz[i] = pc[2, i] + Rc[2, 0, i] * o0 + Rc[2, 1, i] * o1 + Rc[2, 2, i] * o2
 
 
+@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
+def _cloud_sd(c, k, dims, v_WO, tc, ccx, ccy, ccz, cap, grow, sd):
+    """``sd[i]``: the signed distance of point ``cc[i]`` to cloud k (at ``tc[i]``) where it is
+    below ``cap[i] + grow``, else a lower bound of it at least ``cap[i] + grow`` (the search looks
+    no farther: :func:`.pieces.cloud_nearest2`). ``cap`` may be ``sd`` itself (each value is
+    read before it is written). A cloud's signed distance is at least ``-rho``, the value given
+    where the cap is below it."""
+    rho = cloud_radius(k, dims)
+    vx, vy, vz = v_WO[k, 0], v_WO[k, 1], v_WO[k, 2]
+    for i in range(c):
+        reach = cap[i] + grow + rho
+        if reach <= 0.0:
+            sd[i] = -rho
+            continue
+        bound2 = reach * reach if reach < np.inf else np.inf
+        sd[i] = math.sqrt(cloud_nearest2(k, dims, ccx[i] - vx * tc[i], ccy[i] - vy * tc[i], ccz[i] - vz * tc[i],
+                                         bound2)) - rho
+
+
 @stable_calls()
 @numba.njit(cache=True, fastmath=FASTMATH)
-def _spheres_sd(c, s0, s1, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, s_offset, s_radius, ccx, ccy, ccz, sd, sc):
+def _spheres_sd(c, s0, s1, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, s_offset, s_radius, ccx, ccy, ccz, sd, sc,
+                lim):
     """``sc[i] = min(sc[i], sd_k(c_s) - r_s)`` over spheres ``s0 .. s1-1`` for the ``c``
     compacted lanes of pose ``(Rc, pc)`` (obstacles at ``tc``), SIMD across the lanes. For a
     point cloud, each sphere's nearest-point search looks no farther than the distance that
-    could still lower ``sc[i]`` (the minimum stays exact)."""
+    could still lower ``min(sc[i], lim[i])``: ``sc`` ends exact where it is below ``lim``, a
+    lower bound of at least ``lim`` above it (as for :func:`_groups_sd`)."""
     cloud = kinds[k] == CLOUD
-    rho = cloud_radius(k, dims) if cloud else 0.0
-    vx, vy, vz = v_WO[k, 0], v_WO[k, 1], v_WO[k, 2]
     for s in range(s0, s1):
         _compact_centres(c, s_offset, s, Rc, pc, ccx, ccy, ccz)
         if cloud:
             for i in range(c):
-                reach = sc[i] + s_radius[s] + rho  # a point nearer than this lowers sc[i]
-                if reach <= 0.0:  # sd_k - r_s >= -rho - r_s > sc[i]: cannot lower it
-                    sd[i] = np.inf
-                    continue
-                bound2 = reach * reach if reach < np.inf else np.inf
-                sd[i] = math.sqrt(cloud_nearest2(k, dims, ccx[i] - vx * tc[i], ccy[i] - vy * tc[i],
-                                                 ccz[i] - vz * tc[i], bound2)) - rho
+                sd[i] = min(sc[i], lim[i])  # a point nearer than this + r_s lowers sc[i]
+            _cloud_sd(c, k, dims, v_WO, tc, ccx, ccy, ccz, sd, s_radius[s], sd)
         else:
             _obstacle_sd(c, k, kinds, R_WO, p_WO, v_WO, dims, tc, ccx, ccy, ccz, sd)
         for i in range(c):
@@ -425,7 +439,10 @@ def _groups_sd(c, u0, u1, lim, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, u_s
     key = np.empty(nu)
     for j in range(nu):
         _compact_centres(c, u_offset, u0 + j, Rc, pc, ccx, ccy, ccz)
-        _obstacle_sd(c, k, kinds, R_WO, p_WO, v_WO, dims, tc, ccx, ccy, ccz, sd)
+        if kinds[k] == CLOUD:  # exact below lim only: above it the group is skipped either way
+            _cloud_sd(c, k, dims, v_WO, tc, ccx, ccy, ccz, lim, u_radius[u0 + j], sd)
+        else:
+            _obstacle_sd(c, k, kinds, R_WO, p_WO, v_WO, dims, tc, ccx, ccy, ccz, sd)
         lowest = np.inf
         for i in range(c):
             glb[j, i] = sd[i] - u_radius[u0 + j]
@@ -440,7 +457,7 @@ def _groups_sd(c, u0, u1, lim, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, u_s
         if need:
             u = u0 + j
             _spheres_sd(c, u_start[u], u_start[u + 1], k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, s_offset,
-                        s_radius, ccx, ccy, ccz, sd, sc)
+                        s_radius, ccx, ccy, ccz, sd, sc, lim)
         else:
             for i in range(c):
                 fl[i] = min(fl[i], glb[j, i])
@@ -461,9 +478,9 @@ def link_clearances(QT, tau, fine_below, pair_fine_below, mode, parent, KR, Kp, 
     smallest over all obstacles too, where each (link, obstacle) pair whose bounding value cannot
     go below the smallest value so far is skipped (exact too: at N = 1 on the capsule Panda
     against ten obstacles far fewer spheres than per obstacle). 0 (:data:`PER_LINK`):
-    ``out (N, G + P)``: per link the smallest
-    value over its spheres and all obstacles, replaced by the link's bounding-sphere value (a
-    lower bound of it) where that is at least ``fine_below``; then per checked link pair the
+    ``out (N, G + P)``: per link the smallest value over its spheres and all obstacles where it
+    is below ``fine_below``, above it a lower bound of it that is at least ``fine_below`` (the
+    link's bounding-sphere value, or, for a point cloud, where its searches stopped); then per checked link pair the
     smallest sphere-sphere clearance where that is below the pair's ``pair_fine_below (P,)``
     (above it, a lower bound of it at least the bounding spheres' value:
     :func:`.pairs.pair_clearance`, or the pair's floor table where that is at least
@@ -494,7 +511,12 @@ def link_clearances(QT, tau, fine_below, pair_fine_below, mode, parent, KR, Kp, 
             for b in range(m):
                 Gx[g, b], Gy[g, b], Gz[g, b] = cx[b], cy[b], cz[b]
             for k in range(K):
-                _obstacle_sd(m, k, kinds, R_WO, p_WO, v_WO, dims, tb, cx, cy, cz, sd)
+                if kinds[k] == CLOUD and not per_obstacle:  # per link, exact below fine_below only
+                    for b in range(m):
+                        lim[b] = fine_below
+                    _cloud_sd(m, k, dims, v_WO, tb, cx, cy, cz, lim, g_radius[g], sd)
+                else:  # per obstacle, exact: lb + 2 radius bounds the minimum from above
+                    _obstacle_sd(m, k, kinds, R_WO, p_WO, v_WO, dims, tb, cx, cy, cz, sd)
                 for b in range(m):
                     lb[g, k, b] = sd[b] - g_radius[g]
         # where the fine value is needed: per obstacle, below an upper bound of the minimum
@@ -528,14 +550,14 @@ def link_clearances(QT, tau, fine_below, pair_fine_below, mode, parent, KR, Kp, 
                 for i in range(c):
                     tc[i] = tb[idx[i]]
                     sc[i] = np.inf
+                for i in range(c):  # per obstacle: the smallest value so far (an upper bound of the minimum)
+                    lim[i] = best[rk, idx[i]] if per_obstacle else fine_below
                 if g_ustart[g + 1] - g_ustart[g] > 1:  # a group at a time, nearest first
-                    for i in range(c):  # per obstacle: the smallest value so far (an upper bound of the minimum)
-                        lim[i] = best[rk, idx[i]] if per_obstacle else fine_below
                     _groups_sd(c, g_ustart[g], g_ustart[g + 1], lim, k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc,
                                u_start, u_offset, u_radius, s_offset, s_radius, ccx, ccy, ccz, sd, sc, glb, fl)
                 else:
                     _spheres_sd(c, g_start[g], g_start[g + 1], k, kinds, R_WO, p_WO, v_WO, dims, tc, Rc, pc, s_offset,
-                                s_radius, ccx, ccy, ccz, sd, sc)
+                                s_radius, ccx, ccy, ccz, sd, sc, lim)
                 if per_obstacle:
                     for i in range(c):
                         best[rk, idx[i]] = min(best[rk, idx[i]], sc[i])

@@ -26,10 +26,13 @@ after the obstacles' own (built by :func:`drake_mh.scene.batch.obstacle_arrays`)
   three to a row (cell ``(i, j, l)`` is number ``(i ny + j) nz + l``); rows ``f .. f+N-1`` the
   points in W as an implicit k-d tree (the median of a range ``[lo, hi)`` at
   ``mid = (lo + hi) // 2``, its split axis at ``dims[f + N + mid // 3, mid % 3]``, the lower
-  half before it, the upper half after it: :func:`kd_build`). The obstacle is the union of
+  half before it, the upper half after it; with ``b = f + N + (N + 2) // 3``, rows ``b + 2 mid``
+  and ``b + 2 mid + 1`` the lower and upper corners of the bounding box of the range's points,
+  for the ranges of more than ``_LEAF`` points: :func:`kd_build`). The obstacle is the union of
   balls of radius ``rho`` around the points, its signed distance ``min_j |x - p_j| - rho``:
   :func:`cloud_nearest2` computes it exactly (a k-d tree search: Friedman, Bentley, Finkel,
-  ACM TOMS 3(3), 1977). The grid answers most "free" questions in O(1)
+  ACM TOMS 3(3), 1977; a range whose box is no nearer than the best so far is skipped whole,
+  which keeps queries far from a cloud of surface samples cheap). The grid answers most "free" questions in O(1)
   (:func:`cloud_free`): a cell's value is ``h`` times the Euclidean distance transform, in
   cells, of the occupied cells dilated by one cell, that is the least box-to-box distance
   ``h |max(|Δ| - 1, 0)|`` from the cell to an occupied cell, so no point of the cell is nearer
@@ -77,37 +80,58 @@ def convex_free(k, dims, x, y, z, reach):
     return False
 
 
+@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
+def _box2(dims, b0, mid, x, y, z):
+    """Squared distance from (x, y, z) to the bounding box of the range whose median is at
+    ``mid`` (rows ``b0 + 2 mid``: its lower corner, ``b0 + 2 mid + 1``: its upper corner)."""
+    lo, hi = b0 + 2 * mid, b0 + 2 * mid + 1
+    gx = max(dims[lo, 0] - x, 0.0, x - dims[hi, 0])
+    gy = max(dims[lo, 1] - y, 0.0, y - dims[hi, 1])
+    gz = max(dims[lo, 2] - z, 0.0, z - dims[hi, 2])
+    return gx * gx + gy * gy + gz * gz
+
+
 @numba.njit(cache=True, fastmath=FASTMATH)
-def _nearest2(dims, s, a0, N, x, y, z, best, stop):
+def _nearest2(dims, s, a0, b0, N, x, y, z, best, stop):
     """The smaller of ``best`` and the smallest squared distance from (x, y, z) to the points of
-    the tree at rows ``s .. s+N-1`` (axes from row ``a0``), returning as soon as it is below
-    ``stop``. Depth first, the near side first, the far side of a split only while the split
-    plane is nearer than the best so far; no stack and no recursion (numba's cache does not
-    reload recursive functions): bit ``d`` of ``path`` is the side taken at depth ``d``, of
-    ``pending`` whether its far side is still to be tried, and a range is found again from the
-    root by its path."""
+    the tree at rows ``s .. s+N-1`` (axes from row ``a0``, the ranges' bounding boxes from row
+    ``b0``), returning as soon as it is below ``stop``. Depth first, the side with the nearer box
+    first (the point's side of the split plane where a half is a leaf); a range whose bounding
+    box is no nearer than the best so far is skipped whole, and the side beyond the split plane
+    only while the plane is nearer than the best. No stack and no recursion
+    (numba's cache does not reload recursive functions): bit ``d`` of ``path`` is the side taken
+    at depth ``d``, of ``pending`` whether its far side is still to be tried, and a range is found
+    again from the root by its path."""
     lo, hi, depth, path, pending = 0, N, 0, 0, 0
     while True:
+        leaf = True
         while hi - lo > _LEAF:  # down to a leaf, the near side first
             mid = (lo + hi) >> 1
+            if _box2(dims, b0, mid, x, y, z) >= best:  # nothing in this range is nearer
+                leaf = False
+                break
             dx, dy, dz = x - dims[s + mid, 0], y - dims[s + mid, 1], z - dims[s + mid, 2]
             best = min(best, dx * dx + dy * dy + dz * dz)
             if best < stop:
                 return best
             axis = int(dims[a0 + mid // 3, mid % 3])
             diff = dx if axis == 0 else dy if axis == 1 else dz
-            if diff < 0.0:
-                hi = mid
-            else:
+            upper = diff >= 0.0  # the side of the split plane the point is on
+            if mid - lo > _LEAF and hi - mid - 1 > _LEAF:  # two boxes: the nearer first
+                upper = _box2(dims, b0, (mid + 1 + hi) >> 1, x, y, z) < _box2(dims, b0, (lo + mid) >> 1, x, y, z)
+            if upper:
                 lo = mid + 1
                 path |= 1 << depth
+            else:
+                hi = mid
             pending |= 1 << depth
             depth += 1
-        for j in range(lo, hi):
-            dx, dy, dz = x - dims[s + j, 0], y - dims[s + j, 1], z - dims[s + j, 2]
-            best = min(best, dx * dx + dy * dy + dz * dz)
-        if best < stop:
-            return best
+        if leaf:
+            for j in range(lo, hi):
+                dx, dy, dz = x - dims[s + j, 0], y - dims[s + j, 1], z - dims[s + j, 2]
+                best = min(best, dx * dx + dy * dy + dz * dz)
+            if best < stop:
+                return best
         while True:  # back to the deepest split whose far side can still hold a nearer point
             if pending == 0:
                 return best
@@ -125,8 +149,8 @@ def _nearest2(dims, s, a0, N, x, y, z, best, stop):
             mid = (lo + hi) >> 1
             axis = int(dims[a0 + mid // 3, mid % 3])
             diff = (x if axis == 0 else y if axis == 1 else z) - dims[s + mid, axis]
-            if diff * diff < best:
-                far = 1 - ((path >> d) & 1)
+            far = 1 - ((path >> d) & 1)  # the side not taken: beyond the plane or the point's own
+            if diff * diff < best or far == (1 if diff >= 0.0 else 0):
                 if far:
                     lo = mid + 1
                 else:
@@ -138,10 +162,10 @@ def _nearest2(dims, s, a0, N, x, y, z, best, stop):
 
 @numba.njit(cache=True, fastmath=FASTMATH)
 def _points(k, dims):
-    """``(first point row, N, first axis row)`` of cloud k."""
+    """``(first point row, N, first axis row, first box row)`` of cloud k."""
     s, N = int(dims[k, 0]), int(dims[k, 1])
     first = s + int(dims[s, 2])
-    return first, N, first + N
+    return first, N, first + N, first + N + (N + 2) // 3
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
@@ -151,13 +175,13 @@ def cloud_nearest2(k, dims, x, y, z, bound2):
     largest distance that matters, ``inf`` for the exact value). The grid's bounds
     (:func:`_cloud_bounds`) come first: a lower bound beyond ``bound2`` answers at once, and the
     upper bound starts the search (no point beyond it is visited)."""
-    first, N, axes = _points(k, dims)
+    first, N, axes, boxes = _points(k, dims)
     lower, upper = _cloud_bounds(k, dims, x, y, z)
     if lower * lower >= bound2:  # no point nearer than the bound
         return bound2
     if upper * upper < bound2:  # the nearest point is within upper: the value is the same
-        return _nearest2(dims, first, axes, N, x, y, z, upper * upper, -1.0)
-    return _nearest2(dims, first, axes, N, x, y, z, bound2, -1.0)
+        return _nearest2(dims, first, axes, boxes, N, x, y, z, upper * upper, -1.0)
+    return _nearest2(dims, first, axes, boxes, N, x, y, z, bound2, -1.0)
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
@@ -200,9 +224,9 @@ def cloud_free(k, dims, x, y, z, reach):
         return True
     if upper < reach:
         return False
-    first, N, axes = _points(k, dims)
+    first, N, axes, boxes = _points(k, dims)
     lim = reach * reach
-    return _nearest2(dims, first, axes, N, x, y, z, lim, lim) >= lim
+    return _nearest2(dims, first, axes, boxes, N, x, y, z, lim, lim) >= lim
 
 
 @numba.njit(cache=True)
@@ -241,16 +265,20 @@ def _select(W, idx, lo, hi, nth, axis):
 
 @numba.njit(cache=True)
 def kd_build(P):
-    """``(order (N,), axes (N,), tree (N, 3))``: the implicit k-d tree of points ``P (N, 3)``
-    (module docstring): ``tree = P[order]``, the points in tree order, ``axes[mid]`` the split axis of the range whose
-    median is at ``mid``: the widest side of a box that holds the range (the root's bounding
-    box, cut at each median above; any axis gives a valid tree, the widest a balanced search)."""
+    """``(order (N,), axes (N,), tree (N, 3), boxes (N, 6))``: the implicit k-d tree of points
+    ``P (N, 3)`` (module docstring): ``tree = P[order]``, the points in tree order, ``axes[mid]``
+    the split axis of the range whose median is at ``mid``: the widest side of a box that holds
+    the range (the root's bounding box, cut at each median above; any axis gives a valid tree,
+    the widest a balanced search); ``boxes[mid]`` the bounding box of that range's points (lower
+    corner, upper corner), for the ranges of more than ``_LEAF`` points (other rows: 0)."""
     N = P.shape[0]
     W = P.copy()
     idx = np.arange(N)
     axes = np.zeros(N, np.int64)
     stack = np.empty((64, 2), np.int64)
     boxes = np.empty((64, 6))
+    split = np.empty((max(N, 1), 3), np.int64)  # the split ranges (lo, median, hi), parents first
+    n_split = 0
     for a in range(3):
         boxes[0, a], boxes[0, 3 + a] = np.inf, -np.inf
     for j in range(N):
@@ -271,6 +299,8 @@ def kd_build(P):
         mid = (lo + hi) >> 1
         _select(W, idx, lo, hi, mid, axis)
         axes[mid] = axis
+        split[n_split, 0], split[n_split, 1], split[n_split, 2] = lo, mid, hi
+        n_split += 1
         cut = W[mid, axis]
         for u in range(6):
             boxes[top + 1, u] = boxes[top, u]
@@ -279,7 +309,23 @@ def kd_build(P):
         stack[top, 0], stack[top, 1] = lo, mid
         stack[top + 1, 0], stack[top + 1, 1] = mid + 1, hi
         top += 2
-    return idx, axes, W
+    tight = np.zeros((N, 6))
+    for r in range(n_split - 1, -1, -1):  # children before parents: a range's box from its halves
+        lo, mid, hi = split[r, 0], split[r, 1], split[r, 2]
+        for a in range(3):
+            tight[mid, a] = tight[mid, 3 + a] = W[mid, a]
+        for c0, c1 in ((lo, mid), (mid + 1, hi)):
+            if c1 - c0 > _LEAF:
+                c = (c0 + c1) >> 1
+                for a in range(3):
+                    tight[mid, a] = min(tight[mid, a], tight[c, a])
+                    tight[mid, 3 + a] = max(tight[mid, 3 + a], tight[c, 3 + a])
+            else:
+                for j in range(c0, c1):
+                    for a in range(3):
+                        tight[mid, a] = min(tight[mid, a], W[j, a])
+                        tight[mid, 3 + a] = max(tight[mid, 3 + a], W[j, a])
+    return idx, axes, W, tight
 
 
 @numba.njit(cache=True)
