@@ -17,6 +17,7 @@ import pytest
 
 import drake_mh  # noqa: F401 - installs the compile listener
 from drake_mh._support import compilation as _compile
+from drake_mh.scene.compiled_check import compiled_core
 
 
 def _kernel_in(module: str, source: str, name: str):
@@ -119,22 +120,27 @@ def test_shared_block_copies_equal_numba_s_own_copies():
 @pytest.mark.slow
 def test_a_first_plan_says_what_compiles_before_it_compiles(tmp_path):
     """The first-plan script from an empty cache, in a new process: the notice is on stderr after
-    the script started and while the call is still compiling (the marker that follows the call not
-    yet written); the process is then stopped, so the test does not wait for the compilation."""
+    the script started and while a call is still compiling (the marker that follows the plan not
+    yet written); the process is then stopped, so the test does not wait for the compilation.
+    Where the compiled core is built, the ``MotionProblem`` compiled nothing: the first notice
+    comes from ``solve_motion``."""
     script = tmp_path / "first_plan.py"
     script.write_text(textwrap.dedent("""
         import sys
         import numpy as np
         import drake_mh
-        from drake_mh.planning import MotionProblem
+        from drake_mh.planning import MotionProblem, solve_motion
         from drake_mh.scene import Box, Scene, Sphere
         panda = drake_mh.load_robot("panda")
         scene = Scene(panda)
         scene.add("ball", Sphere(0.1), [0.5, 0.0, 0.5])
         scene.add("table", Box(1.0, 1.0, 0.05), [0.5, 0.0, -0.05])
         print("MARK before", file=sys.stderr, flush=True)
-        MotionProblem(panda, scene, panda.home.copy(), np.array([1.0, 0.3, 0.0, -1.5, 0.0, 1.8, 0.7]), clearance=0.01)
+        problem = MotionProblem(panda, scene, panda.home.copy(), np.array([1.0, 0.3, 0.0, -1.5, 0.0, 1.8, 0.7]),
+                                clearance=0.01)
         print("MARK problem built", file=sys.stderr, flush=True)
+        solve_motion(problem, "rrt_connect", seed=0)
+        print("MARK planned", file=sys.stderr, flush=True)
     """))
     env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "DRAKE_MH_NUMBA_CACHE_DIR")}
     env["DRAKE_MH_CACHE"] = str(tmp_path / "cache")
@@ -145,7 +151,7 @@ def test_a_first_plan_says_what_compiles_before_it_compiles(tmp_path):
     try:
         for line in process.stderr:
             lines.append(line.rstrip("\n"))
-            if line.startswith(("drake_mh: compiling", "MARK problem built")):
+            if line.startswith(("drake_mh: compiling", "MARK planned")):
                 break
     finally:
         process.kill()
@@ -153,4 +159,6 @@ def test_a_first_plan_says_what_compiles_before_it_compiles(tmp_path):
         watchdog.cancel()
     assert lines and lines[-1].startswith("drake_mh: compiling"), "\n".join(lines[-40:])
     assert "MARK before" in lines  # announced after the script started, while the call still runs
+    if compiled_core() is not None:  # the problem's checks ran in the C++ core
+        assert "MARK problem built" in lines, "\n".join(lines[-40:])
     assert str(tmp_path / "cache") in lines[-1]  # says where it is cached
