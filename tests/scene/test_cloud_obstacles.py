@@ -1,6 +1,7 @@
 """Point-cloud obstacles in a Scene: the batched checks and segment certificates never call
 free what the brute-force distance of the robot's geometry to every point shows closer; the
-exact distances equal it; the k-d tree in the kernels finds the nearest point."""
+exact distances equal it; the k-d tree in the kernels finds the nearest point, built by the numba
+kernel or by the compiled core (a valid tree, numba's own, the same answers)."""
 
 from __future__ import annotations
 
