@@ -2,6 +2,7 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
+#include <cmath>
 #include <cstdint>
 #include <mutex>
 #include <stdexcept>
@@ -10,6 +11,7 @@
 
 #include "collision.hpp"
 #include "fk.hpp"
+#include "kdtree.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -30,6 +32,7 @@ static void init_checker(dmh::CollisionChecker* self, Ints ints, Floats floats) 
 }
 
 using F64Out = nb::ndarray<nb::numpy, double>;
+using Points = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
 
 template <class T>
 static nb::ndarray<nb::numpy, T> owned(T* data, std::initializer_list<size_t> shape) {
@@ -56,7 +59,7 @@ static const char* FREE_ONE =
     "not in [0, inf), -3 a wrong size.";
 
 NB_MODULE(_native, m) {
-    m.doc() = "drake_mh's compiled core (C++): the sphere-model collision check and its forward kinematics.";
+    m.doc() = "drake_mh's compiled core (C++): the sphere-model collision check, its forward kinematics and point clouds' k-d trees.";
     m.attr("simd_width") = dmh::W;
     m.attr("lanes") = dmh::CollisionChecker::LANES;
 
@@ -117,6 +120,24 @@ NB_MODULE(_native, m) {
         }, "Q"_a, "clearance"_a, "self_clearance"_a,
         "(N,) bool for Q (N, nq) C-contiguous float64, clearances > 0 [m]; None if Q is not finite.")
         .def("free_one", &free_one, "q"_a, "clearance"_a, "self_clearance"_a, FREE_ONE);
+
+    m.def("kd_build", [](Points P) {
+        const size_t N = P.shape(0);
+        const double* p = P.data();
+        for (size_t j = 0; j < 3 * N; ++j)
+            if (!std::isfinite(p[j])) throw nb::value_error("kd_build: the points must be finite");
+        int64_t* order = new int64_t[N + 1];
+        int64_t* axes = new int64_t[N + 1];
+        double* tree = new double[3 * N + 1];
+        double* boxes = new double[6 * N + 1];
+        {
+            nb::gil_scoped_release unlocked;
+            dmh::kd_build(p, (int64_t)N, order, axes, tree, boxes);
+        }
+        return nb::make_tuple(owned(order, {N}), owned(axes, {N}), owned(tree, {N, 3}), owned(boxes, {N, 6}));
+    }, "P"_a,
+    "(order (N,), axes (N,), tree (N, 3), boxes (N, 6)) of finite points P (N, 3) C-contiguous float64:\n"
+    "the implicit k-d tree of drake_mh.scene.kernels.pieces.kd_build, the same tree (the same selection).");
 
     // the (entry, buffer) pair of drake_mh.scene.batch.CollisionModel.free_function's make_one:
     // entry(q, clearance, self_clearance, buffer), the checker as the buffer

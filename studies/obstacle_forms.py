@@ -6,8 +6,9 @@ Four parts, each a row of the grid (``part``):
   the test meshes (``tests/data/``) from an empty cache (cold), then a cache hit (median of 5).
 * ``cloud_build``: the point-cloud structure of the batched checks for 50,000 points drawn
   uniformly in [-0.8, 0.8]² x [0, 1] m — the whole shape-table entry (grid of distance bounds
-  + implicit k-d tree), the k-d tree alone, and, beside them, scipy's ``cKDTree`` and a 2 cm
-  Euclidean distance transform (median of 7).
+  + implicit k-d tree; median of 7), the k-d tree alone by the compiled core (where it is built:
+  the table's own) and by the numba kernel (median of 11 rounds, the two interleaved), and,
+  beside them, scipy's ``cKDTree`` and a 2 cm Euclidean distance transform (median of 7).
 * ``batched``: ``Scene.collision_free`` (N = 1024 random configurations of the capsule Panda,
   ns per configuration, median over interleaved rounds; warm = 20 consecutive calls) on the
   shared benchmark scenes (:mod:`drake_mh.scene.benchmark`): ten mixed primitives, the same as
@@ -126,6 +127,7 @@ def _cloud_build(case: Case) -> dict:
 
     from drake_mh.geometry.cloud import PointCloud
     from drake_mh.scene.batch import obstacle_arrays
+    from drake_mh.scene.compiled_check import compiled_core
     from drake_mh.scene.kernels.pieces import kd_build
     from drake_mh.scene.obstacle import Obstacle
 
@@ -140,8 +142,19 @@ def _cloud_build(case: Case) -> dict:
         grid[tuple(cells.T)] = False
         ndimage.distance_transform_edt(grid)
 
-    out = {"success": True, "points": CLOUD_POINTS}
-    for key, function in (("table", lambda: obstacle_arrays((obstacle,))), ("kd", lambda: kd_build(points)),
+    out = {"success": True, "points": CLOUD_POINTS, "load": load_average()}
+    builds = {"kd_numba": lambda: kd_build(points)}
+    core = compiled_core()
+    if core is not None:  # the table's own build, interleaved round by round with numba's
+        core.kd_build(points[:100])
+        builds["kd_compiled"] = lambda: core.kd_build(points)
+    rounds = {key: [] for key in builds}
+    for _ in range(11):
+        for key, build in builds.items():
+            rounds[key].append(timed(build))
+    for key, pairs in rounds.items():
+        out[f"{key}_wall"], out[f"{key}_cpu"] = (float(np.median(v)) for v in zip(*pairs))
+    for key, function in (("table", lambda: obstacle_arrays((obstacle,))),
                           ("ckdtree", lambda: cKDTree(points)), ("edt", edt)):
         out[f"{key}_wall"], out[f"{key}_cpu"] = timed(function, 7)
     out["build_structure"] = out["table_wall"]
@@ -315,12 +328,14 @@ def summarize(records: list[dict]) -> str:
                                   f"{r['build_cold']:.2f} / {r['build_cold_cpu']:.2f}", _ms(r["build_warm"], ".2f")]
                                  for r in parts["decompose"]])
     for r in parts.get("cloud_build", []):
-        lines += ["", f"### Cloud structure, {r['points']:,} points (median of 7)", ""]
+        lines += ["", f"### Cloud structure, {r['points']:,} points (median of 7; k-d trees: of 11, "
+                      f"interleaved; load average {r.get('load', float('nan')):.1f})", ""]
         lines += markdown_table(["structure", "wall [ms]", "CPU [ms]"], [
             [label, _ms(r[f"{key}_wall"]), _ms(r[f"{key}_cpu"])]
             for label, key in (("shape-table entry: grid of distance bounds + k-d tree", "table"),
-                               ("kernel k-d tree alone", "kd"), ("scipy cKDTree", "ckdtree"),
-                               ("2 cm distance transform (scipy EDT)", "edt"))])
+                               ("k-d tree alone, compiled core (the table's where built)", "kd_compiled"),
+                               ("k-d tree alone, numba kernel", "kd_numba"), ("scipy cKDTree", "ckdtree"),
+                               ("2 cm distance transform (scipy EDT)", "edt")) if f"{key}_wall" in r])
     for r in parts.get("batched", []):
         lines += ["", f"### Batched check, ten mixed obstacles, capsule Panda, N = {r['n_query']}", ""]
         base = r["query_primitives"]

@@ -10,6 +10,21 @@ GRID_CELLS = 65_536
 """Most cells of a point cloud's grid (:mod:`.kernels.pieces`); the cell is at least 2 cm."""
 
 
+def tree_builder():
+    """``kd_build(P (N, 3)) -> (order, axes, tree, boxes)``: the compiled core's k-d tree build
+    where it is built (:func:`drake_mh.scene.compiled_check.compiled_core`), else the numba
+    kernel :func:`drake_mh.scene.kernels.pieces.kd_build`; both build the same tree of the same
+    points (the same selection step for step)."""
+    from drake_mh.scene.compiled_check import compiled_core
+
+    core = compiled_core()
+    if core is not None:
+        return core.kd_build
+    from drake_mh.scene.kernels.pieces import kd_build
+
+    return kd_build
+
+
 def cloud_entry(cloud, R: np.ndarray, p: np.ndarray, kind: int) -> tuple:
     """A point cloud's kernel entry ``(kind, R_WO, p_WO, (N, radius), table)`` for
     :func:`drake_mh.scene.batch.obstacle_arrays`: the cloud's points ``(N, 3)`` posed by
@@ -18,7 +33,7 @@ def cloud_entry(cloud, R: np.ndarray, p: np.ndarray, kind: int) -> tuple:
     (:mod:`drake_mh.scene.kernels.pieces`); ``p_WO`` is the centre of
     their bounding box, ``radius`` [m] its half diagonal + the points' radius (a ball about it
     that holds every point's ball)."""
-    from drake_mh.scene.kernels.pieces import distance_transform, kd_build
+    from drake_mh.scene.kernels.pieces import distance_transform
 
     identity = np.array_equal(R, np.eye(3)) and not np.any(p)
     # writable either way: one compiled kd_build
@@ -48,7 +63,7 @@ def cloud_entry(cloud, R: np.ndarray, p: np.ndarray, kind: int) -> tuple:
     values = table[3:head].reshape(-1)
     np.maximum(floor.reshape(-1) - 1e-9, 0.0, out=values[:n_cells])  # round-off of the cells
     values[n_cells:] = 0.0
-    order, axes, tree, boxes = kd_build(p_W)
+    order, axes, tree, boxes = tree_builder()(p_W)
     table[head:head + N] = tree
     axis_values = table[head + N:head + N + axis_rows].reshape(-1)
     axis_values[:N] = axes

@@ -1,8 +1,11 @@
 """Point-cloud obstacles in a Scene: the batched checks and segment certificates never call
 free what the brute-force distance of the robot's geometry to every point shows closer; the
-exact distances equal it; the k-d tree in the kernels finds the nearest point."""
+exact distances equal it; the k-d tree in the kernels finds the nearest point, built by the numba
+kernel or by the compiled core (a valid tree, numba's own, the same answers)."""
 
 from __future__ import annotations
+
+import importlib.util
 
 import numpy as np
 import pytest
@@ -16,6 +19,10 @@ from obstacle_reference import PointDistance, check_certified_segments, near_con
 
 PANDA = drake_mh.load_robot("panda")
 REFERENCE = PointDistance(PANDA)
+NATIVE = pytest.mark.skipif(importlib.util.find_spec("drake_mh._native") is None,
+                            reason="the compiled core drake_mh._native is not built (pip install . builds it)")
+CORES = ["0", pytest.param("1", marks=NATIVE)]
+"""``DRAKE_MH_COMPILED_CORE``: the numba kernels, and the compiled core where it is built."""
 
 
 def box_surface(rng, count, size, centre):
@@ -36,9 +43,11 @@ def cloud_scene(seed: int, radius: float = 0.01):
     return scene, points @ X[:3, :3].T + X[:3, 3], radius
 
 
-def test_kd_tree_finds_the_nearest_point_and_the_grid_bounds_it():
+@pytest.mark.parametrize("core", CORES)
+def test_kd_tree_finds_the_nearest_point_and_the_grid_bounds_it(core, monkeypatch):
     from drake_mh.scene.kernels.pieces import _cloud_bounds, cloud_floor, cloud_free, cloud_nearest2
 
+    monkeypatch.setenv("DRAKE_MH_COMPILED_CORE", core)  # which builds the k-d tree
     rng = np.random.default_rng(0)
     for n in (1, 7, 9, 1000, 20000):
         points = rng.normal(size=(n, 3)) * [1.0, 0.3, 0.01]  # flat: one grid layer, splits on every axis
@@ -71,12 +80,23 @@ def test_grid_distance_transform_equals_scipys():
     assert np.all(distance_transform(np.zeros((3, 4, 5), bool)) == np.inf)
 
 
-def test_kd_build_orders_the_points_into_a_valid_tree():
+def compiled_kd_build(P):
+    from drake_mh import _native
+
+    return _native.kd_build(P)
+
+
+@pytest.mark.parametrize("build", ["numba", pytest.param("compiled", marks=NATIVE)])
+@pytest.mark.parametrize("n", [1, 9, 5000])
+def test_kd_build_orders_the_points_into_a_valid_tree(build, n):
     from drake_mh.scene.kernels.pieces import _LEAF, kd_build
 
     rng = np.random.default_rng(4)
-    P = rng.normal(size=(5000, 3)) * [1.0, 0.2, 0.05]
-    order, axes, tree, boxes = kd_build(P)
+    P = rng.normal(size=(n, 3)) * [1.0, 0.2, 0.05]
+    P[n // 2: n // 2 + n // 5] = P[0]  # repeated points
+    P[: n // 10, 2] = 0.0  # ties on one axis
+    order, axes, tree, boxes = (kd_build if build == "numba" else compiled_kd_build)(P)
+    assert np.all(boxes[[i for i in range(n) if i not in mids(n)]] == 0.0)  # other rows: 0
     assert np.array_equal(np.sort(order), np.arange(len(P))) and np.array_equal(tree, P[order])
     stack = [(0, len(P))]
     while stack:  # every median splits its range on its axis; its box is the range's bounding box
@@ -87,6 +107,44 @@ def test_kd_build_orders_the_points_into_a_valid_tree():
         assert np.all(tree[lo:mid, a] <= tree[mid, a]) and np.all(tree[mid + 1:hi, a] >= tree[mid, a])
         assert np.array_equal(boxes[mid], np.r_[tree[lo:hi].min(axis=0), tree[lo:hi].max(axis=0)])
         stack += [(lo, mid), (mid + 1, hi)]
+
+
+def mids(n: int) -> set:
+    """The medians of the split ranges of an implicit k-d tree of n points."""
+    from drake_mh.scene.kernels.pieces import _LEAF
+
+    found, stack = set(), [(0, n)]
+    while stack:
+        lo, hi = stack.pop()
+        if hi - lo > _LEAF:
+            found.add((lo + hi) // 2)
+            stack += [(lo, (lo + hi) // 2), ((lo + hi) // 2 + 1, hi)]
+    return found
+
+
+@NATIVE
+def test_compiled_kd_build_builds_the_numba_tree():
+    from drake_mh.scene.kernels.pieces import kd_build
+
+    rng = np.random.default_rng(5)
+    for P in (rng.normal(size=(20001, 3)), rng.integers(0, 4, (3000, 3)).astype(float), np.zeros((0, 3))):
+        for mine, theirs in zip(compiled_kd_build(P), kd_build(P.copy())):
+            assert np.array_equal(mine, theirs)  # the same selection, step for step
+    with pytest.raises(ValueError, match="finite"):
+        compiled_kd_build(np.array([[0.0, np.nan, 1.0]]))
+
+
+@NATIVE
+def test_collision_free_answers_alike_with_and_without_the_compiled_core(monkeypatch):
+    rng = np.random.default_rng(6)
+    Q = rng.uniform(PANDA.lower, PANDA.upper, (400, PANDA.nq))
+    answers = []
+    for core in ("0", "1"):
+        monkeypatch.setenv("DRAKE_MH_COMPILED_CORE", core)  # the tree's build and the check
+        scene, _, _ = cloud_scene(7)
+        answers.append((scene.collision_free(Q), [scene.collision_free(q) for q in Q[:40]]))
+    assert np.array_equal(answers[0][0], answers[1][0]) and answers[0][1] == answers[1][1]
+    assert 0 < np.count_nonzero(answers[0][0]) < len(Q)  # both answers occur
 
 
 @settings(max_examples=4, deadline=None)
