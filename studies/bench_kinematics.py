@@ -100,7 +100,7 @@ def measure(robot_name: str, N: int, rng: np.random.Generator, repeats: int) -> 
 
     robot = drake_mh.load_robot(robot_name)
     kin = robot.batch
-    anchor, R_AE, p_AE, _ = kin._frame_anchor(None)
+    anchor, R_AE, p_AE, _ = kin.frame_arrays(None)
     kin.fk_jacobian(robot.random_configurations(2, rng))  # compile (numba cache) before timing
     Q = robot.random_configurations(N, rng)
     t_drake = _best_time(lambda: drake_loop(robot, Q), max(3, repeats // 4) if N < 1000 else 2)

@@ -112,10 +112,10 @@ def _kinematics(robot, native, want_jac: bool, Qs: list, rounds: int) -> tuple[d
     from drake_mh.kinematics import kernels
 
     bk = robot.batch
-    parent, KR, Kp, perm, kind, qidx = args = bk._args
+    parent, KR, Kp, perm, kind, qidx = args = bk.chain_arrays
     kin = native.Kinematics(np.concatenate([parent, perm.ravel(), kind, qidx]).astype(np.int64),
                             np.concatenate([KR.ravel(), Kp.ravel()]))
-    anchor, ER, Ep, on_path = bk._frame_anchor(None)
+    anchor, ER, Ep, on_path = bk.frame_arrays(None)
     ER_flat, nq = np.ascontiguousarray(ER.ravel()), robot.nq
 
     def numba(Q):

@@ -148,14 +148,14 @@ def test_native_kinematics_gives_drakes_poses_and_jacobians(name):
              "prismatic chain": lambda: Robot(random_chain_urdf(7, 3, prismatic_every=2)),
              "tree": lambda: Robot(random_chain_urdf(4, seed=7, branch=True), ee_frame="tip")}[name]()
     bk = robot.batch
-    parent, KR, Kp, perm, kind, qidx = bk._args
+    parent, KR, Kp, perm, kind, qidx = bk.chain_arrays
     kin = native().Kinematics(np.concatenate([parent, perm.ravel(), kind, qidx]).astype(np.int64),
                               np.concatenate([KR.ravel(), Kp.ravel()]))
     assert kin.nq == robot.nq
     Q = robot.random_configurations(70, 4)
     Q[0, 0] += 2e5  # an angle beyond the polynomial's reduction: the C library's sine
     for frame in [None] + (["b1_link"] if name == "tree" else []):
-        anchor, ER, Ep, on_path = bk._frame_anchor(frame)
+        anchor, ER, Ep, on_path = bk.frame_arrays(frame)
         T, J = kin.fk_jacobian(Q, anchor, np.ascontiguousarray(ER.ravel()), Ep, on_path, True)
         T_only, none = kin.fk_jacobian(Q, anchor, np.ascontiguousarray(ER.ravel()), Ep, on_path, False)
         assert none is None

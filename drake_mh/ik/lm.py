@@ -420,7 +420,7 @@ def _compiled_chain(batch, frame: str | None) -> tuple[tuple, np.ndarray]:
     if frame not in per_frame:
         revolute = np.zeros(batch.nq, dtype=np.bool_)
         revolute[batch.chain.qidx[batch.chain.kind == 0]] = True
-        per_frame[frame] = (tuple(batch._args) + tuple(batch._frame_anchor(frame)), revolute)
+        per_frame[frame] = (tuple(batch.chain_arrays) + tuple(batch.frame_arrays(frame)), revolute)
     return per_frame[frame]
 
 

@@ -181,6 +181,23 @@ class BatchKinematics:
     def nq(self) -> int:
         return self.robot.nq
 
+    @property
+    def chain_arrays(self) -> tuple:
+        """The chain as the compiled kernels read it: ``(parent (F,), KR (F, 3, 3), Kp (F, 3),
+        perm (F, 3), kind (F,), qidx (F,))`` (each moving frame's parent, fixed rotation and
+        translation [m] from it, signed axis permutation, joint kind, configuration index)."""
+        return self._args
+
+    def frame_arrays(self, frame: str | None = None) -> tuple:
+        """``(anchor, R_AF (3, 3), p_AF (3,) [m], on_path (F,) bool)`` of a named frame (default:
+        the end effector): its moving frame ``A``, its fixed pose in it, and the frames on ``A``'s
+        path to the world, as the compiled kernels read them.
+
+        Raises:
+            FrameNotFound: the robot has no such frame on a moving body of the chain.
+        """
+        return self._frame_anchor(frame)
+
     def _frame_anchor(self, frame: str | None):
         """(anchor, R_AF, p_AF, on_path) for a named frame (default: the end effector)."""
         name = self.robot.ee_frame_name if frame is None else frame

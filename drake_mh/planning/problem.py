@@ -107,7 +107,7 @@ class MotionProblem:
                 raise InvalidMotionProblem("the goal pose's rotation X_WG[:3, :3] must be a rotation matrix")
             object.__setattr__(self, "goal_pose", goal.copy())
             object.__setattr__(self, "goal", goal.copy())
-            self.robot.batch._frame_anchor(self.frame)  # FrameNotFound for an unknown frame
+            self.robot.batch.frame_arrays(self.frame)  # FrameNotFound for an unknown frame
             return
         G = self._configurations(goal, "goal")
         free = self.scene.collision_free(G, clearance, self_clearance)

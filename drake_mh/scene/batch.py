@@ -196,7 +196,7 @@ class CollisionModel:
         self.capsules = bounding_capsules(offsets, radii, start)
         u_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
         self.group_arrays = (np.asarray(g_ustart, np.int64), u_start) + bounding_spheres(offsets, radii, u_start)
-        self.chain_arrays = batch._args
+        self.chain_arrays = batch.chain_arrays
         index = {name: g for g, name in enumerate(self.link_names)}
         pairs = sorted({tuple(sorted((index[a], index[b]))) for a, b in self_pairs
                         if a in index and b in index and a != b})

@@ -270,7 +270,7 @@ class ExactDistances:
         self.drake_self = scene.self_collision and self._drake_has_self_pairs()
         self.R_WG = np.zeros((G, 3, 3))
         self.p_WG = np.zeros((G, 3))
-        self._chain = robot.batch._args[:6]
+        self._chain = robot.batch.chain_arrays
         self._shape = (robot.nq,)
         self._state: _ObstacleState | None = None
 

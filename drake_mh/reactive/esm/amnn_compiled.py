@@ -189,11 +189,11 @@ def run_layers(robot, step, opt, handling: str):
         raise InvalidArgument(f"the compiled AMNN step supports handling 'reject' or 'repair'; got {handling!r}")
     cfg = step.config
     batch = robot.batch
-    anchor, ER, Ep, on_path = batch._frame_anchor(None)      # the kernel arguments of BatchKinematics._run
+    anchor, ER, Ep, on_path = batch.frame_arrays(None)      # the kernel arguments of BatchKinematics._run
     X = np.ascontiguousarray(opt.initial_population())
     sweeps = int(cfg.repair_sweeps) if handling == "repair" else -1
     F, best_x, best_f = _amnn_layers(X, opt.rng, int(opt.T), opt.lower, opt.upper, np.ascontiguousarray(step.A),
                                      np.ascontiguousarray(step.c), float(cfg.feasibility_tol), sweeps,
-                                     tuple(batch._args), anchor, ER, Ep, on_path,
+                                     tuple(batch.chain_arrays), anchor, ER, Ep, on_path,
                                      np.ascontiguousarray(step.r_d, dtype=float), float(cfg.h1), float(cfg.h2))
     return best_x, float(best_f), X, F
