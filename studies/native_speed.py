@@ -29,7 +29,6 @@ Run: ``drake-mh study native_speed [--quick]`` or ``python studies/native_speed.
 
 from __future__ import annotations
 
-import importlib.util
 import time
 
 import numpy as np
@@ -135,10 +134,12 @@ def _kinematics(robot, native, want_jac: bool, Qs: list, rounds: int) -> tuple[d
 def run_case(case: Case) -> dict:
     """One implementation pair at one ``N``: ns per configuration, ratios, identical answers."""
     row = dict(robot=case["robot"], case=case["case"], N=case["N"], cpu=cpu_model(), load_average=load_average())
-    row["built"] = importlib.util.find_spec("drake_mh._native") is not None
+    from drake_mh.scene.compiled_check import compiled_core
+
+    _native = compiled_core()
+    row["built"] = _native is not None
     if not row["built"]:
         return row
-    from drake_mh import _native
 
     robot = _robot(case["robot"])
     rng = np.random.default_rng(0)
@@ -164,7 +165,8 @@ def summarize(records: list[dict]) -> str:
     """Per case and N: ns per configuration of both, their ratios, identical answers."""
     rows = [r for r in finished(records) if r.get("built")]
     if not rows:
-        return "The compiled core drake_mh._native is not built: nothing measured (pip install . builds it)."
+        return ("The compiled core drake_mh._native is not built (or DRAKE_MH_COMPILED_CORE=0): nothing measured "
+                "(pip install . builds it).")
     lines = ["Compiled core (C++) vs numba, same process, interleaved rounds; ns per configuration (median of "
              "rounds); ratio = native / numba (below 1: C++ faster).", ""]
     lines += markdown_table(
