@@ -32,6 +32,18 @@ inline bool convex_free(const Packed& s, int64_t k, double x, double y, double z
     return false;
 }
 
+// max_i (n_i . (x, y, z) - h_i) of convex piece k, the point relative to p_WO[k]: a lower bound
+// of its signed distance, exact inside (pieces.py convex_value).
+inline double convex_value(const Packed& s, int64_t k, double x, double y, double z) {
+    const double* d = s.dims;
+    const int64_t st = (int64_t)cell_of(d, k, 0), M = (int64_t)cell_of(d, k, 1);
+    double best = -std::numeric_limits<double>::infinity();
+    for (int64_t i = 0; i < M; ++i)
+        best = smax(best, cell_of(d, st + i, 0) * x + cell_of(d, st + i, 1) * y + cell_of(d, st + i, 2) * z -
+                              run_of(d, st + M, i));
+    return best;
+}
+
 // Squared distance from (x, y, z) to the bounding box of the range whose median is at mid (rows
 // b0 + 2 mid: its lower corner, b0 + 2 mid + 1: its upper corner): pieces.py _box2.
 inline double box2(const double* d, int64_t b0, int64_t mid, double x, double y, double z) {
@@ -149,6 +161,19 @@ inline void cloud_bounds(const Packed& s, int64_t k, double x, double y, double 
     const int64_t c = ((int64_t)fx * ny + (int64_t)fy) * nz + (int64_t)fz;
     lower = run_of(d, st + 3, c);
     upper = (lower + UPPER * h) * (1.0 + 1e-9) + 1e-9;
+}
+
+// The smallest squared distance [m^2] from (x, y, z) (in W) to a point of cloud k, or bound2 if
+// none is nearer (pieces.py cloud_nearest2: the grid's bounds first, then the k-d tree).
+inline double cloud_nearest2(const Packed& s, int64_t k, double x, double y, double z, double bound2) {
+    double lower, upper;
+    cloud_bounds(s, k, x, y, z, lower, upper);
+    if (lower * lower >= bound2) return bound2;
+    const double* d = s.dims;
+    const int64_t st = (int64_t)cell_of(d, k, 0), N = (int64_t)cell_of(d, k, 1);
+    const int64_t first = st + (int64_t)cell_of(d, st, 2);
+    const double start = upper * upper < bound2 ? upper * upper : bound2;
+    return nearest2(d, first, first + N, first + N + (N + 2) / 3, N, x, y, z, start, -1.0);
 }
 
 // The radius [m] of cloud k's balls.

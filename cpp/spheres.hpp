@@ -59,6 +59,34 @@ inline bool point_free(const Packed& s, int64_t k, double reach, double x, doubl
     return u * u + v * v + w * w >= (reach + d0) * (reach + d0);
 }
 
+// Distance [m] of point (x, y, z) outside obstacle k, 0 or less inside (collision.py
+// point_distance: the value point_free compares with its reach, with a square root).
+inline double point_distance(const Packed& s, int64_t k, double x, double y, double z) {
+    const int64_t kind = s.kinds[k];
+    const double* pw = s.p_WO + 3 * k;
+    const double* Rw = s.R_WO + 9 * k;
+    const double* d = s.dims + 3 * k;
+    const double dx = x - pw[0], dy = y - pw[1], dz = z - pw[2];
+    const double d0 = d[0];
+    if (kind == SPHERE) return std::sqrt(dx * dx + dy * dy + dz * dz) - d0;
+    if (kind == CONVEX) return convex_value(s, k, dx, dy, dz);
+    if (kind == CLOUD) return std::sqrt(cloud_nearest2(s, k, x, y, z, INF)) - cloud_radius(s, k);
+    const double u = Rw[0] * dx + Rw[3] * dy + Rw[6] * dz;
+    const double v = Rw[1] * dx + Rw[4] * dy + Rw[7] * dz;
+    double w = Rw[2] * dx + Rw[5] * dy + Rw[8] * dz;
+    if (kind == BOX) {
+        const double ox = smax(std::fabs(u) - d0, 0.0), oy = smax(std::fabs(v) - d[1], 0.0),
+                     oz = smax(std::fabs(w) - d[2], 0.0);
+        return std::sqrt(ox * ox + oy * oy + oz * oz);
+    }
+    if (kind == CYLINDER) {
+        const double orr = smax(std::sqrt(u * u + v * v) - d0, 0.0), oa = smax(std::fabs(w) - d[1], 0.0);
+        return std::sqrt(orr * orr + oa * oa);
+    }
+    w = w - smin(smax(w, -d[1]), d[1]);  // CAPSULE
+    return std::sqrt(u * u + v * v + w * w) - d0;
+}
+
 // Whether the W points (x, y, z) are at least reach from obstacle k (as _obstacle_free); a mesh
 // piece or a cloud is tested only in the lanes set in alive (the others read free).
 inline vi obstacle_free_v(const Packed& s, int64_t k, double reach, vd x, vd y, vd z, vi alive) {
