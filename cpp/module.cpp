@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "collision.hpp"
+#include "dynamics.hpp"
 #include "fk.hpp"
 #include "kdtree.hpp"
 
@@ -32,6 +33,8 @@ static void init_checker(dmh::CollisionChecker* self, Ints ints, Floats floats) 
 }
 
 using F64Out = nb::ndarray<nb::numpy, double>;
+using Array = nb::ndarray<const double, nb::c_contig, nb::device::cpu>;  // any shape, checked by the caller's sizes
+using IntArray = nb::ndarray<const int64_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 using Points = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
 
 template <class T>
@@ -138,6 +141,49 @@ NB_MODULE(_native, m) {
     }, "P"_a,
     "(order (N,), axes (N,), tree (N, 3), boxes (N, 6)) of finite points P (N, 3) C-contiguous float64:\n"
     "the implicit k-d tree of drake_mh.scene.kernels.pieces.kd_build, the same tree (the same selection).");
+
+    m.def("rnea", [](IntArray parent, Array KR, Array Kp, IntArray kind, IntArray qidx, Array mass, Array com,
+                     Array inertia, Array a_world, Batch Q, Batch V, Batch A) {
+        const size_t F = parent.shape(0), N = Q.shape(0), nq = Q.shape(1);
+        if (KR.size() != 9 * F || Kp.size() != 3 * F || kind.shape(0) != F || qidx.shape(0) != F ||
+            mass.size() != F || com.size() != 3 * F || inertia.size() != 9 * F || a_world.size() != 3 ||
+            V.shape(0) != N || V.shape(1) != nq || A.shape(0) != N || A.shape(1) != nq)
+            throw nb::value_error("rnea: a chain of F frames and Q, V, A of one shape (N, nq)");
+        for (size_t k = 0; k < F; ++k)
+            if (qidx.data()[k] < 0 || qidx.data()[k] >= (int64_t)nq || parent.data()[k] >= (int64_t)k)
+                throw nb::value_error("rnea: qidx must be in [0, nq) and frames in topological order");
+        double* tau = new double[N * nq + 1];
+        {
+            nb::gil_scoped_release unlocked;
+            dmh::rnea((int64_t)F, parent.data(), KR.data(), Kp.data(), kind.data(), qidx.data(), mass.data(),
+                      com.data(), inertia.data(), a_world.data(), Q.data(), V.data(), A.data(), (int64_t)N,
+                      (int64_t)nq, tau);
+        }
+        return owned(tau, {N, nq});
+    }, "parent"_a, "KR"_a, "Kp"_a, "kind"_a, "qidx"_a, "mass"_a, "com"_a, "inertia"_a, "a_world"_a, "Q"_a, "V"_a, "A"_a,
+    "Joint torques tau (N, nq) [N m] of Q, V, A (N, nq) C-contiguous float64: the recursive Newton-Euler\n"
+    "algorithm of drake_mh.trajectories.dynamics.BatchDynamics (without its damping and rotor terms).");
+
+    m.def("bernstein_bound", [](Array B, Array V, Array centre, Array half, Array best, double slack,
+                                int64_t max_levels, Array left, Array right) {
+        if (B.ndim() != 3 || V.ndim() != 3 || left.ndim() != 2 || right.ndim() != 2)
+            throw nb::value_error("bernstein_bound: B (P, n1, nq), V (Pv, m, nq), left and right (n1, n1)");
+        const size_t P = B.shape(0), n1 = B.shape(1), nq = B.shape(2);
+        if (V.shape(2) != nq || centre.size() != nq || half.size() != nq || best.size() != nq ||
+            left.shape(0) != n1 || left.shape(1) != n1 || right.shape(0) != n1 || right.shape(1) != n1 ||
+            max_levels < 0)
+            throw nb::value_error("bernstein_bound: centre, half, best (nq,); left, right (n1, n1); max_levels >= 0");
+        double* out = new double[nq + 1];
+        {
+            nb::gil_scoped_release unlocked;
+            dmh::bernstein_bound(B.data(), (int64_t)P, (int64_t)n1, (int64_t)nq, V.data(), (int64_t)V.shape(0),
+                                 (int64_t)V.shape(1), centre.data(), half.data(), best.data(), slack, max_levels,
+                                 left.data(), right.data(), out);
+        }
+        return owned(out, {nq});
+    }, "B"_a, "V"_a, "centre"_a, "half"_a, "best"_a, "slack"_a, "max_levels"_a, "left"_a, "right"_a,
+    "Per joint, the bound (nq,) of drake_mh.trajectories.bound.kinematic_bound's halving loop on the Bernstein\n"
+    "coefficients B (P, n1, nq) (values seen V (Pv, m, nq); de Casteljau's halves left, right (n1, n1)).");
 
     // the (entry, buffer) pair of drake_mh.scene.batch.CollisionModel.free_function's make_one:
     // entry(q, clearance, self_clearance, buffer), the checker as the buffer

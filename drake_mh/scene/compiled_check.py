@@ -10,28 +10,9 @@ with nothing compiled at call time. Where the module is not built, or the enviro
 
 from __future__ import annotations
 
-import importlib
-import os
+from drake_mh._support.native import ENVIRONMENT, compiled_core
 
 __all__ = ["ENVIRONMENT", "compiled_core", "free_function"]
-
-ENVIRONMENT = "DRAKE_MH_COMPILED_CORE"
-"""``0`` in the environment: the kernels of :mod:`drake_mh.scene.kernels` answer even where the
-compiled core is built (read when a scene binds its check)."""
-
-
-def compiled_core():
-    """The module ``drake_mh._native``, or None where it is not built or :data:`ENVIRONMENT` is
-    ``0``. A module that is there but does not load (built for another Python) raises its
-    ``ImportError``."""
-    if os.environ.get(ENVIRONMENT, "1").strip() == "0":
-        return None
-    try:
-        return importlib.import_module("drake_mh._native")
-    except ModuleNotFoundError as error:
-        if error.name != "drake_mh._native":
-            raise
-        return None  # not built: the kernels answer
 
 
 def free_function(model, obstacles: tuple):

@@ -26,7 +26,15 @@ from math import comb
 import numba
 import numpy as np
 
-__all__ = ["kinematic_bound", "piece_degree"]
+from drake_mh._support.native import compiled_core
+
+__all__ = ["ONE_SIDED", "kinematic_bound", "piece_degree"]
+
+
+ONE_SIDED = 1e-9
+"""[fraction of a piece] values at a piece's ends are taken this far inside it (its own
+polynomial, not the next piece's): :func:`kinematic_bound` interpolates at those fractions, so the
+polynomial it bounds is the piece's, exactly."""
 
 
 def piece_degree(trajectory) -> int:
@@ -154,15 +162,21 @@ def kinematic_bound(trajectory, order: int, ratio: tuple, t0: np.ndarray, t1: np
     centre, half = (np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), np.shape(best))) for x in ratio)
     best = np.array(best, dtype=float)
     a, b = np.asarray(t0, float), np.asarray(t1, float)
+    # the values are taken one-sided (each piece's own polynomial at its ends: pulled inside by
+    # ONE_SIDED of the piece, as certify samples), so they interpolate at those fractions
     if samples is not None and len(samples[0]) > n:
         tau, V_all = samples
         pick = np.unique(np.round(np.linspace(0, len(tau) - 1, n + 1)).astype(int))
-        V, M0 = V_all[:, pick], _to_bernstein(tuple(np.asarray(tau)[pick]))
+        V, M0 = V_all[:, pick], _to_bernstein(tuple(np.clip(np.asarray(tau)[pick], ONE_SIDED, 1.0 - ONE_SIDED)))
     else:
         h = b - a
-        eps = 1e-9 * h  # each piece's own polynomial at its ends (one-sided, as in certify)
-        T = np.clip(a[:, None] + u[None, :] * h[:, None], (a + eps)[:, None], (b - eps)[:, None])
-        V, M0 = trajectory.derivatives(T.ravel(), order)[order].reshape(len(a), n + 1, -1), M  # (P, n+1, nq)
+        T = np.clip(a[:, None] + u[None, :] * h[:, None], (a + ONE_SIDED * h)[:, None], (b - ONE_SIDED * h)[:, None])
+        V = trajectory.derivatives(T.ravel(), order)[order].reshape(len(a), n + 1, -1)  # (P, n+1, nq)
+        M0 = _to_bernstein(tuple(np.clip(u, ONE_SIDED, 1.0 - ONE_SIDED))) if n > 0 else M
     B = np.einsum("ij,pjk->pik", M0, V)  # (P, n+1, nq) Bernstein coefficients per piece
-    return _subdivide(np.ascontiguousarray(B), np.ascontiguousarray(V), centre, half, best, float(slack),
-                      int(max_levels), left, right)
+    arguments = (np.ascontiguousarray(B), np.ascontiguousarray(V), centre, half, best, float(slack), int(max_levels),
+                 left, right)
+    core = compiled_core()
+    if core is not None:  # the compiled core: nothing compiles at call time
+        return core.bernstein_bound(*arguments)
+    return _subdivide(*arguments)

@@ -4,7 +4,8 @@ Time parameterization and certification need joint torques at hundreds of path s
 the ABC via-point study at population x time samples (20,000 evaluations x 100 samples per
 run). Drake's ``CalcInverseDynamics`` costs ~13 µs per call from Python (measured, Panda), so
 :class:`BatchDynamics` runs the recursive Newton-Euler algorithm (RNEA) vectorized over ``N``
-samples, compiled with numba, instead. Nothing is typed per robot: the kinematic tree comes from
+samples, in the compiled core (C++, :mod:`drake_mh._support.native`) where it is built, else
+compiled with numba, instead. Nothing is typed per robot: the kinematic tree comes from
 :func:`drake_mh.kinematics.compile_chain` (joint frames and axes read from Drake) and the
 masses, centres of mass and rotational inertias from each body's
 ``default_spatial_inertia()``; welded bodies are lumped onto their moving ancestor. The
@@ -31,7 +32,8 @@ import weakref
 import numba
 import numpy as np
 
-from drake_mh.errors import UnsupportedModel
+from drake_mh._support.native import compiled_core
+from drake_mh.errors import InvalidArgument, UnsupportedModel
 from drake_mh.kinematics import PRISMATIC, compile_chain
 
 __all__ = ["BatchDynamics", "batch_dynamics"]
@@ -123,12 +125,23 @@ class BatchDynamics:
                 (or ``(nq,)``).
             gravity: include ``g(q)`` (as Drake's plant has it); ``False`` gives
                 ``M q̈ + C q̇`` (+ damping and rotor inertia terms, which are linear in v and a).
+
+        Raises:
+            InvalidArgument: ``Q``, ``V`` and ``A`` not of one shape ``(N, nq)`` or ``(nq,)``.
         """
         Q, V, A = (np.ascontiguousarray(np.atleast_2d(np.asarray(x, dtype=float))) for x in (Q, V, A))
         a_world = -self.gravity_W if gravity else np.zeros(3)
-        tau = np.empty(Q.shape)
-        _rnea(self.chain.parent, self._K_R, self._K_p, self.chain.kind, self.chain.qidx, self.mass,
-              self.com, self.inertia, a_world, Q, V, A, tau)
+        if not (Q.shape == V.shape == A.shape and Q.ndim == 2 and Q.shape[1] == self.nq):
+            raise InvalidArgument(f"inverse_dynamics: Q, V and A must have one shape (N, {self.nq}) or ({self.nq},); "
+                                  f"got {Q.shape}, {V.shape}, {A.shape}")
+        core = compiled_core()
+        arguments = (self.chain.parent, self._K_R, self._K_p, self.chain.kind, self.chain.qidx, self.mass,
+                     self.com, self.inertia, a_world, Q, V, A)
+        if core is not None:  # the compiled core: nothing compiles at call time
+            tau = core.rnea(*arguments)
+        else:
+            tau = np.empty(Q.shape)
+            _rnea(*arguments, tau)
         return tau + self.damping * V + self.reflected * A
 
     def path_coefficients(self, P, Ps, Pss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -1,4 +1,5 @@
-"""BatchDynamics (plant-compiled RNEA) against Drake's inverse dynamics with gravity."""
+"""BatchDynamics (plant-compiled RNEA, in the compiled core and in the numba fallback) against Drake's
+inverse dynamics with gravity."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import drake_mh
+from drake_mh._support.native import ENVIRONMENT, compiled_core
+from drake_mh.errors import InvalidArgument
 from drake_mh.robot import Robot
 from drake_mh.trajectories import BatchDynamics
 
@@ -49,9 +52,20 @@ def _compare(robot: Robot, seed: int, n: int = 20) -> float:
     return float(np.max(np.abs(tau - ref)) / max(1.0, np.max(np.abs(ref))))
 
 
+@pytest.mark.parametrize("backend", ["core", "numba"])
 @pytest.mark.parametrize("name", ["panda", "planar2r", "planar5", "seed000_6dof"])
-def test_bundled_robots_match_drake(name):
+def test_bundled_robots_match_drake(monkeypatch, name, backend):
+    if backend == "numba":
+        monkeypatch.setenv(ENVIRONMENT, "0")  # the numba kernel, the fallback where the core is not built
+    elif compiled_core() is None:
+        pytest.skip("the compiled core drake_mh._native is not built (pip install . builds it)")
     assert _compare(drake_mh.load_robot(name), 0) < 1e-12
+
+
+def test_shapes_that_differ_are_refused():
+    dynamics = BatchDynamics(drake_mh.load_robot("planar2r"))
+    with pytest.raises(InvalidArgument, match="one shape"):
+        dynamics.inverse_dynamics(np.zeros((3, 2)), np.zeros((2, 2)), np.zeros((3, 2)))
 
 
 @settings(max_examples=10, deadline=None)

@@ -1,0 +1,181 @@
+// Inverse dynamics of a compiled chain (recursive Newton-Euler) and the Bernstein bound's
+// halving loop: the answers of drake_mh/trajectories/dynamics.py _rnea and bound.py _subdivide.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "kinematics.hpp"
+
+namespace dmh {
+
+inline void cross3(const double* a, const double* b, double* out) {
+    const double x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2], z = a[0] * b[1] - a[1] * b[0];
+    out[0] = x, out[1] = y, out[2] = z;
+}
+
+// tau (N, nq) = RNEA of the chain (frames in topological order; KR (F, 3, 3), Kp (F, 3), kind 1
+// prismatic else revolute about z, qidx the frame's coordinate) with lumped masses mass (F,),
+// centres of mass com (F, 3) and rotational inertias inertia (F, 3, 3) in the frames, the base
+// accelerating at a_world (3,) (-gravity), for Q, V, A (N, nq) row-major.
+inline void rnea(int64_t F, const int64_t* parent, const double* KR, const double* Kp, const int64_t* kind,
+                 const int64_t* qidx, const double* mass, const double* com, const double* inertia,
+                 const double* a_world, const double* Q, const double* V, const double* A, int64_t N, int64_t nq,
+                 double* tau) {
+    std::vector<double> R(9 * F), o(3 * F), w(3 * F), dw(3 * F), acc(3 * F), force(3 * F), moment(3 * F);
+    const double eye[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, zero[3] = {0, 0, 0};
+    double r[3], z[3], t1[3], t2[3], c[3], I[9];
+    for (int64_t n = 0; n < N; ++n) {
+        for (int64_t k = 0; k < F; ++k) {
+            const int64_t p = parent[k], i = qidx[k];
+            const double q = Q[n * nq + i], qd = V[n * nq + i], qdd = A[n * nq + i];
+            const double* Rp = p < 0 ? eye : &R[9 * p];
+            const double* wp = p < 0 ? zero : &w[3 * p];
+            const double* dwp = p < 0 ? zero : &dw[3 * p];
+            const double* ap = p < 0 ? a_world : &acc[3 * p];
+            const double* K = KR + 9 * k;
+            const double* kp = Kp + 3 * k;
+            for (int a = 0; a < 3; ++a) r[a] = Rp[3 * a] * kp[0] + Rp[3 * a + 1] * kp[1] + Rp[3 * a + 2] * kp[2];
+            const double cq = std::cos(q), sq = std::sin(q);
+            double* Rk = &R[9 * k];
+            for (int a = 0; a < 3; ++a) {
+                const double* Ra = Rp + 3 * a;
+                const double r0 = Ra[0] * K[0] + Ra[1] * K[3] + Ra[2] * K[6];
+                const double r1 = Ra[0] * K[1] + Ra[1] * K[4] + Ra[2] * K[7];
+                const double r2 = Ra[0] * K[2] + Ra[1] * K[5] + Ra[2] * K[8];
+                z[a] = r2;
+                if (kind[k] == 1) {
+                    Rk[3 * a] = r0, Rk[3 * a + 1] = r1, Rk[3 * a + 2] = r2;
+                } else {
+                    Rk[3 * a] = r0 * cq + r1 * sq;
+                    Rk[3 * a + 1] = -r0 * sq + r1 * cq;
+                    Rk[3 * a + 2] = r2;
+                }
+            }
+            if (kind[k] == 1)
+                for (int a = 0; a < 3; ++a) r[a] += z[a] * q;
+            cross3(dwp, r, t1);  // a_k = a_p + dw_p x r + w_p x (w_p x r)
+            cross3(wp, r, c);
+            cross3(wp, c, t2);
+            for (int a = 0; a < 3; ++a) {
+                acc[3 * k + a] = ap[a] + t1[a] + t2[a];
+                o[3 * k + a] = (p < 0 ? 0.0 : o[3 * p + a]) + r[a];
+            }
+            cross3(wp, z, t1);
+            for (int a = 0; a < 3; ++a) {
+                if (kind[k] == 1) {
+                    w[3 * k + a] = wp[a];
+                    dw[3 * k + a] = dwp[a];
+                    acc[3 * k + a] += 2.0 * t1[a] * qd + z[a] * qdd;
+                } else {
+                    w[3 * k + a] = wp[a] + z[a] * qd;
+                    dw[3 * k + a] = dwp[a] + z[a] * qdd + t1[a] * qd;
+                }
+            }
+        }
+        std::fill(force.begin(), force.end(), 0.0);
+        std::fill(moment.begin(), moment.end(), 0.0);
+        for (int64_t k = F - 1; k >= 0; --k) {
+            const double m = mass[k];
+            const double* Rk = &R[9 * k];
+            double *wk = &w[3 * k], *dwk = &dw[3 * k], *ak = &acc[3 * k], *fk = &force[3 * k], *mk = &moment[3 * k];
+            if (m > 0.0) {
+                const double* ck = com + 3 * k;
+                const double* Ik = inertia + 9 * k;
+                for (int a = 0; a < 3; ++a) c[a] = Rk[3 * a] * ck[0] + Rk[3 * a + 1] * ck[1] + Rk[3 * a + 2] * ck[2];
+                for (int a = 0; a < 3; ++a)  // I = R inertia R^T
+                    for (int b = 0; b < 3; ++b) {
+                        double s = 0.0;
+                        for (int e = 0; e < 3; ++e)
+                            for (int f = 0; f < 3; ++f) s += Rk[3 * a + e] * Ik[3 * e + f] * Rk[3 * b + f];
+                        I[3 * a + b] = s;
+                    }
+                cross3(wk, c, t1);
+                cross3(wk, t1, t2);
+                cross3(dwk, c, t1);
+                for (int a = 0; a < 3; ++a) fk[a] += m * (ak[a] + t1[a] + t2[a]);
+                for (int a = 0; a < 3; ++a) {  // t1 = I w, t2 = I dw
+                    t1[a] = I[3 * a] * wk[0] + I[3 * a + 1] * wk[1] + I[3 * a + 2] * wk[2];
+                    t2[a] = I[3 * a] * dwk[0] + I[3 * a + 1] * dwk[1] + I[3 * a + 2] * dwk[2];
+                }
+                cross3(wk, t1, z);
+                cross3(c, ak, t1);
+                for (int a = 0; a < 3; ++a) mk[a] += t2[a] + z[a] + m * t1[a];
+            }
+            const double* v = kind[k] == 1 ? fk : mk;
+            tau[n * nq + qidx[k]] = Rk[2] * v[0] + Rk[5] * v[1] + Rk[8] * v[2];
+            const int64_t p = parent[k];
+            if (p >= 0) {
+                for (int a = 0; a < 3; ++a) r[a] = o[3 * k + a] - o[3 * p + a];
+                cross3(r, fk, t1);
+                for (int a = 0; a < 3; ++a) {
+                    force[3 * p + a] += fk[a];
+                    moment[3 * p + a] += mk[a] + t1[a];
+                }
+            }
+        }
+    }
+}
+
+// The halving loop of drake_mh/trajectories/bound.py kinematic_bound: B (P, n1, nq) Bernstein
+// coefficients of the pieces, V (Pv, m, nq) values seen, centre / half (nq,) the ratio's, best
+// (nq,) the largest ratio seen; left / right (n1, n1) de Casteljau's halves. certified (nq,): the
+// bound. x / 0 is inf as in numpy (a joint without range: half inf gives 0).
+inline void bernstein_bound(const double* B0, int64_t P0, int64_t n1, int64_t nq, const double* V, int64_t Pv,
+                            int64_t m, const double* centre, const double* half, const double* best0, double slack,
+                            int64_t max_levels, const double* left, const double* right, double* certified) {
+    std::vector<double> best(best0, best0 + nq), B(B0, B0 + P0 * n1 * nq), bound, halves;
+    auto ratio = [&](double x, int64_t j) { return std::max(x - centre[j], centre[j] - x) / half[j]; };
+    for (int64_t j = 0; j < nq; ++j) certified[j] = -INFINITY;
+    for (int64_t i = 0; i < Pv * m; ++i)
+        for (int64_t j = 0; j < nq; ++j) best[j] = std::max(best[j], ratio(V[i * nq + j], j));
+    int64_t P = P0;
+    std::vector<int64_t> keep;
+    for (int64_t level = 0; level <= max_levels && P > 0; ++level) {
+        bound.assign(P * nq, 0.0);
+        for (int64_t p = 0; p < P; ++p)
+            for (int64_t j = 0; j < nq; ++j) {
+                double lo = B[(p * n1) * nq + j], hi = lo;
+                for (int64_t i = 1; i < n1; ++i) {
+                    const double b = B[(p * n1 + i) * nq + j];
+                    lo = std::min(lo, b), hi = std::max(hi, b);
+                }
+                bound[p * nq + j] = std::max(hi - centre[j], centre[j] - lo) / half[j];
+            }
+        keep.clear();
+        for (int64_t p = 0; p < P; ++p) {
+            bool open = false;
+            if (level < max_levels)
+                for (int64_t j = 0; j < nq; ++j) open |= bound[p * nq + j] > best[j] + slack;
+            if (open)
+                keep.push_back(p);
+            else
+                for (int64_t j = 0; j < nq; ++j) certified[j] = std::max(certified[j], bound[p * nq + j]);
+        }
+        const int64_t Kn = (int64_t)keep.size();
+        halves.assign(2 * Kn * n1 * nq, 0.0);
+        for (int64_t q = 0; q < Kn; ++q) {
+            const double* Bp = &B[keep[q] * n1 * nq];
+            for (int64_t i = 0; i < n1; ++i)
+                for (int64_t j = 0; j < nq; ++j) {
+                    double acc_l = 0.0, acc_r = 0.0;
+                    for (int64_t k = 0; k < n1; ++k) {
+                        acc_l += left[i * n1 + k] * Bp[k * nq + j];
+                        acc_r += right[i * n1 + k] * Bp[k * nq + j];
+                    }
+                    halves[(q * n1 + i) * nq + j] = acc_l;
+                    halves[((Kn + q) * n1 + i) * nq + j] = acc_r;
+                }
+        }
+        for (int64_t p = 0; p < 2 * Kn; ++p)  // the halves' end values: exact values of the polynomial
+            for (int64_t i : {int64_t(0), n1 - 1})
+                for (int64_t j = 0; j < nq; ++j) best[j] = std::max(best[j], ratio(halves[(p * n1 + i) * nq + j], j));
+        B.swap(halves);
+        P = 2 * Kn;
+    }
+    for (int64_t j = 0; j < nq; ++j) certified[j] = std::max(certified[j], best[j]);
+}
+
+}  // namespace dmh
