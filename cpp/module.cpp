@@ -99,7 +99,21 @@ NB_MODULE(_native, m) {
             if (!want_jac) return nb::make_tuple(owned(T, {N, 4, 4}), nb::none());
             return nb::make_tuple(owned(T, {N, 4, 4}), owned(J, {N, 6, nq}));
         }, "Q"_a, "anchor"_a, "ER"_a, "Ep"_a, "on_path"_a, "want_jac"_a,
-        "X_WF (N, 4, 4) and (want_jac) J (N, 6, nq) of the frame at (ER, Ep) in moving frame anchor.");
+        "X_WF (N, 4, 4) and (want_jac) J (N, 6, nq) of the frame at (ER, Ep) in moving frame anchor.")
+        .def("fk_jacobian_one", [](dmh::Kinematics& self, One q, int64_t anchor, Floats ER, Floats Ep,
+                                   nb::ndarray<const bool, nb::ndim<1>, nb::c_contig, nb::device::cpu> on_path,
+                                   nb::ndarray<double, nb::shape<4, 4>, nb::c_contig, nb::device::cpu> T,
+                                   nb::ndarray<double, nb::ndim<2>, nb::c_contig, nb::device::cpu> J, bool want_jac) {
+            const size_t nq = (size_t)self.nq();
+            if (q.shape(0) != nq || ER.shape(0) != 9 || Ep.shape(0) != 3 || on_path.shape(0) != (size_t)self.F() ||
+                anchor < -1 || anchor >= self.F() || (want_jac && (J.shape(0) != 6 || J.shape(1) != nq)))
+                throw nb::value_error("q (nq,), ER (9,), Ep (3,), on_path (F,), J (6, nq), -1 <= anchor < F");
+            std::lock_guard<std::mutex> one_call(self.busy);  // (the GIL is held: a short call)
+            return self.fk_jacobian_one(q.data(), (int64_t)q.stride(0), anchor, ER.data(), Ep.data(), on_path.data(),
+                                        T.data(), want_jac ? J.data() : nullptr);
+        }, "q"_a, "anchor"_a, "ER"_a, "Ep"_a, "on_path"_a, "T"_a, "J"_a, "want_jac"_a,
+        "Writes X_WF into T (4, 4) and, with want_jac, the Jacobian into J (6, nq), of one configuration q (nq,)\n"
+        "float64 (any stride); False (nothing written) if q is not finite.");
 
     nb::class_<dmh::CollisionChecker>(m, "CollisionChecker",
         "The boolean sphere-model check of a scene's packed arrays (drake_mh.scene.kernels.packing.pack):\n"

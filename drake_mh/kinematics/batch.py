@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drake_mh._support.native import compiled_core
 from drake_mh.kinematics import kernels as _kernels
 from drake_mh.errors import FrameNotFound
 
@@ -176,6 +177,7 @@ class BatchKinematics:
         self._frame_cache: dict[str, tuple] = {}
         self._one_functions: dict[tuple, object] = {}
         self._q_shape = (robot.nq,)
+        self._native = None
 
     @property
     def nq(self) -> int:
@@ -214,7 +216,25 @@ class BatchKinematics:
                                        np.ascontiguousarray(X_AF[:3, 3]), on_path.copy())
         return self._frame_cache[name]
 
+    def _core(self):
+        """The chain in the compiled core (``drake_mh._native.Kinematics``, built once), or None
+        where the core is not built or is switched off (:mod:`drake_mh._support.native`): then the
+        numba kernels answer."""
+        if compiled_core() is None:
+            return None
+        if self._native is None:
+            parent, KR, Kp, perm, kind, qidx = self._args
+            self._native = compiled_core().Kinematics(
+                np.concatenate([parent, perm.ravel(), kind, qidx]).astype(np.int64),
+                np.concatenate([KR.ravel(), Kp.ravel()]))
+        return self._native
+
     def _run(self, Q, frame, want_jac: bool):
+        native = self._core()
+        if native is not None:
+            anchor, ER, Ep, on_path = self._frame_anchor(frame)
+            T, J = native.fk_jacobian(self.robot.check_Q(Q), anchor, ER.ravel(), Ep, on_path, want_jac)
+            return T, J if want_jac else np.empty((0, 6, self.nq))
         QT = self._transposed(Q)
         anchor, ER, Ep, on_path = self._frame_anchor(frame)
         N = QT.shape[1]
@@ -239,9 +259,28 @@ class BatchKinematics:
         error from there. Every argument of the kernel is bound in the closure (the dispatch
         cost grows with the number of arguments Python passes).
         """
-        key = (frame, want_jac)
+        key = (frame, want_jac, compiled_core() is not None)
         function = self._one_functions.get(key)
         if function is not None:
+            return function
+        native = self._core()
+        if native is not None:  # the compiled core (finiteness checked there)
+            run, (anchor, ER, Ep, on_path) = native.fk_jacobian_one, self._frame_anchor(frame)
+            ER, ndarray, f64, shape, check = ER.ravel(), np.ndarray, np.dtype(np.float64), self._q_shape, \
+                self.robot.check_q
+
+            empty, nq, no_jacobian = np.empty, shape[0], np.empty((6, shape[0]))
+
+            def function(q):
+                if not (type(q) is ndarray and q.dtype is f64 and q.shape == shape):
+                    q = check(q)
+                T = empty((4, 4))
+                J = empty((6, nq)) if want_jac else no_jacobian
+                if not run(q, anchor, ER, Ep, on_path, T, J, want_jac):
+                    check(q)  # raises, naming the joints
+                return J if want_jac else T
+
+            self._one_functions[key] = function
             return function
         F = len(self.chain.parent)
         (parent, KR, Kp, perm, kind, qidx), (anchor, ER, Ep, on_path) = self._args, self._frame_anchor(frame)
@@ -309,6 +348,13 @@ class BatchKinematics:
 
     def points(self, Q, anchors: np.ndarray, offsets: np.ndarray) -> np.ndarray:
         """World positions ``(N, S, 3)`` of points compiled by :meth:`compile_points`."""
+        if self._core() is not None:  # p_WF + R_WF p_FS from the compiled core's frames (anchor -1: W)
+            R, p = self.moving_frames(Q)
+            world = anchors < 0
+            at = np.where(world, 0, anchors)
+            out = p[:, at] + np.einsum("nsij,sj->nsi", R[:, at], offsets)
+            out[:, world] = offsets[world]
+            return out
         QT = self._transposed(Q)
         out = np.empty((QT.shape[1], len(anchors), 3))
         _kernels.points(QT, *self._args, anchors, offsets, out)
@@ -329,6 +375,9 @@ class BatchKinematics:
         Column 2 of each rotation is the joint axis in W; frame k belongs to
         ``chain.joint_names[k]``.
         """
+        native = self._core()
+        if native is not None:
+            return native.moving_frames(self.robot.check_Q(Q))
         QT = self._transposed(Q)
         F = len(self.chain.parent)
         R = np.empty((QT.shape[1], F, 3, 3))

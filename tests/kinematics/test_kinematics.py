@@ -1,4 +1,5 @@
-"""BatchKinematics agrees with Drake on every bundled robot, random URDF chains and DH robots."""
+"""BatchKinematics agrees with Drake on every bundled robot, random URDF chains and DH robots, in
+the compiled core and in the numba kernels (the fallback where the core is not built)."""
 
 import numpy as np
 import pytest
@@ -6,12 +7,25 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import drake_mh
+from drake_mh._support.native import ENVIRONMENT, compiled_core
+from drake_mh.errors import InvalidConfiguration
 from drake_mh.robot import Robot
 
 from random_models import random_chain_urdf
 
 TOL = 1e-10
 ROBOTS = {name: drake_mh.load_robot(name) for name in drake_mh.available_robots()}
+
+
+@pytest.fixture(autouse=True, scope="module", params=["core", "numba"])
+def backend(request):
+    """Every test once with the compiled core and once with the numba kernels."""
+    with pytest.MonkeyPatch.context() as patch:
+        if request.param == "numba":
+            patch.setenv(ENVIRONMENT, "0")
+        elif compiled_core() is None:
+            pytest.skip("the compiled core drake_mh._native is not built (pip install . builds it)")
+        yield request.param
 
 
 def assert_matches_drake(robot, Q, frame=None):
@@ -105,3 +119,16 @@ def test_sphere_centres_follow_their_links():
         poses = robot.link_poses(q)
         expected = [poses[link][:3, :3] @ c + poses[link][:3, 3] for link, c in zip(model.links, model.centres_B)]
         np.testing.assert_allclose(C_i, expected, atol=TOL)
+
+
+def test_single_configuration_matches_drake_and_refuses_non_finite():
+    robot = ROBOTS["panda"]
+    for q in robot.random_configurations(5, 9):
+        np.testing.assert_allclose(robot.batch.one(q), robot.fk_drake(q), atol=TOL, rtol=0)
+        np.testing.assert_allclose(robot.batch.one(list(q), want_jac=True), robot.jacobian_drake(q), atol=TOL, rtol=0)
+        np.testing.assert_allclose(robot.batch.one(q[::-1][::-1].copy()[::1]), robot.fk_drake(q), atol=TOL, rtol=0)
+    q = robot.home.copy()
+    q[3] = np.nan
+    for want_jac in (False, True):
+        with pytest.raises(InvalidConfiguration, match="NaN|finite|inf"):
+            robot.batch.one(q, want_jac=want_jac)
