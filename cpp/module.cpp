@@ -13,6 +13,7 @@
 #include "dynamics.hpp"
 #include "fk.hpp"
 #include "kdtree.hpp"
+#include "lm.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -155,6 +156,102 @@ NB_MODULE(_native, m) {
     }, "P"_a,
     "(order (N,), axes (N,), tree (N, 3), boxes (N, 6)) of finite points P (N, 3) C-contiguous float64:\n"
     "the implicit k-d tree of drake_mh.scene.kernels.pieces.kd_build, the same tree (the same selection).");
+
+    // lm.py lm_run / lm_step: the state arrays are BatchLM's, written in place
+    using RW = nb::ndarray<double, nb::c_contig, nb::device::cpu>;
+    using RWi = nb::ndarray<int64_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+    using RWb = nb::ndarray<bool, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+    using Bools = nb::ndarray<const bool, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+    struct LMArgs {
+        dmh::LMState S;
+        dmh::LMProblem P;
+        std::vector<double> r;
+    };
+    auto lm_args = [](RW Qt, RW Qa, RW Ea, RW Ja, RW fa, RW lam, RWi stall, RWi iters, RWb fresh, RWi status, RW Qn,
+                      nb::tuple problem, nb::tuple settings, Bools revolute) {
+        const size_t K = Qt.ndim() == 2 ? Qt.shape(0) : 0, nq = Qt.ndim() == 2 ? Qt.shape(1) : 0;
+        auto shaped = [](auto& a, std::initializer_list<size_t> shape) {
+            if (a.ndim() != shape.size()) return false;
+            size_t i = 0;
+            for (size_t n : shape)
+                if (a.shape(i++) != n) return false;
+            return true;
+        };
+        if (!shaped(Qt, {K, nq}) || !shaped(Qa, {K, nq}) || !shaped(Ea, {K, 6}) || !shaped(Ja, {K, 6, nq}) ||
+            !shaped(fa, {K}) || !shaped(lam, {K}) || stall.shape(0) != K || iters.shape(0) != K ||
+            fresh.shape(0) != K || status.shape(0) != K || !shaped(Qn, {K, nq}) || revolute.shape(0) != nq ||
+            nb::len(problem) != 17 || nb::len(settings) != 9)
+            throw nb::value_error("lm: the state of K candidates of nq joints (drake_mh.ik.lm.BatchLM)");
+        LMArgs a;
+        a.r.assign(nq + 1, 0.0);
+        a.S = dmh::LMState{(int64_t)K, (int64_t)nq, Qt.data(), Qa.data(), Ea.data(), Ja.data(), fa.data(),
+                           lam.data(), stall.data(), iters.data(), status.data(), fresh.data(), Qn.data(), a.r.data()};
+        // problem = BatchLM._const: p_t, R_t, has_rot, w_o, lower, upper, (settings 7), ref_gain, q_ref, tol_p2, tol_o2
+        auto vec = [&](nb::handle h, size_t n) {
+            auto v = nb::cast<Floats>(h);
+            if (v.shape(0) != n) throw nb::value_error("lm: a problem vector of the wrong size");
+            return v.data();
+        };
+        dmh::LMProblem& P = a.P;
+        P.p_t = vec(problem[0], 3);
+        P.R_t = nb::cast<Batch>(problem[1]).data();
+        if (nb::cast<Batch>(problem[1]).shape(0) != 3 || nb::cast<Batch>(problem[1]).shape(1) != 3)
+            throw nb::value_error("lm: R_t must be (3, 3)");
+        P.has_rot = nb::cast<bool>(problem[2]);
+        P.w_o = nb::cast<double>(problem[3]);
+        P.lower = vec(problem[4], nq), P.upper = vec(problem[5], nq);
+        P.adaptive = nb::cast<bool>(settings[0]);
+        P.lam_down = nb::cast<double>(settings[1]), P.lam_up = nb::cast<double>(settings[2]);
+        P.lam_min = nb::cast<double>(settings[3]), P.lam_max = nb::cast<double>(settings[4]);
+        P.max_iter = nb::cast<int64_t>(settings[5]), P.stall_iters = nb::cast<int64_t>(settings[6]);
+        P.project = nb::cast<bool>(settings[7]), P.error_damping = nb::cast<bool>(settings[8]);
+        P.ref_gain = nb::cast<double>(problem[13]);
+        P.q_ref = vec(problem[14], nq);
+        P.tol_p2 = nb::cast<double>(problem[15]), P.tol_o2 = nb::cast<double>(problem[16]);
+        P.revolute = revolute.data();
+        return a;
+    };
+    m.def("lm_step", [lm_args](Array T, Array J, RW Qt, RW Qa, RW Ea, RW Ja, RW fa, RW lam, RWi stall, RWi iters,
+                               RWb fresh, RWi status, RW Qn, nb::tuple problem) {
+        const size_t K = Qt.ndim() == 2 ? Qt.shape(0) : 0, nq = Qt.ndim() == 2 ? Qt.shape(1) : 0;
+        nb::tuple settings = nb::make_tuple(problem[6], problem[7], problem[8], problem[9], problem[10], problem[11],
+                                            problem[12], true, false);
+        bool* no_turns = new bool[nq + 1]();  // (project: the limits are never wrapped into)
+        nb::capsule keep(no_turns, [](void* p) noexcept { delete[] static_cast<bool*>(p); });
+        LMArgs a = lm_args(Qt, Qa, Ea, Ja, fa, lam, stall, iters, fresh, status, Qn, problem, settings,
+                           Bools(no_turns, {nq}, keep));
+        if (T.size() != 16 * K || J.size() != 6 * nq * K) throw nb::value_error("lm_step: T (K, 4, 4), J (K, 6, nq)");
+        return dmh::lm_step(T.data(), J.data(), a.S, a.P);
+    }, "T"_a, "J"_a, "Qt"_a, "Qa"_a, "Ea"_a, "Ja"_a, "fa"_a, "lam"_a, "stall"_a, "iters"_a, "fresh"_a, "status"_a,
+    "Qn"_a, "problem"_a,
+    "drake_mh.ik.lm.lm_step: one iteration of every candidate at its poses T and Jacobians J; the state\n"
+    "arrays written in place; problem = BatchLM's constants. The converged row with the smallest error, or -1.");
+    m.def("lm_run", [lm_args](dmh::Kinematics& kin, int64_t anchor, Floats ER, Floats Ep, Bools on_path, Batch starts,
+                              int64_t n_starts, uint64_t gen_seed, int64_t cursor, int64_t max_evals, RW Qt, RW Qa,
+                              RW Ea, RW Ja, RW fa, RW lam, RWi stall, RWi iters, RWb fresh, RWi status, RW best_q,
+                              RW best_f, nb::tuple problem, double lam0, nb::tuple settings, Bools revolute, RW Qn,
+                              RW T, RW J) {
+        LMArgs a = lm_args(Qt, Qa, Ea, Ja, fa, lam, stall, iters, fresh, status, Qn, problem, settings, revolute);
+        const int64_t K = a.S.K, nq = a.S.nq;
+        if (nq != kin.nq() || ER.shape(0) != 9 || Ep.shape(0) != 3 || on_path.shape(0) != (size_t)kin.F() ||
+            anchor < -1 || anchor >= kin.F() || (starts.shape(0) > 0 && (int64_t)starts.shape(1) != nq) ||
+            best_q.size() != (size_t)nq || best_f.size() != 1 || T.size() != (size_t)(16 * K) ||
+            J.size() != (size_t)(6 * nq * K) || cursor < 0)
+            throw nb::value_error("lm_run: the chain's frame, starts (M, nq), best_q (nq,), best_f (1,), T, J");
+        int64_t evals = 0, row;
+        {
+            nb::gil_scoped_release unlocked;
+            std::lock_guard<std::mutex> one_call(kin.busy);
+            row = dmh::lm_run(kin, anchor, ER.data(), Ep.data(), on_path.data(), starts.data(),
+                              (int64_t)starts.shape(0), n_starts, gen_seed, cursor, max_evals, evals, a.S, a.P, lam0,
+                              best_q.data(), best_f.data(), T.data(), J.data());
+        }
+        return nb::make_tuple(row, evals, cursor);
+    }, "kinematics"_a, "anchor"_a, "ER"_a, "Ep"_a, "on_path"_a, "starts"_a, "n_starts"_a, "gen_seed"_a, "cursor"_a,
+    "max_evals"_a, "Qt"_a, "Qa"_a, "Ea"_a, "Ja"_a, "fa"_a, "lam"_a, "stall"_a, "iters"_a, "fresh"_a, "status"_a,
+    "best_q"_a, "best_f"_a, "problem"_a, "lam0"_a, "settings"_a, "revolute"_a, "Qn"_a, "T"_a, "J"_a,
+    "drake_mh.ik.lm.lm_run on the compiled chain kin (frame at (ER, Ep) in moving frame anchor): iterations with\n"
+    "restarts until a candidate converges; the state written in place. (row, evals, cursor).");
 
     m.def("rnea", [](IntArray parent, Array KR, Array Kp, IntArray kind, IntArray qidx, Array mass, Array com,
                      Array inertia, Array a_world, Batch Q, Batch V, Batch A) {

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from drake_mh._support.native import compiled_core
 from drake_mh._support.random import uniform_at
 from drake_mh.kinematics.kernels import fk_jacobian_one
 
@@ -488,8 +489,13 @@ class BatchLM:
     def iterate(self) -> int:
         """One iteration of every candidate; returns a converged row or -1 (see :func:`lm_step`)."""
         T, J = self._fk_jacobian(self.Qt, self._frame)
-        best = lm_step(T, J, self.Qt, self.Qa, self.Ea, self.Ja, self.fa, self.lam, self.stall, self.iters,
-                       self.fresh, self.status, *self._const, self.Qn)
+        core = compiled_core()
+        if core is not None:  # the compiled core: nothing compiles at call time
+            best = core.lm_step(T, J, self.Qt, self.Qa, self.Ea, self.Ja, self.fa, self.lam, self.stall, self.iters,
+                                self.fresh, self.status, self.Qn, self._const)
+        else:
+            best = lm_step(T, J, self.Qt, self.Qa, self.Ea, self.Ja, self.fa, self.lam, self.stall, self.iters,
+                           self.fresh, self.status, *self._const, self.Qn)
         self.Qt, self.Qn = self.Qn, self.Qt
         return int(best)
 
@@ -522,6 +528,18 @@ class BatchLM:
                               c[6:13] + (bool(self.settings.project_limits), bool(self.settings.error_damping)),
                               *c[13:], revolute)
         n_starts = len(starts) if n_starts is None else int(n_starts)
+        kinematics = self.problem.robot.batch.core_kinematics()
+        if kinematics is not None:  # the compiled core: nothing compiles at call time
+            chain, revolute = _compiled_chain(self.problem.robot.batch, self._frame)
+            anchor, ER, Ep, on_path = chain[6:]
+            c = self._const
+            row, evals, cursor = compiled_core().lm_run(
+                kinematics, anchor, ER.ravel(), Ep, on_path, starts, n_starts, int(gen_seed) % 2**64, int(cursor),
+                int(max_evals), self.Qt, self.Qa, self.Ea, self.Ja, self.fa, self.lam, self.stall, self.iters,
+                self.fresh, self.status, self.best_q, self.best_f, c, float(self.settings.lam0),
+                c[6:13] + (bool(self.settings.project_limits), bool(self.settings.error_damping)), revolute, self.Qn,
+                self._T, self._J)
+            return int(row), int(evals), int(cursor)
         row, evals, cursor = lm_run(starts, n_starts, np.uint64(int(gen_seed) % 2**64), int(cursor),
                                     int(max_evals), self.Qt, self.Qa, self.Ea, self.Ja, self.fa, self.lam,
                                     self.stall, self.iters, self.fresh, self.status, self.best_q, self.best_f,

@@ -216,7 +216,7 @@ class BatchKinematics:
                                        np.ascontiguousarray(X_AF[:3, 3]), on_path.copy())
         return self._frame_cache[name]
 
-    def _core(self):
+    def core_kinematics(self):
         """The chain in the compiled core (``drake_mh._native.Kinematics``, built once), or None
         where the core is not built or is switched off (:mod:`drake_mh._support.native`): then the
         numba kernels answer."""
@@ -230,7 +230,7 @@ class BatchKinematics:
         return self._native
 
     def _run(self, Q, frame, want_jac: bool):
-        native = self._core()
+        native = self.core_kinematics()
         if native is not None:
             anchor, ER, Ep, on_path = self._frame_anchor(frame)
             T, J = native.fk_jacobian(self.robot.check_Q(Q), anchor, ER.ravel(), Ep, on_path, want_jac)
@@ -263,7 +263,7 @@ class BatchKinematics:
         function = self._one_functions.get(key)
         if function is not None:
             return function
-        native = self._core()
+        native = self.core_kinematics()
         if native is not None:  # the compiled core (finiteness checked there)
             run, (anchor, ER, Ep, on_path) = native.fk_jacobian_one, self._frame_anchor(frame)
             ER, ndarray, f64, shape, check = ER.ravel(), np.ndarray, np.dtype(np.float64), self._q_shape, \
@@ -348,7 +348,7 @@ class BatchKinematics:
 
     def points(self, Q, anchors: np.ndarray, offsets: np.ndarray) -> np.ndarray:
         """World positions ``(N, S, 3)`` of points compiled by :meth:`compile_points`."""
-        if self._core() is not None:  # p_WF + R_WF p_FS from the compiled core's frames (anchor -1: W)
+        if self.core_kinematics() is not None:  # p_WF + R_WF p_FS from the compiled core's frames (anchor -1: W)
             R, p = self.moving_frames(Q)
             world = anchors < 0
             at = np.where(world, 0, anchors)
@@ -375,7 +375,7 @@ class BatchKinematics:
         Column 2 of each rotation is the joint axis in W; frame k belongs to
         ``chain.joint_names[k]``.
         """
-        native = self._core()
+        native = self.core_kinematics()
         if native is not None:
             return native.moving_frames(self.robot.check_Q(Q))
         QT = self._transposed(Q)

@@ -133,3 +133,61 @@ def test_jacobian_baselines_start_mid_range(panda, method):
     problem = IKProblem(panda, panda.fk(panda.home), position_tolerance=1e-5, orientation_tolerance=1e-5)
     result = solve_ik(problem, method, seed=0, budget=1000)
     assert result.success and result.nfe == 1 and result.attempts == 1
+
+
+def _backend(monkeypatch, backend):
+    if backend == "numba":
+        monkeypatch.setenv("DRAKE_MH_COMPILED_CORE", "0")
+    else:
+        monkeypatch.delenv("DRAKE_MH_COMPILED_CORE", raising=False)
+
+
+def _runs(problem, settings, backend, monkeypatch, K=3, seed=0):
+    """BatchLM with one backend: the state after a first short chunk (two iterations, before any
+    row is near round-off), and every call's answer until a row converges (chunks of 40
+    evaluations) with the converged point."""
+    _backend(monkeypatch, backend)
+    lm = BatchLM(problem, K, settings)
+    lm.status[:] = STALLED
+    starts = problem.robot.random_configurations(2, seed + 1)
+    answers = [lm.run(starts, 0, 2 * K, n_starts=400, gen_seed=seed)]
+    early = [a.copy() for a in (lm.Qt, lm.Qa, lm.Ea, lm.Ja, lm.fa, lm.lam, lm.stall, lm.iters, lm.fresh, lm.status)]
+    row, cursor = answers[0][0], answers[0][2]
+    while row < 0 and cursor < 400:
+        row, evals, cursor = lm.run(starts, cursor, 40, n_starts=400, gen_seed=seed)
+        answers.append((row, evals, cursor))
+    return answers, early, lm.Qa[row].copy() if row >= 0 else None
+
+
+@pytest.mark.parametrize("settings", [FIRST, dataclasses.replace(FIRST, project_limits=True),
+                                      LMSettings(stall_iters=3, lam0=1e-2), LMSettings(adaptive=False, ref_gain=0.5)],
+                         ids=["free-chan", "projected-chan", "adaptive", "plain-ref"])
+@pytest.mark.parametrize("position_only", [False, True])
+def test_compiled_core_iterates_as_the_numba_kernel(panda, monkeypatch, settings, position_only):
+    """The compiled core's lm_run takes the numba kernel's steps: the same state after two
+    iterations (to round-off), the same answers of every call (restarts, chunks) and the same
+    converged point; its lm_step gives the numba lm_step's state from the same inputs."""
+    pytest.importorskip("drake_mh._native", reason="the compiled core drake_mh._native is not built")
+    for seed in range(3):
+        q = panda.random_configurations(1, 100 + seed)[0]
+        target = panda.fk(q)[:3, 3] if position_only else panda.fk(q)
+        problem = IKProblem(panda, target, position_tolerance=1e-6, orientation_tolerance=1e-6,
+                            q_ref=panda.home if settings.ref_gain else None)
+        core_answers, core_early, core_q = _runs(problem, settings, "core", monkeypatch, seed=seed)
+        numba_answers, numba_early, numba_q = _runs(problem, settings, "numba", monkeypatch, seed=seed)
+        assert core_answers == numba_answers
+        for a, b in zip(core_early, numba_early):
+            np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
+        if core_q is not None:
+            np.testing.assert_allclose(core_q, numba_q, atol=1e-9)
+        states = []
+        for backend in ("core", "numba"):  # one lm_step from the same state and the same poses
+            _backend(monkeypatch, backend)
+            lm = BatchLM(problem, 4, settings)
+            lm.start(np.arange(4), panda.random_configurations(4, seed))
+            lm.iterate()
+            lm.Qt[:] = panda.random_configurations(4, seed + 7)
+            states.append((lm.iterate(), [a.copy() for a in (lm.Qt, lm.Qa, lm.fa, lm.lam, lm.stall, lm.status)]))
+        assert states[0][0] == states[1][0]
+        for a, b in zip(states[0][1], states[1][1]):
+            np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
