@@ -153,22 +153,26 @@ NB_MODULE(_native, m) {
         .def("values", [](dmh::Clearances& self, Batch Q, Floats tau, double fine_below, Floats pair_fine_below,
                           int mode, Batch v_WO) -> nb::object {
             const int64_t N = (int64_t)Q.shape(0);
-            if ((int64_t)Q.shape(1) != self.nq() || (int64_t)tau.shape(0) != N ||
+            const bool still = tau.shape(0) == 0;  // no tau: the obstacles where they are
+            if ((int64_t)Q.shape(1) != self.nq() || (!still && (int64_t)tau.shape(0) != N) ||
                 (int64_t)pair_fine_below.shape(0) != self.packed().P || mode < dmh::PER_LINK || mode > dmh::OVERALL)
                 throw nb::value_error("Q (N, nq), tau (N,), pair_fine_below (P,), mode 0, 1 or 2");
             check_v_WO(self, v_WO);
-            if (!all_finite(tau.data(), (size_t)N)) throw nb::value_error("tau must be finite");
+            if (!all_finite(tau.data(), tau.shape(0))) throw nb::value_error("tau must be finite");
             if (!all_finite(Q.data(), Q.size())) return nb::none();
             const size_t width = (size_t)self.width(mode);
             double* out = new double[(size_t)N * width + 1];
             {
                 nb::gil_scoped_release unlocked;
                 std::lock_guard<std::mutex> one_call(self.busy);
-                self.evaluate(Q.data(), N, tau.data(), fine_below, pair_fine_below.data(), mode, v_WO.data(), out);
+                std::vector<double> zeros(still ? (size_t)N : 0, 0.0);
+                self.evaluate(Q.data(), N, still ? zeros.data() : tau.data(), fine_below, pair_fine_below.data(), mode,
+                              v_WO.data(), out);
             }
             return nb::cast(owned(out, {(size_t)N, width}));
         }, "Q"_a, "tau"_a, "fine_below"_a, "pair_fine_below"_a, "mode"_a, "v_WO"_a,
-        "(N, width) float64 for Q (N, nq) C-contiguous (None if Q is not finite), obstacles at p_WO + tau v_WO:\n"
+        "(N, width) float64 for Q (N, nq) C-contiguous (None if Q is not finite), obstacles at p_WO + tau v_WO\n"
+        "(tau (N,), or empty: 0):\n"
         "mode 0 per link and pair (width G + P), 1 per obstacle (K), 2 over all obstacles (1).")
         .def("certify_segments", [](dmh::Clearances& self, Batch QA, Batch QB, Batch reach, Batch v_WO, double speed,
                                     double clearance, double self_clearance, double tolerance, double min_piece,

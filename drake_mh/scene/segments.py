@@ -168,12 +168,18 @@ def certify_segments(scene, QA, QB, clearance: float = 0.0, self_clearance: floa
         v_WO = np.array([o.velocity_W * float(duration) for o in scene.obstacles.values()]).reshape(-1, 3)
         v_WO = v_WO[scene.obstacle_owners]  # per kernel obstacle (a mesh's pieces move with it)
         speed = float(np.max(np.linalg.norm(v_WO, axis=1), initial=0.0))
+    v_WO = np.ascontiguousarray(v_WO, dtype=float).reshape(-1, 3)
+    compiled = model.compiled_clearances(scene.obstacle_arrays, pairs=True)
+    if compiled is not None:  # the compiled core: the kernel's verdicts, nothing compiled at call time
+        status, t_stop, lower, lower_self, evals = compiled.certify_segments(
+            QA, QB, model.reach, v_WO, speed, clearance, self_clearance, float(tolerance), MIN_PIECE,
+            int(max_evaluations))
+        return SegmentCertificate(status, t_stop, lower, lower_self, evals, clearance, self_clearance)
     M = QA.shape[0]
     status, t_stop = np.empty(M, np.int64), np.empty(M)
     lower, lower_self, evals = np.empty(M), np.empty(M), np.empty(M, np.int64)
     SK.certify_segments(QA, QB, model.reach, speed, clearance, self_clearance, float(tolerance), MIN_PIECE,
-                        int(max_evaluations), *model._kernel_args(), kinds, R_WO, p_WO,
-                        np.ascontiguousarray(v_WO), dims, *model.pair_arrays,
+                        int(max_evaluations), *model._kernel_args(), kinds, R_WO, p_WO, v_WO, dims, *model.pair_arrays,
                         status, t_stop, lower, lower_self, evals)
     return SegmentCertificate(status, t_stop, lower, lower_self, evals, clearance, self_clearance)
 
