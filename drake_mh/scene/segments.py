@@ -19,6 +19,10 @@ The sphere model never reads more clearance than the exact geometry has
 too. The converse is conservative: a segment that passes within ``sphere_model.bound`` of an
 obstacle may be reported blocked.
 
+Where the compiled core is built (:mod:`drake_mh.scene.compiled_check`), its port of that
+kernel answers (``drake_mh._native.Clearances.certify_segments``: the same verdicts, nothing
+compiled at call time); with ``DRAKE_MH_COMPILED_CORE=0`` or without it, the numba kernel.
+
 Moving obstacles (``durations``): an obstacle with velocity ``v`` moves ``v · duration`` during
 the segment; the bound then adds its displacement to every link's Lipschitz constant, and the
 configurations are evaluated against the obstacles where they are at that instant.
