@@ -92,18 +92,14 @@ inline void cloud_sd(const Packed& s, int64_t c, int64_t k, const double* v_WO, 
     }
 }
 
-class Clearances {
+class Clearances : public PackedModel {
 public:
     std::mutex busy;  // held by a call: the workspace is the object's own
     static constexpr int64_t LANES = 128;
 
     Clearances(std::vector<int64_t> ints, std::vector<double> floats)
-        : ints_(std::move(ints)), floats_(std::move(floats)) {
-        ok_ = unpack(ints_.data(), (int64_t)ints_.size(), floats_.data(), (int64_t)floats_.size(), s_);
+        : PackedModel(std::move(ints), std::move(floats)) {
         if (!ok_) return;
-        for (int64_t k = 0; k < s_.K; ++k) ok_ = ok_ && s_.kinds[k] >= SPHERE && s_.kinds[k] <= CLOUD;
-        nq_ = 0;
-        for (int64_t k = 0; k < s_.chain.F; ++k) nq_ = std::max(nq_, s_.chain.qidx[k] + 1);
         const int64_t F = std::max<int64_t>(s_.chain.F, 1), G = std::max<int64_t>(s_.G, 1),
                       K = std::max<int64_t>(s_.K, 1), L = LANES;
         U_ = 1;
@@ -114,10 +110,6 @@ public:
         pbuf_.resize(4 * std::max<int64_t>(s_.S, 1));
         idx_.resize(L), key_.resize(U_), order_.resize(U_);
     }
-
-    bool ok() const { return ok_; }
-    int64_t nq() const { return nq_; }
-    const Packed& packed() const { return s_; }
 
     // out (N, width) row-major, width = G + P (PER_LINK), K (PER_OBSTACLE) or 1 (OVERALL): the
     // values of link_clearances for Q (N, nq) row-major at tau (N,), obstacles displaced by v_WO
@@ -131,11 +123,7 @@ public:
     int64_t width(int mode) const { return mode == OVERALL ? 1 : mode == PER_OBSTACLE ? s_.K : s_.G + s_.P; }
 
 private:
-    std::vector<int64_t> ints_;
-    std::vector<double> floats_;
-    Packed s_;
-    bool ok_ = false;
-    int64_t nq_ = 0, U_ = 1;
+    int64_t U_ = 1;  // most sphere groups of a link
     Buffer q_, R_, p_, Gc_, lb_, best_, lanes_, glb_, pbuf_, Rc_;
     std::vector<int64_t> idx_, order_;
     std::vector<double> key_;

@@ -23,11 +23,13 @@ using Batch = nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::c
 using One = nb::ndarray<const double, nb::ndim<1>, nb::device::cpu>;
 using BoolOut = nb::ndarray<nb::numpy, bool, nb::ndim<1>>;
 
-static void init_checker(dmh::CollisionChecker* self, Ints ints, Floats floats) {
-    new (self) dmh::CollisionChecker(std::vector<int64_t>(ints.data(), ints.data() + ints.shape(0)),
-                                     std::vector<double>(floats.data(), floats.data() + floats.shape(0)));
+// A CollisionChecker or Clearances (a dmh::PackedModel) built in place from copies of the buffers.
+template <class Model>
+static void init_model(Model* self, Ints ints, Floats floats) {
+    new (self) Model(std::vector<int64_t>(ints.data(), ints.data() + ints.shape(0)),
+                     std::vector<double>(floats.data(), floats.data() + floats.shape(0)));
     if (!self->ok()) {
-        self->~CollisionChecker();
+        self->~Model();
         throw nb::value_error("the packed buffers do not hold a collision model (drake_mh.scene.kernels.packing.pack)");
     }
 }
@@ -53,15 +55,6 @@ static int free_one(dmh::CollisionChecker& self, One q, double clearance, double
     if ((int64_t)q.shape(0) != self.nq()) return -3;
     std::lock_guard<std::mutex> one_call(self.busy);  // (the GIL is held: a short call)
     return self.free_one(q.data(), (int64_t)q.stride(0), clearance, self_clearance);
-}
-
-static void init_clearances(dmh::Clearances* self, Ints ints, Floats floats) {
-    new (self) dmh::Clearances(std::vector<int64_t>(ints.data(), ints.data() + ints.shape(0)),
-                               std::vector<double>(floats.data(), floats.data() + floats.shape(0)));
-    if (!self->ok()) {
-        self->~Clearances();
-        throw nb::value_error("the packed buffers do not hold a collision model (drake_mh.scene.kernels.packing.pack)");
-    }
 }
 
 static bool all_finite(const double* x, size_t n) {
@@ -124,7 +117,7 @@ NB_MODULE(_native, m) {
         "The boolean sphere-model check of a scene's packed arrays (drake_mh.scene.kernels.packing.pack):\n"
         "the answers of drake_mh.scene.kernels.collision.collision_free. Holds copies of the buffers and\n"
         "its own workspace: calls on one checker run one at a time; a batched call releases the GIL.")
-        .def("__init__", &init_checker, "ints"_a, "floats"_a)
+        .def("__init__", &init_model<dmh::CollisionChecker>, "ints"_a, "floats"_a)
         .def_prop_ro("nq", &dmh::CollisionChecker::nq)
         .def("free", [](dmh::CollisionChecker& self, Batch Q, double clearance, double self_clearance) -> nb::object {
             const int64_t N = (int64_t)Q.shape(0), nq = (int64_t)Q.shape(1);
@@ -148,7 +141,7 @@ NB_MODULE(_native, m) {
         "drake_mh.scene.kernels.collision.link_clearances and the verdicts of\n"
         "drake_mh.scene.kernels.segments.certify_segments. Holds copies of the buffers and its own\n"
         "workspace: calls on one object run one at a time, with the GIL released.")
-        .def("__init__", &init_clearances, "ints"_a, "floats"_a)
+        .def("__init__", &init_model<dmh::Clearances>, "ints"_a, "floats"_a)
         .def_prop_ro("nq", &dmh::Clearances::nq)
         .def("values", [](dmh::Clearances& self, Batch Q, Floats tau, double fine_below, Floats pair_fine_below,
                           int mode, Batch v_WO) -> nb::object {
