@@ -6,7 +6,8 @@
 //
 // Layout as the numba kernel: a block of LANES configurations, lane index innermost (R (F, 3, 3,
 // L), p (F, 3, L), bounding centres (G, L)); the lanes that need a link's spheres are compacted
-// (gather) and each sphere is evaluated over them, loops the compiler vectorizes.
+// (gather) and each sphere is evaluated over them in plain loops over the lanes (left to the
+// compiler's vectorizer, as numba leaves them to LLVM's).
 #pragma once
 
 #include <algorithm>
