@@ -23,18 +23,38 @@ struct Buffer {
     }
 };
 
-class CollisionChecker {
+// A model's packed buffers (copies, held for the object's life), their views, and whether they
+// hold a model (sizes matching the header, known obstacle kinds).
+class PackedModel {
+public:
+    PackedModel(std::vector<int64_t> ints, std::vector<double> floats)
+        : ints_(std::move(ints)), floats_(std::move(floats)) {
+        ok_ = unpack(ints_.data(), (int64_t)ints_.size(), floats_.data(), (int64_t)floats_.size(), s_);
+        if (!ok_) return;
+        for (int64_t k = 0; k < s_.K; ++k) ok_ = ok_ && s_.kinds[k] >= SPHERE && s_.kinds[k] <= CLOUD;
+        for (int64_t k = 0; k < s_.chain.F; ++k) nq_ = std::max(nq_, s_.chain.qidx[k] + 1);
+    }
+
+    bool ok() const { return ok_; }
+    int64_t nq() const { return nq_; }
+    const Packed& packed() const { return s_; }
+
+protected:
+    std::vector<int64_t> ints_;
+    std::vector<double> floats_;
+    Packed s_;
+    bool ok_ = false;
+    int64_t nq_ = 0;
+};
+
+class CollisionChecker : public PackedModel {
 public:
     std::mutex busy;  // held by a call: the workspace is the object's own
     static constexpr int64_t LANES = 128;  // configurations per block (a multiple of W)
 
     CollisionChecker(std::vector<int64_t> ints, std::vector<double> floats)
-        : ints_(std::move(ints)), floats_(std::move(floats)) {
-        ok_ = unpack(ints_.data(), (int64_t)ints_.size(), floats_.data(), (int64_t)floats_.size(), s_);
+        : PackedModel(std::move(ints), std::move(floats)) {
         if (!ok_) return;
-        for (int64_t k = 0; k < s_.K; ++k) ok_ = ok_ && s_.kinds[k] >= SPHERE && s_.kinds[k] <= CLOUD;
-        nq_ = 0;
-        for (int64_t k = 0; k < s_.chain.F; ++k) nq_ = std::max(nq_, s_.chain.qidx[k] + 1);
         const int64_t F = s_.chain.F, L = LANES;
         q_.resize(std::max<int64_t>(nq_, 1) * L);
         R_.resize(F * 9 * L);
@@ -46,9 +66,6 @@ public:
         p1_.resize(3 * std::max<int64_t>(F, 1));
         gc1_.resize(3 * std::max<int64_t>(s_.G, 1));
     }
-
-    bool ok() const { return ok_; }
-    int64_t nq() const { return nq_; }
 
     // out[n] for the N configurations Q (N, nq) (row-major); false (nothing written) if Q holds
     // a NaN or an infinity. Clearances > 0 (the tests compare squares).
@@ -70,11 +87,6 @@ public:
     }
 
 private:
-    std::vector<int64_t> ints_;
-    std::vector<double> floats_;
-    Packed s_;
-    bool ok_ = false;
-    int64_t nq_ = 0;
     Buffer q_, R_, p_, Gc_, alive_, pbuf_, R1_, p1_, gc1_;
 
     void block(const double* Q, int64_t n0, int64_t m, int64_t nq, double clearance, double self_clearance,
