@@ -12,6 +12,7 @@
 #include "collision.hpp"
 #include "fk.hpp"
 #include "kdtree.hpp"
+#include "planner.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -120,6 +121,8 @@ NB_MODULE(_native, m) {
         }, "Q"_a, "clearance"_a, "self_clearance"_a,
         "(N,) bool for Q (N, nq) C-contiguous float64, clearances > 0 [m]; None if Q is not finite.")
         .def("free_one", &free_one, "q"_a, "clearance"_a, "self_clearance"_a, FREE_ONE);
+
+    bind_planner(m);
 
     m.def("kd_build", [](Points P) {
         const size_t N = P.shape(0);
