@@ -68,10 +68,16 @@ def motions(scene, count: int, seed: int, clearance: float):
 
 def drake_reference(scene):
     """``f(Q) -> (N,)`` the smallest distance [m] at each configuration by Drake's signed distance
-    queries on a fresh plant, over the robot-obstacle pairs and the link pairs the scene checks."""
+    queries: on a fresh plant over the robot-obstacle pairs and the link pairs the scene checks
+    for primitives, else (meshes, a point cloud, which the fresh plant does not take) the scene's
+    exact distance (Drake's queries on the scene's own plant, tested against a fresh one in
+    tests/scene/test_exact.py)."""
     from pydrake.geometry import Role
 
     from references import FreshDrake
+
+    if any(type(o.shape).__name__ not in ("Sphere", "Box", "Cylinder", "Capsule") for o in scene.obstacles.values()):
+        return scene.exact_min_distance
 
     drake = FreshDrake(PANDA, scene, self_collision=True)
     inspector = drake.scene_graph.model_inspector()
@@ -159,29 +165,49 @@ def test_plans_equal_the_numba_kernels(form):
 
 
 @pytest.mark.slow
-def test_solve_motion_uses_the_compiled_core_and_compiles_nothing(monkeypatch):
-    """solve_motion's rrt_connect through the compiled core: no compile time, the numba path's
-    path for the same seed (DRAKE_MH_COMPILED_CORE=0 on a fresh scene), same info counts."""
+def test_rrt_connect_plans_through_the_compiled_core(monkeypatch):
+    """rrt_connect's plan and certify_motions through the compiled core never reach the numba
+    kernels (replaced by None here) and compile nothing; they give the numba path's path for the
+    same seed (DRAKE_MH_COMPILED_CORE=0 on a fresh scene), its counts and its answers; solve_motion
+    reports them."""
+    from drake_mh._support.compilation import compile_seconds
+    from drake_mh.planning.rrt_connect import planner
+
     results = {}
     for switch in ("1", "0"):
         monkeypatch.setenv(ENVIRONMENT, switch)
         scene = cluttered(3)
-        QA, QB = motions(scene, 2, 11, 0.01)
+        QA, QB = motions(scene, 40, 11, 0.01)
         problem = MotionProblem(PANDA, scene, QA[0], QA[1], clearance=0.01)
-        results[switch] = solve_motion(problem, "rrt_connect", seed=5, retime=False)
-    native, kernel = results["1"], results["0"]
-    assert native.success and kernel.success
-    assert native.info["compile_time"] == 0.0
-    np.testing.assert_allclose(native.path, kernel.path, rtol=0, atol=1e-9)
+        with monkeypatch.context() as patch:
+            if switch == "1":
+                patch.setattr(K, "plan_kernel", None)
+                patch.setattr(K, "certify_motions", None)
+            before = compile_seconds()
+            path, info = planner.plan(problem, QA[1:3], np.random.default_rng(5), None, None)
+            certified = certify_motions(scene, QA, QB, 0.01)
+            compiled = compile_seconds() - before
+            solved = solve_motion(problem, "rrt_connect", seed=5, retime=False)
+        results[switch] = path, info, certified, compiled, solved
+    (path, info, certified, compiled, solved), (path0, info0, certified0, _, solved0) = results["1"], results["0"]
+    assert compiled == 0.0 and info["prepare_time"] >= 0.0
+    assert path is not None and path0 is not None and info["goal"] == info0["goal"]
+    np.testing.assert_allclose(path, path0, rtol=0, atol=1e-9)
     for name in S.STAT_NAMES[:COUNTS]:
-        assert native.info[name] == kernel.info[name], name
+        assert info[name] == info0[name], name
+    assert 0.1 < certified0.mean() < 0.9
+    np.testing.assert_array_equal(certified, certified0)
+    assert solved.success and solved0.success
+    np.testing.assert_allclose(solved.path, solved0.path, rtol=0, atol=1e-9)
+    assert solved.info["motions"] == solved0.info["motions"]
 
 
 def test_bad_input_raises_the_planners_errors():
     """The planner validates in Python before the compiled call: DrakeMhError with the option or
     argument named (and the compiled entry rejects shapes it cannot read, never crashes)."""
     scene = cluttered(4)
-    problem = MotionProblem(PANDA, scene, PANDA.home, PANDA.home)
+    QA, QB = motions(scene, 2, 3, 0.0)
+    problem = MotionProblem(PANDA, scene, QA[0], QA[1])
     with pytest.raises(DrakeMhError, match="lanes"):
         solve_motion(problem, "rrt_connect", lanes=0)
     with pytest.raises(DrakeMhError, match="probes"):
@@ -189,9 +215,9 @@ def test_bad_input_raises_the_planners_errors():
     with pytest.raises(DrakeMhError, match="step"):
         solve_motion(problem, "rrt_connect", step=float("nan"))
     with pytest.raises(DrakeMhError):
-        certify_motions(scene, PANDA.home[None], np.full((1, PANDA.nq), np.nan))
+        certify_motions(scene, QA[:1], np.full((1, PANDA.nq), np.nan))
     with pytest.raises(DrakeMhError, match="hold as many"):
-        certify_motions(scene, np.tile(PANDA.home, (2, 1)), PANDA.home[None])
+        certify_motions(scene, QA, QB[:1])
     native, (ints, floats, v_WO, reach, lower, upper) = planner(scene)
     stats = np.zeros(len(S.STAT_NAMES))
     options = RRTConnectConfig()._vector
