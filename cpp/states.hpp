@@ -47,24 +47,6 @@ struct StateWorkspace {
     }
 };
 
-// Centres of offset o fixed in frame a over nv vectors of lanes (collision.py _centre_block).
-inline void centres_v(int64_t a, const double* o, const double* R, const double* p, int64_t L, int64_t nv,
-                      double* cx, double* cy, double* cz) {
-    const double o0 = o[0], o1 = o[1], o2 = o[2];
-    for (int64_t v = 0; v < nv; ++v) {
-        const int64_t b = v * W;
-        if (a < 0) {
-            store(cx + b, splat(o0)), store(cy + b, splat(o1)), store(cz + b, splat(o2));
-            continue;
-        }
-        const double* Ra = R + a * 9 * L + b;
-        const double* pa = p + a * 3 * L + b;
-        store(cx + b, load(pa) + load(Ra) * o0 + load(Ra + L) * o1 + load(Ra + 2 * L) * o2);
-        store(cy + b, load(pa + L) + load(Ra + 3 * L) * o0 + load(Ra + 4 * L) * o1 + load(Ra + 5 * L) * o2);
-        store(cz + b, load(pa + 2 * L) + load(Ra + 6 * L) * o0 + load(Ra + 7 * L) * o1 + load(Ra + 8 * L) * o2);
-    }
-}
-
 // Spheres s0 .. s1-1 (frame a) of lane b against obstacle k (states.py _spheres_state): CLEAR,
 // NEAR (low: the smallest clearance of those below margin) or COLLISION (returned at once).
 inline int spheres_state(const Packed& s, int64_t b, int64_t a, int64_t s0, int64_t s1, double margin,
@@ -210,15 +192,7 @@ inline int check_states(const Packed& s, const double* QT, int64_t ld, int64_t n
         for (int64_t ki = 0; ki < K; ++ki) {
             const int64_t k = ki == 0 ? k0 : (ki <= k0 ? ki - 1 : ki);
             if (s.o_gap[g * K + k] >= margin) continue;  // no configuration brings them near
-            double lim = margin + s.g_radius[g] + s.o_radius[k];  // bounding sphere vs bounding sphere
-            lim *= lim;
-            const double px = s.p_WO[3 * k], py = s.p_WO[3 * k + 1], pz = s.p_WO[3 * k + 2];
-            vi close{};
-            for (int64_t v = 0; v < nv; ++v) {
-                const vd dx = load(gx + v * W) - px, dy = load(gy + v * W) - py, dz = load(gz + v * W) - pz;
-                close |= (dx * dx + dy * dy + dz * dz < lim) & inm[v];
-            }
-            if (!any(close)) continue;
+            if (!bounding_close(s, g, k, margin, gx, gy, gz, nv, inm)) continue;  // bounding spheres apart
             int64_t c = 0;
             for (int64_t v = 0; v < nv; ++v) {  // the link's bounding sphere vs the obstacle's shape
                 const vi h = inm[v] & ~obstacle_free_v(s, k, margin + s.g_radius[g], load(gx + v * W),
