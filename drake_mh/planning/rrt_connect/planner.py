@@ -69,7 +69,8 @@ class RRTConnectConfig:
             margins) or ``"bisection"`` (the scene's
             :func:`drake_mh.scene.segments.certify_segments` on clearance values). Each is a
             compiled variant of the kernel: the first ``"bisection"`` plan of a machine compiles
-            its own (cached on disk after).
+            its own (cached on disk after). ``"bisection"`` always runs in the numba kernel;
+            ``"boolean"`` in the compiled core where it is built.
         goal_bias: probability of sampling a root of the other tree (a goal configuration when
             the start tree grows, the start when the goal tree grows) instead of a uniform
             sample.
