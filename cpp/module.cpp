@@ -60,7 +60,7 @@ static const char* FREE_ONE =
     "not in [0, inf), -3 a wrong size.";
 
 NB_MODULE(_native, m) {
-    m.doc() = "drake_mh's compiled core (C++): the sphere-model collision check, its forward kinematics and point clouds' k-d trees.";
+    m.doc() = "drake_mh's compiled core (C++): the sphere-model collision check, its forward kinematics, point clouds' k-d trees and rrt_connect's planner and certified motion check.";
     m.attr("simd_width") = dmh::W;
     m.attr("lanes") = dmh::CollisionChecker::LANES;
 

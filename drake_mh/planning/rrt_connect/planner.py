@@ -1,6 +1,5 @@
 """``rrt_connect`` and ``rrt_connect_smooth``: the Python side of the compiled planner.
 
-
 :func:`plan` reads the problem, binds the scene's compiled arrays (once per obstacle set),
 and makes one call that plans, certifies and shortcuts: into the compiled core's
 ``MotionPlanner`` (C++, ``cpp/rrt_connect.hpp``: the same draws and checks, so the same path for
