@@ -69,6 +69,12 @@ inline double segment_floor(const Packed& s, int64_t i, const double* qa, const 
     return best;
 }
 
+// From here on no multiply-add is fused (numba compiles check.py, shortcut.py and search.py
+// without fast-math): the same roundings as the kernels, so that a motion steered to exactly
+// `step` gets the same number of states (ceil of its length times the resolution).
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
+
 // The options of a plan's motion checks (certified_motion's arguments that stay fixed).
 struct MotionOptions {
     double clearance = 0.0, self_clearance = 0.0, resolution = 16.0, margin = 0.02;
@@ -279,5 +285,7 @@ private:
         return true;
     }
 };
+
+#pragma GCC pop_options
 
 }  // namespace dmh

@@ -14,6 +14,9 @@
 
 namespace dmh {
 
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")  // as motion.hpp's MotionChecker: the kernels' roundings
+
 // SplitMix64 (Steele, Lea & Flood, OOPSLA 2014): random.py next_u64 / uniform / below.
 struct SplitMix64 {
     uint64_t state;
@@ -298,5 +301,7 @@ inline PlanResult rrt_connect(MotionChecker& mc, const PlanOptions& po, const do
         a = next_tree(a);
     }
 }
+
+#pragma GCC pop_options
 
 }  // namespace dmh

@@ -156,8 +156,9 @@ inline void remember(StateWorkspace& ws, int64_t gi, int64_t k) {
 
 // Configurations QT[:, n0:n0+m] (QT (nq, ld) row-major, m <= ws.L) at two clearance levels
 // (states.py check_states; its docstring states the contract): COLLISION, NEAR or CLEAR;
-// unless COLLISION, out[n0 + b] (kept every margin) and tau[n0 + b] are written.
-inline int check_states(const Packed& s, const double* QT, int64_t ld, int64_t n0, int64_t m,
+// unless COLLISION, out[n0 + b] (kept every margin) and tau[n0 + b] are written. Not inlined:
+// its callers compile without fused multiply-adds (motion.hpp), it with them (as numba's).
+__attribute__((noinline)) inline int check_states(const Packed& s, const double* QT, int64_t ld, int64_t n0, int64_t m,
                         const double* link_margin, const double* pair_margin, const double* link_plain,
                         const double* pair_plain, const double* inv_lam, const double* speeds, StateWorkspace& ws,
                         bool* out, double* tau) {
