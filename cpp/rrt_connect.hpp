@@ -68,7 +68,8 @@ inline std::vector<double> arc_lengths(const Path& path) {
     std::vector<double> s(M, 0.0);
     for (int64_t k = 0; k + 1 < M; ++k) {
         double d = 0.0;
-        for (int64_t j = 0; j < path.nq; ++j) d += (path.row(k + 1)[j] - path.row(k)[j]) * (path.row(k + 1)[j] - path.row(k)[j]);
+        const double *a = path.row(k), *b = path.row(k + 1);
+        for (int64_t j = 0; j < path.nq; ++j) d += (b[j] - a[j]) * (b[j] - a[j]);
         s[k + 1] = s[k] + std::sqrt(d);
     }
     return s;

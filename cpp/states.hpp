@@ -240,7 +240,8 @@ __attribute__((noinline)) inline int check_states(const Packed& s, const double*
         const double *bx = Gc + gb * L, *by = Gc + (G + gb) * L, *bz = Gc + (2 * G + gb) * L;
         for (int64_t v = 0; v < nv; ++v) {
             const int64_t o = v * W;
-            const vd dx = load(ax + o) - load(bx + o), dy = load(ay + o) - load(by + o), dz = load(az + o) - load(bz + o);
+            const vd dx = load(ax + o) - load(bx + o), dy = load(ay + o) - load(by + o),
+                     dz = load(az + o) - load(bz + o);
             const vi near = inm[v] & (dx * dx + dy * dy + dz * dz < lim);
             if (!any(near)) continue;
             for (int j = 0; j < W; ++j) {
