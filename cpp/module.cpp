@@ -15,6 +15,7 @@
 #include "fk.hpp"
 #include "kdtree.hpp"
 #include "lm.hpp"
+#include "planner.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -78,7 +79,9 @@ static const char* FREE_ONE =
     "not in [0, inf), -3 a wrong size.";
 
 NB_MODULE(_native, m) {
-    m.doc() = "drake_mh's compiled core (C++): the sphere-model collision check and clearance values, certified segments, its forward kinematics and point clouds' k-d trees.";
+    m.doc() = "drake_mh's compiled core (C++): the sphere-model collision check and clearance values, certified "
+              "segments, forward kinematics, point clouds' k-d trees, rrt_connect's planner and certified motion check, "
+              "the Levenberg-Marquardt IK, inverse dynamics and trajectory bounds.";
     m.attr("simd_width") = dmh::W;
     m.attr("lanes") = dmh::CollisionChecker::LANES;
 
@@ -214,6 +217,8 @@ NB_MODULE(_native, m) {
         "min_piece"_a, "max_evals"_a,
         "(status, t_stop, lower, lower_self, evals) (M,) each of the segments QA[i] -> QB[i] (M, nq):\n"
         "drake_mh.scene.kernels.segments.certify_segments, v_WO (K, 3) the obstacles' displacement per segment.");
+
+    bind_planner(m);
 
     m.def("kd_build", [](Points P) {
         const size_t N = P.shape(0);

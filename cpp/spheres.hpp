@@ -123,6 +123,39 @@ inline vi obstacle_free_v(const Packed& s, int64_t k, double reach, vd x, vd y, 
     return u * u + v * v + w * w >= lim;
 }
 
+// Centres of offset o fixed in frame a over nv vectors of lanes (collision.py _centre_block).
+inline void centres_v(int64_t a, const double* o, const double* R, const double* p, int64_t L, int64_t nv,
+                      double* cx, double* cy, double* cz) {
+    const double o0 = o[0], o1 = o[1], o2 = o[2];
+    for (int64_t v = 0; v < nv; ++v) {
+        const int64_t b = v * W;
+        if (a < 0) {
+            store(cx + b, splat(o0)), store(cy + b, splat(o1)), store(cz + b, splat(o2));
+            continue;
+        }
+        const double* Ra = R + a * 9 * L + b;
+        const double* pa = p + a * 3 * L + b;
+        store(cx + b, load(pa) + load(Ra) * o0 + load(Ra + L) * o1 + load(Ra + 2 * L) * o2);
+        store(cy + b, load(pa + L) + load(Ra + 3 * L) * o0 + load(Ra + 4 * L) * o1 + load(Ra + 5 * L) * o2);
+        store(cz + b, load(pa + 2 * L) + load(Ra + 6 * L) * o0 + load(Ra + 7 * L) * o1 + load(Ra + 8 * L) * o2);
+    }
+}
+
+// Whether, in some lane set in mask (nv vectors), link g's bounding sphere (centres gx, gy, gz)
+// is closer than clearance to obstacle k's bounding sphere.
+inline bool bounding_close(const Packed& s, int64_t g, int64_t k, double clearance, const double* gx,
+                           const double* gy, const double* gz, int64_t nv, const vi* mask) {
+    double lim = clearance + s.g_radius[g] + s.o_radius[k];
+    lim *= lim;
+    const double px = s.p_WO[3 * k], py = s.p_WO[3 * k + 1], pz = s.p_WO[3 * k + 2];
+    vi close{};
+    for (int64_t v = 0; v < nv; ++v) {
+        const vd dx = load(gx + v * W) - px, dy = load(gy + v * W) - py, dz = load(gz + v * W) - pz;
+        close |= (dx * dx + dy * dy + dz * dz < lim) & mask[v];
+    }
+    return any(close);
+}
+
 // Spheres s0 .. s1-1 (frame a) of lane b all at least clearance from obstacle k.
 inline bool range_free(const Packed& s, int64_t b, int64_t a, int64_t s0, int64_t s1, double clearance,
                        const double* R, const double* p, int64_t L, int64_t k) {
