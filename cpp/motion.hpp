@@ -152,6 +152,20 @@ public:
         return true;
     }
 
+    // Whether a probe state collides at the plain clearances (check.py probe_collides): one
+    // batched call; a probe certifies nothing, it may only reject.
+    bool probe_collides(const double* qa, const double* qb, bool interior) {
+        const int64_t probes = interior ? o.interior : o.probes;
+        if (probes == 0) return false;
+        for (int64_t w = 0; w < probes; ++w) {
+            const double t = interior ? INTERIOR_PROBES[w] : PROBES[w];
+            for (int64_t j = 0; j < nq; ++j) PT[j * probes + w] = qa[j] + t * (qb[j] - qa[j]);
+        }
+        return check_states(s, PT.data(), probes, 0, probes, probe_link.data(), probe_pair.data(), probe_link.data(),
+                            probe_pair.data(), inv_lam.data(), speeds.data(), ws,
+                            reinterpret_cast<bool*>(probe_out.data()), probe_tau.data()) == COLLISION;
+    }
+
 private:
     std::vector<double> lam, inv_lam, speeds, margin_link, margin_pair, plain_link, plain_pair, probe_link,
         probe_pair, PT, probe_tau, QT, tau;
@@ -172,19 +186,6 @@ private:
             else
                 pair[c - G] = o.self_clearance + scale * lam_[c] + 1e-12;
         }
-    }
-
-    // Whether a probe state collides at the plain clearances (check.py probe_collides).
-    bool probe_collides(const double* qa, const double* qb, bool interior) {
-        const int64_t probes = interior ? o.interior : o.probes;
-        if (probes == 0) return false;
-        for (int64_t w = 0; w < probes; ++w) {
-            const double t = interior ? INTERIOR_PROBES[w] : PROBES[w];
-            for (int64_t j = 0; j < nq; ++j) PT[j * probes + w] = qa[j] + t * (qb[j] - qa[j]);
-        }
-        return check_states(s, PT.data(), probes, 0, probes, probe_link.data(), probe_pair.data(), probe_link.data(),
-                            probe_pair.data(), inv_lam.data(), speeds.data(), ws,
-                            reinterpret_cast<bool*>(probe_out.data()), probe_tau.data()) == COLLISION;
     }
 
     // Conservative advancement from both ends of each uncertain piece (check.py _refine).

@@ -14,7 +14,7 @@
 #include <mutex>
 #include <vector>
 
-#include "rrt_connect.hpp"
+#include "lazy_prm.hpp"
 
 namespace dmh {
 
@@ -55,6 +55,20 @@ public:
         return rrt_connect(*mc_, po, q_start, goals, G, lower, upper, seed, max_nodes, time_limit);
     }
 
+    // Informed lazy PRM* (lazy_prm.hpp prm_search), its samples checked by the boolean check of
+    // the same buffers (built at the first call).
+    int prm(const PrmOptions& po, const double* q_start, const double* goals, int64_t G, const double* init_path,
+            int64_t M0, int64_t init_goal, const double* lower, const double* upper, uint64_t seed,
+            int64_t max_samples, double time_limit, std::vector<double>& path, int64_t& goal) {
+        if (!checker_) checker_ = std::make_unique<CollisionChecker>(ints_, floats_);
+        double* stats = mc_->stats;
+        for (int64_t i = 0; i < PRM_N_STATS; ++i) stats[i] = 0.0;
+        SplitMix64 rng{seed};
+        const Deadline clock{now(), time_limit};
+        return prm_search(*mc_, *checker_, rng, clock, q_start, goals, G, init_path, M0, init_goal, lower, upper,
+                          max_samples, po, path, goal);
+    }
+
     void certify(const double* QA, const double* QB, int64_t M, bool* out) {
         const int64_t nq = mc_->nq;
         for (int64_t i = 0; i < M; ++i) out[i] = mc_->certified_motion(QA + i * nq, QB + i * nq, false);
@@ -66,6 +80,7 @@ private:
     Packed s_;
     bool ok_ = false, configured_ = false;
     std::unique_ptr<MotionChecker> mc_;
+    std::unique_ptr<CollisionChecker> checker_;
 };
 
 }  // namespace dmh
@@ -149,6 +164,45 @@ inline nb::tuple plan(dmh::MotionPlanner& self, CVec q_start, CMat goals, CVec l
     return nb::make_tuple(nb::ndarray<nb::numpy, double>(path, {M, nq}, owner), result.outcome, result.goal);
 }
 
+inline nb::tuple prm(dmh::MotionPlanner& self, CVec q_start, CMat goals, CMat init_path, int64_t init_goal, CVec lower,
+                     CVec upper, double clearance, double self_clearance, uint64_t seed, int64_t max_samples,
+                     double time_limit, CVec options, Stats stats) {
+    const size_t nq = (size_t)self.nq(), G = goals.shape(0), M0 = init_path.shape(0);
+    check(q_start.shape(0) == nq && goals.shape(1) == nq && G >= 1 && lower.shape(0) == nq && upper.shape(0) == nq &&
+              (M0 == 0 || init_path.shape(1) == nq) && (M0 < 2 || (init_goal >= 0 && (size_t)init_goal < G)),
+          "prm: q_start (nq,), goals (G >= 1, nq), init_path (M, nq) to goals[init_goal], lower and upper (nq,)");
+    check(options.shape(0) == 12 && stats.shape(0) == dmh::PRM_N_STATS, "prm: options (12,) and stats (N_STATS,)");
+    check(max_samples >= 0 && !std::isnan(time_limit), "prm: max_samples >= 0 and a time limit that is a number");
+    for (size_t j = 0; j < nq; ++j)
+        check(std::isfinite(q_start.data()[j]) && std::isfinite(lower.data()[j]) && std::isfinite(upper.data()[j]),
+              "prm: q_start and the limits must be finite");
+    for (size_t j = 0; j < G * nq; ++j) check(std::isfinite(goals.data()[j]), "prm: the goals must be finite");
+    for (size_t j = 0; j < M0 * nq; ++j) check(std::isfinite(init_path.data()[j]), "prm: init_path must be finite");
+    const double* op = options.data();  // lazy_prm_star/search.py OPTION_NAMES
+    const dmh::MotionOptions mo = motion_options(clearance, self_clearance, op[2], op[3], (int64_t)op[4],
+                                                 (int64_t)op[5], (int64_t)op[6], (int64_t)op[7], (int64_t)op[8], false);
+    dmh::PrmOptions po;
+    po.batch = (int64_t)op[0], po.k_scale = op[1], po.shortcut_iterations = (int64_t)op[9];
+    po.shortcut_min_gain = op[10];
+    check(po.batch >= 1 && std::isfinite(po.k_scale) && po.k_scale > 0.0 && po.shortcut_iterations >= 0,
+          "prm: batch >= 1, k_scale > 0, shortcut_iterations >= 0");
+    std::vector<double> best;
+    int64_t goal = -1;
+    int outcome;
+    {
+        nb::gil_scoped_release unlocked;
+        std::lock_guard<std::mutex> one_call(self.busy);
+        self.set_options(mo, stats.data());
+        outcome = self.prm(po, q_start.data(), goals.data(), (int64_t)G, init_path.data(), (int64_t)M0, init_goal,
+                           lower.data(), upper.data(), seed, max_samples, time_limit, best, goal);
+    }
+    const size_t M = best.size() / nq;
+    double* path = new double[M * nq + 1];
+    std::copy(best.begin(), best.end(), path);
+    nb::capsule owner(path, [](void* p) noexcept { delete[] static_cast<double*>(p); });
+    return nb::make_tuple(nb::ndarray<nb::numpy, double>(path, {M, nq}, owner), outcome, goal);
+}
+
 inline nb::object certify_motions(dmh::MotionPlanner& self, CMat QA, CMat QB, double clearance, double self_clearance,
                                   double resolution, double margin, int64_t lanes0, int64_t lanes1, int64_t probes,
                                   int64_t max_evals, Stats stats) {
@@ -186,6 +240,10 @@ inline void bind_planner(nanobind::module_& m) {
              "self_clearance"_a, "seed"_a, "max_nodes"_a, "time_limit"_a, "options"_a, "stats"_a,
              "(path (M, nq), outcome, goal) of plan_kernel's arguments (options: search.OPTION_NAMES; its clock entry\n"
              "is not read), stats (len(STAT_NAMES),) float64 set; path empty (0, nq) unless FOUND.")
+        .def("prm", &planner_binding::prm, "q_start"_a, "goals"_a, "init_path"_a, "init_goal"_a, "lower"_a, "upper"_a,
+             "clearance"_a, "self_clearance"_a, "seed"_a, "max_samples"_a, "time_limit"_a, "options"_a, "stats"_a,
+             "(path (M, nq), outcome, goal) of lazy_prm_star/search.py prm_kernel's arguments (options: its\n"
+             "OPTION_NAMES, the clock entry not read), stats (N_STATS,) float64 set; path empty unless FOUND.")
         .def("certify_motions", &planner_binding::certify_motions, "QA"_a, "QB"_a, "clearance"_a, "self_clearance"_a,
              "resolution"_a, "margin"_a, "first_lanes"_a, "block_lanes"_a, "probes"_a, "max_evals"_a, "stats"_a,
              "(M,) bool: search.certify_motions's answers for the motions QA[i] -> QB[i] (M, nq); stats added to.");

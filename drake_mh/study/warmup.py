@@ -86,7 +86,8 @@ def _verification() -> None:
 
 
 def _lazy_prm_star() -> None:
-    """``lazy_prm_star``'s kernel (its ``prepare``, which loads ``rrt_connect``'s too)."""
+    """``lazy_prm_star``'s kernel (its ``prepare``, which loads ``rrt_connect``'s too). Where the
+    compiled core is built both planners run in C++: nothing compiles."""
     from types import SimpleNamespace
 
     from drake_mh.planning.lazy_prm_star import planner

@@ -98,13 +98,14 @@ _COUNTS = tuple((name, S.STAT_NAMES.index(name)) for name in (
 
 
 def prepare(problem, **options) -> float:
-    """Compile or load ``rrt_connect``'s kernel and this one (once per process); seconds taken.
-    From an empty numba cache this kernel compiles in about 3.5 minutes (with ``rrt_connect``'s
-    kernels already cached), from the cache it loads in about 0.15 s."""
+    """Bind the problem's scene and, where the numba kernels are the ones called (no compiled
+    core, or ``DRAKE_MH_COMPILED_CORE=0``), compile or load ``rrt_connect``'s kernel and this one
+    (once per process); seconds taken. From an empty numba cache this kernel compiles in about
+    3.5 minutes, from the cache it loads in about 0.15 s; the compiled core compiles nothing."""
     global _PREPARED
     start = time.perf_counter()
     rrt.prepare(problem)
-    if not _PREPARED:
+    if not _PREPARED and rrt.compiled_planner(problem.scene) is None:  # (the compiled core compiles nothing)
         _kernel_call(problem, problem.q_start[None], np.empty((0, len(problem.q_start))), 0, 0, 1, 1.0,
                      LazyPRMStarConfig(batch=1, shortcut_iterations=0))
         _PREPARED = True
@@ -114,6 +115,14 @@ def prepare(problem, **options) -> float:
 def _kernel_call(problem, goals, init_path, init_goal, seed, samples, time_limit, config):
     ints, floats, v_WO, reach, lower, upper = scene_arguments(problem.scene)
     stats = np.zeros(K.N_STATS)
+    native = rrt.compiled_planner(problem.scene)
+    if native is not None:  # the compiled core: the same search, nothing compiled at call time
+        path, outcome, goal = native.prm(
+            np.ascontiguousarray(problem.q_start, dtype=float), np.ascontiguousarray(goals, dtype=float),
+            np.ascontiguousarray(init_path, dtype=float).reshape(-1, len(problem.q_start)), int(init_goal), lower,
+            upper, float(problem.clearance), float(problem.self_clearance), int(seed) % 2**64, int(samples),
+            float(time_limit), config.vector(), stats)
+        return path, outcome, int(goal), stats
     path, outcome, goal = K.prm_kernel(
         np.ascontiguousarray(problem.q_start, dtype=float), np.ascontiguousarray(goals, dtype=float),
         np.ascontiguousarray(init_path, dtype=float), int(init_goal), lower, upper, ints, floats, v_WO, reach,

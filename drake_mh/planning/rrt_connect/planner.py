@@ -202,6 +202,14 @@ def _bind(scene) -> tuple:
     return bound + (_ENTRIES.setdefault(tuple(numba.typeof(a) for a in bound), {}), np.zeros(_NSTATS), native)
 
 
+def compiled_planner(scene):
+    """The compiled core's ``MotionPlanner`` bound to the scene's current obstacles (kept with the
+    scene's binding, :func:`_binding`), or None where the core is not built or was switched off
+    when the binding was made. Its ``prm`` runs ``lazy_prm_star``'s search on the same motion
+    checks."""
+    return _binding(scene)[8]
+
+
 def _call(binding: tuple, arguments: tuple):
     """:func:`.search.plan_kernel` on ``arguments`` (which hold the ``binding``'s arrays): the
     binding's compiled-core planner where it has one and ``by_values`` is None (its ``plan`` takes
