@@ -17,7 +17,7 @@ import pytest
 
 import drake_mh  # noqa: F401 - installs the compile listener
 from drake_mh._support import compilation as _compile
-from drake_mh.scene.compiled_check import compiled_core
+from drake_mh._support.native import ENVIRONMENT, compiled_core
 
 
 def _kernel_in(module: str, source: str, name: str):
@@ -117,33 +117,33 @@ def test_shared_block_copies_equal_numba_s_own_copies():
         assert len({id(b.scope) for b in ours.values()}) == len({id(b.scope) for b in blocks.values()})
 
 
-@pytest.mark.slow
-def test_a_first_plan_says_what_compiles_before_it_compiles(tmp_path):
-    """The first-plan script from an empty cache, in a new process: the notice is on stderr after
-    the script started and while a call is still compiling (the marker that follows the plan not
-    yet written); the process is then stopped, so the test does not wait for the compilation.
-    Where the compiled core is built, the ``MotionProblem`` compiled nothing: the first notice
-    comes from ``solve_motion``."""
+FIRST_PLAN = """
+    import sys
+    import numpy as np
+    import drake_mh
+    from drake_mh.planning import MotionProblem, solve_motion
+    from drake_mh.scene import Box, Scene, Sphere
+    panda = drake_mh.load_robot("panda")
+    scene = Scene(panda)
+    scene.add("ball", Sphere(0.1), [0.5, 0.0, 0.5])
+    scene.add("table", Box(1.0, 1.0, 0.05), [0.5, 0.0, -0.05])
+    print("MARK before", file=sys.stderr, flush=True)
+    problem = MotionProblem(panda, scene, panda.home.copy(), np.array([1.0, 0.3, 0.0, -1.5, 0.0, 1.8, 0.7]),
+                            clearance=0.01)
+    print("MARK problem built", file=sys.stderr, flush=True)
+    result = solve_motion(problem, "rrt_connect", seed=0)
+    print("MARK planned", result.success, result.info["compile_time"], file=sys.stderr, flush=True)
+"""
+
+
+def _first_plan_lines(tmp_path, core: str) -> list[str]:
+    """stderr of the first-plan script in a new process with an empty kernel cache, up to the
+    first compile notice or the end of the plan (the process is then stopped)."""
     script = tmp_path / "first_plan.py"
-    script.write_text(textwrap.dedent("""
-        import sys
-        import numpy as np
-        import drake_mh
-        from drake_mh.planning import MotionProblem, solve_motion
-        from drake_mh.scene import Box, Scene, Sphere
-        panda = drake_mh.load_robot("panda")
-        scene = Scene(panda)
-        scene.add("ball", Sphere(0.1), [0.5, 0.0, 0.5])
-        scene.add("table", Box(1.0, 1.0, 0.05), [0.5, 0.0, -0.05])
-        print("MARK before", file=sys.stderr, flush=True)
-        problem = MotionProblem(panda, scene, panda.home.copy(), np.array([1.0, 0.3, 0.0, -1.5, 0.0, 1.8, 0.7]),
-                                clearance=0.01)
-        print("MARK problem built", file=sys.stderr, flush=True)
-        solve_motion(problem, "rrt_connect", seed=0)
-        print("MARK planned", file=sys.stderr, flush=True)
-    """))
+    script.write_text(textwrap.dedent(FIRST_PLAN))
     env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "DRAKE_MH_NUMBA_CACHE_DIR")}
     env["DRAKE_MH_CACHE"] = str(tmp_path / "cache")
+    env[ENVIRONMENT] = core
     process = subprocess.Popen([sys.executable, str(script)], env=env, stderr=subprocess.PIPE, text=True)
     watchdog = threading.Timer(1800, process.kill)
     watchdog.start()
@@ -157,8 +157,28 @@ def test_a_first_plan_says_what_compiles_before_it_compiles(tmp_path):
         process.kill()
         process.communicate()
         watchdog.cancel()
+    return lines
+
+
+@pytest.mark.slow
+def test_a_first_plan_compiles_nothing_with_the_compiled_core(tmp_path):
+    """The first-plan script from an empty cache, in a new process, with the compiled core (what
+    the install line builds): it plans, retimes and verifies without compiling any kernel."""
+    if compiled_core() is None:
+        pytest.skip("the compiled core drake_mh._native is not built (pip install . builds it)")
+    lines = _first_plan_lines(tmp_path, "1")
+    assert lines and lines[-1].startswith("MARK planned"), "\n".join(lines[-40:])
+    assert not any(line.startswith("drake_mh: compiling") for line in lines)
+    assert lines[-1].split()[2:] == ["True", "0.0"]  # success, and no compile time inside the call
+
+
+@pytest.mark.slow
+def test_a_first_plan_says_what_compiles_before_it_compiles(tmp_path):
+    """The same script on the numba kernels (``DRAKE_MH_COMPILED_CORE=0``): the notice is on
+    stderr after the script started and while a call is still compiling (the marker that follows
+    the plan not yet written), naming where it is cached; the process is then stopped, so the
+    test does not wait for the compilation."""
+    lines = _first_plan_lines(tmp_path, "0")
     assert lines and lines[-1].startswith("drake_mh: compiling"), "\n".join(lines[-40:])
     assert "MARK before" in lines  # announced after the script started, while the call still runs
-    if compiled_core() is not None:  # the problem's checks ran in the C++ core
-        assert "MARK problem built" in lines, "\n".join(lines[-40:])
     assert str(tmp_path / "cache") in lines[-1]  # says where it is cached
