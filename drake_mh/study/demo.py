@@ -26,17 +26,10 @@ logger = logging.getLogger(__name__)
 
 #: studies the demo runs (quick grid), in order; the IK comparison joins when it exists
 DEMO_STUDIES: tuple[str, ...] = ("bench_kinematics", "fk_accuracy", "retime_benchmark")
-#: optional studies added to the demo when their script exists. motion_benchmark's quick form (one
-#: table problem, five planners, 1 s each) is the slowest part from an empty numba cache: 129 s of a
-#: 195 s demo (load 1, AMD EPYC, 2 cores) without the background compilation, 51 s compiling the
-#: verification kernels and 73 s rrt_connect's kernel; the whole demo takes 18 s when the cache is warm.
+#: optional studies added to the demo when their script exists
 OPTIONAL_DEMO_STUDIES: tuple[str, ...] = ("ik_comparison", "motion_benchmark")
-#: the study whose kernels compile in two background processes from the demo's start
-#: (:mod:`drake_mh.study.warmup`): from an empty numba cache the demo took 195-199 s without them,
-#: 171 s with them (2026-11-24); 181.6 s on 11-25, 121.5 s after rrt_connect's kernel stopped
-#: compiling its unused certification mode, 146 s for that code and 160 s for 472e1b9 later that
-#: day, 145 and 133 s after the compiled penetration correction (its kernel compiles 5 s longer)
-#: and the static gaps (18 s with a warm cache throughout)
+#: the study whose numba kernels compile in two background processes from the demo's start
+#: (:mod:`drake_mh.study.warmup`) where the compiled core is not built (with it, they run in C++)
 BACKGROUND_COMPILE = "motion_benchmark"
 #: figures of a study report shown on the demo page, in order of preference (at most two)
 KEY_FIGURES: tuple[str, ...] = ("boxplots", "convergence")

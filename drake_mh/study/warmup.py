@@ -239,8 +239,13 @@ def _run(target) -> None:
 def start() -> list:
     """Starts the compilation of the quick ``motion_benchmark``'s kernels in two new processes
     (``spawn``): ``rrt_connect``'s, and its problem set's and verification's; an empty list
-    if processes cannot start. Nothing here is timed or reported: a failure only means the
-    study compiles for itself."""
+    if processes cannot start, or where the compiled core is built (those kernels run in it:
+    nothing to compile). Nothing here is timed or reported: a failure only means the study
+    compiles for itself."""
+    from drake_mh._support.native import compiled_core
+
+    if compiled_core() is not None:
+        return []
     processes = []
     for target in (_rrt_connect, _demo_planning):
         try:
