@@ -11,6 +11,7 @@
 
 #include "collision.hpp"
 #include "dynamics.hpp"
+#include "exact_bind.hpp"
 #include "fk.hpp"
 #include "kdtree.hpp"
 #include "lm.hpp"
@@ -66,6 +67,7 @@ NB_MODULE(_native, m) {
     m.doc() = "drake_mh's compiled core (C++): the sphere-model collision check, its forward kinematics and point clouds' k-d trees.";
     m.attr("simd_width") = dmh::W;
     m.attr("lanes") = dmh::CollisionChecker::LANES;
+    dmh_bind::bind_exact(m);
 
     nb::class_<dmh::Kinematics>(m, "Kinematics",
         "Batched forward kinematics of a compiled chain (drake_mh.kinematics.BatchKinematics): ints =\n"

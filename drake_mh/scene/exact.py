@@ -15,6 +15,10 @@ How distances are computed (:class:`ExactDistances`, one per scene):
   cylinders, the certified GJK of :mod:`drake_mh.scene.kernels.gjk` for the other shapes (Drake's
   GJK was measured up to 16 mm optimistic there). These pairs are filtered out of Drake's
   query in the scene's context (:meth:`ExactDistances.exclude`).
+  That call runs in the compiled core ``drake_mh._native`` where it is built (the same
+  arithmetic in C++, ``cpp/exact.hpp``: nothing compiled at call time), in the numba kernel
+  where it is not or ``DRAKE_MH_COMPILED_CORE=0`` (read when the scene builds its
+  :class:`ExactDistances`).
 * Where the exact method does not hold — a capsule's axis inside a box or cylinder, or
   overlapping GJK cores — Drake's ``ComputeSignedDistancePairClosestPoints`` is asked for that
   pair and the smaller value kept (Drake's penetration depth).
@@ -41,6 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drake_mh._support.native import compiled_core
 from drake_mh.scene.kernels import exact as X
 from drake_mh.scene.kernels import gjk
 from drake_mh.scene.segment_distance import primitive_code
@@ -271,6 +276,8 @@ class ExactDistances:
         self.R_WG = np.zeros((G, 3, 3))
         self.p_WG = np.zeros((G, 3))
         self._chain = robot.batch.chain_arrays
+        core = compiled_core()
+        self._pairs = X.exact_pairs if core is None else core.exact_pairs  # the same arguments and answer
         self._shape = (robot.nq,)
         self._state: _ObstacleState | None = None
 
@@ -295,7 +302,7 @@ class ExactDistances:
 
     def _run(self, q, max_distance: float, min_only: bool):
         state = self.state()
-        best, n_need, n_rows = X.exact_pairs(
+        best, n_need, n_rows = self._pairs(
             q, *self._chain, self.g_int, self.g_float, state.vertices, state.o_int, state.o_float, self.self_pairs,
             max_distance, min_only, gjk.TOLERANCE, self.R_WG, self.p_WG, state.out, state.status, state.need,
             state.order)
