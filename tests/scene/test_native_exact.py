@@ -17,7 +17,8 @@ from references import FreshDrake
 from sphere_fixtures import mesh_arm_urdf, primitive_arm_urdf
 
 CORE = compiled_core()
-pytestmark = pytest.mark.skipif(CORE is None, reason="the compiled core drake_mh._native is not built")
+pytestmark = pytest.mark.skipif(
+    CORE is None, reason="the compiled core drake_mh._native is not built or switched off (DRAKE_MH_COMPILED_CORE=0)")
 
 PANDA = drake_mh.load_robot("panda")
 BRACKET = Mesh(Path(__file__).resolve().parents[1] / "data" / "bracket.obj", scale=2.0)
