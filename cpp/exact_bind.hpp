@@ -84,7 +84,7 @@ inline nb::tuple exact_pairs(nb::ndarray<const double, nb::ndim<1>, nb::device::
     return nb::make_tuple(best, n_need, n_rows);
 }
 
-inline void correct_clearances(Out values, In points_W, In radii, In c_G, In g_bound, InI g_start, InI g_kind,
+inline void correct_clearances(Out values, nb::ndarray<const double, nb::ndim<3>, nb::device::cpu> points_W, In radii, In c_G, In g_bound, InI g_start, InI g_kind,
                                In half_length, In radius, In VH, InI v_start, In NH, In OH, InI f_start, In EH,
                                InI e_start, In excess, InI kinds, In R_WO, In p_WO, In dims, In corners, InI n_corners,
                                In normals, InI n_normals, In edges, InI n_edges) {
@@ -117,6 +117,7 @@ inline void correct_clearances(Out values, In points_W, In radii, In c_G, In g_b
                     n_edges.data()[k] >= 0 && n_edges.data()[k] <= (int64_t)edges.shape(1),
                 "an obstacle's polytope counts exceed its padded rows");
     dmh::penetration::Cores C;
+    for (int i = 0; i < 3; ++i) C.ps[i] = (int64_t)points_W.stride(i);
     C.n = n, C.K = K, C.G = G, C.Vc = (int64_t)corners.shape(1), C.Fn = (int64_t)normals.shape(1),
     C.Ee = (int64_t)edges.shape(1);
     C.values = values.data(), C.points_W = points_W.data(), C.radii = radii.data(), C.c_G = c_G.data();

@@ -194,6 +194,7 @@ inline double sdf_at(int64_t kind, const double* d, const double* R, const doubl
 // The arrays of correct_clearances (penetration.py, its docstring and core_arrays).
 struct Cores {
     int64_t n = 0, K = 0, G = 0, Vc = 0, Fn = 0, Ee = 0;  // Vc, Fn, Ee: padded widths of corners, normals, edges
+    int64_t ps[3] = {0, 0, 0};  // points_W's strides (elements): it is read in place, whatever its layout
     double* values;
     const double *points_W, *radii, *c_G, *g_bound, *half_length, *radius, *VH, *NH, *OH, *EH, *excess;
     const int64_t *g_start, *g_kind, *v_start, *f_start, *e_start;
@@ -206,7 +207,8 @@ struct Cores {
 inline void correct_clearances(const Cores& C) {
     const int64_t n = C.n, K = C.K, G = C.G;
     std::vector<double> VO(3 * std::max<int64_t>(C.Vc, 2)), NO(3 * std::max<int64_t>(C.Fn, 1)),
-        EO(3 * std::max<int64_t>(C.Ee, 1)), R_WG(9 * std::max<int64_t>(G, 1)), p_WG(3 * std::max<int64_t>(G, 1));
+        EO(3 * std::max<int64_t>(C.Ee, 1)), R_WG(9 * std::max<int64_t>(G, 1)), p_WG(3 * std::max<int64_t>(G, 1)),
+        row(12 * std::max<int64_t>(G, 1));
     Packed s{};  // the obstacles as point_distance reads them (a mesh's pieces, clouds)
     s.K = K, s.kinds = C.kinds, s.R_WO = C.R_WO, s.p_WO = C.p_WO, s.dims = C.dims;
     auto centre = [&](int64_t g, const double* c, double* x) {
@@ -215,7 +217,9 @@ inline void correct_clearances(const Cores& C) {
         for (int i = 0; i < 3; ++i) x[i] = p[i] + R[3 * i] * c[0] + R[3 * i + 1] * c[1] + R[3 * i + 2] * c[2];
     };
     for (int64_t r = 0; r < n; ++r) {
-        const double* pts = C.points_W + r * 4 * G * 3;
+        for (int64_t j = 0; j < 4 * G; ++j)  // this configuration's points (4 G, 3), contiguous
+            for (int i = 0; i < 3; ++i) row[3 * j + i] = C.points_W[r * C.ps[0] + j * C.ps[1] + i * C.ps[2]];
+        const double* pts = row.data();
         for (int64_t g = 0; g < G; ++g)
             for (int i = 0; i < 3; ++i) {
                 p_WG[3 * g + i] = pts[12 * g + i];
