@@ -233,6 +233,7 @@ class _ObstacleState:
                                   + [exact.links[b] for _, b in exact.self_pairs], dtype=object)
         self.row_self = np.array([False] * (G * K) + [True] * S, dtype=bool)
         self.query_needed = exact.drake_self or (exact.drake_links and K > 0)
+        self.compiled = None  # the compiled core's ExactPairs of these arrays, made on first use
 
 
 class ExactDistances:
@@ -276,8 +277,7 @@ class ExactDistances:
         self.R_WG = np.zeros((G, 3, 3))
         self.p_WG = np.zeros((G, 3))
         self._chain = robot.batch.chain_arrays
-        core = compiled_core()
-        self._pairs = X.exact_pairs if core is None else core.exact_pairs  # the same arguments and answer
+        self._core = compiled_core()
         self._shape = (robot.nq,)
         self._state: _ObstacleState | None = None
 
@@ -302,10 +302,18 @@ class ExactDistances:
 
     def _run(self, q, max_distance: float, min_only: bool):
         state = self.state()
-        best, n_need, n_rows = self._pairs(
-            q, *self._chain, self.g_int, self.g_float, state.vertices, state.o_int, state.o_float, self.self_pairs,
-            max_distance, min_only, gjk.TOLERANCE, self.R_WG, self.p_WG, state.out, state.status, state.need,
-            state.order)
+        if self._core is not None:  # the compiled core: the same arrays, checked and held once per state
+            if state.compiled is None:
+                state.compiled = self._core.ExactPairs(
+                    *self._chain, self.g_int, self.g_float, state.vertices, state.o_int, state.o_float,
+                    self.self_pairs, gjk.TOLERANCE, self.R_WG, self.p_WG, state.out, state.status, state.need,
+                    state.order)
+            best, n_need, n_rows = state.compiled(q, max_distance, min_only)
+        else:
+            best, n_need, n_rows = X.exact_pairs(
+                q, *self._chain, self.g_int, self.g_float, state.vertices, state.o_int, state.o_float,
+                self.self_pairs, max_distance, min_only, gjk.TOLERANCE, self.R_WG, self.p_WG, state.out, state.status,
+                state.need, state.order)
         if n_need < 0:
             self.robot.check_q(q)  # raises, naming the joints
         return state, best, n_need, n_rows

@@ -194,7 +194,7 @@ def test_scene_distances_equal_with_either_backend_and_drakes_where_exact(monkey
         numba_scene = _scene(robot, 3, reach, self_collision=True)
         numba_scene._exact  # built now: it reads the switch
         monkeypatch.delenv(ENVIRONMENT)
-        assert compiled._exact._pairs is CORE.exact_pairs and numba_scene._exact._pairs is X.exact_pairs
+        assert compiled._exact._core is CORE and numba_scene._exact._core is None
         drake = _drake_per_obstacle(robot, compiled) if robot is not robots[1][0] else None
         balls = {name for name, o in compiled.obstacles.items() if isinstance(o.shape, Sphere)}
         for q in robot.random_configurations(15, 4):
