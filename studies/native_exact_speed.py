@@ -4,8 +4,8 @@ Per case, both implementations run in the same process on the same arrays, inter
 rounds (their order alternating), after both are compiled or loaded:
 
 * ``min_only`` and ``all pairs``: one configuration's exact distances
-  (:func:`drake_mh.scene.kernels.exact.exact_pairs` against ``_native.exact_pairs``, the
-  arguments :class:`drake_mh.scene.exact.ExactDistances` passes, smallest-only mode as
+  (:func:`drake_mh.scene.kernels.exact.exact_pairs` against a call of ``_native.ExactPairs``
+  holding the same arrays, as :class:`drake_mh.scene.exact.ExactDistances` calls them; smallest-only mode as
   ``Scene.min_distance`` and every pair as ``Scene.distances``), one call per configuration
   cycling through 200 random configurations;
 * ``correction``: the penetration correction of 200 configurations with every value negative
@@ -76,7 +76,15 @@ def _exact(scene, native, Q, min_only: bool, rounds: int) -> tuple[dict, float]:
         return lambda i: function(Q[i], *exact._chain, exact.g_int, exact.g_float, state.vertices, state.o_int,
                                   state.o_float, exact.self_pairs, np.inf, min_only, gjk.TOLERANCE, *outputs)[0]
 
-    numba, compiled = bound(X.exact_pairs), bound(native.exact_pairs)
+    numba = bound(X.exact_pairs)
+    pairs = native.ExactPairs(*exact._chain, exact.g_int, exact.g_float, state.vertices, state.o_int, state.o_float,
+                              exact.self_pairs, gjk.TOLERANCE, np.zeros_like(exact.R_WG), np.zeros_like(exact.p_WG),
+                              np.zeros_like(state.out), np.zeros_like(state.status), np.zeros_like(state.need),
+                              np.zeros_like(state.order))
+
+    def compiled(i):
+        return pairs(Q[i], np.inf, min_only)[0]
+
     worst = max(abs(numba(i) - compiled(i)) for i in range(len(Q)))
     return _interleaved({"numba": numba, "native": compiled}, len(Q), rounds), worst
 
