@@ -23,18 +23,38 @@ struct Buffer {
     }
 };
 
-class CollisionChecker {
+// A model's packed buffers (copies, held for the object's life), their views, and whether they
+// hold a model (sizes matching the header, known obstacle kinds).
+class PackedModel {
+public:
+    PackedModel(std::vector<int64_t> ints, std::vector<double> floats)
+        : ints_(std::move(ints)), floats_(std::move(floats)) {
+        ok_ = unpack(ints_.data(), (int64_t)ints_.size(), floats_.data(), (int64_t)floats_.size(), s_);
+        if (!ok_) return;
+        for (int64_t k = 0; k < s_.K; ++k) ok_ = ok_ && s_.kinds[k] >= SPHERE && s_.kinds[k] <= CLOUD;
+        for (int64_t k = 0; k < s_.chain.F; ++k) nq_ = std::max(nq_, s_.chain.qidx[k] + 1);
+    }
+
+    bool ok() const { return ok_; }
+    int64_t nq() const { return nq_; }
+    const Packed& packed() const { return s_; }
+
+protected:
+    std::vector<int64_t> ints_;
+    std::vector<double> floats_;
+    Packed s_;
+    bool ok_ = false;
+    int64_t nq_ = 0;
+};
+
+class CollisionChecker : public PackedModel {
 public:
     std::mutex busy;  // held by a call: the workspace is the object's own
     static constexpr int64_t LANES = 128;  // configurations per block (a multiple of W)
 
     CollisionChecker(std::vector<int64_t> ints, std::vector<double> floats)
-        : ints_(std::move(ints)), floats_(std::move(floats)) {
-        ok_ = unpack(ints_.data(), (int64_t)ints_.size(), floats_.data(), (int64_t)floats_.size(), s_);
+        : PackedModel(std::move(ints), std::move(floats)) {
         if (!ok_) return;
-        for (int64_t k = 0; k < s_.K; ++k) ok_ = ok_ && s_.kinds[k] >= SPHERE && s_.kinds[k] <= CLOUD;
-        nq_ = 0;
-        for (int64_t k = 0; k < s_.chain.F; ++k) nq_ = std::max(nq_, s_.chain.qidx[k] + 1);
         const int64_t F = s_.chain.F, L = LANES;
         q_.resize(std::max<int64_t>(nq_, 1) * L);
         R_.resize(F * 9 * L);
@@ -46,9 +66,6 @@ public:
         p1_.resize(3 * std::max<int64_t>(F, 1));
         gc1_.resize(3 * std::max<int64_t>(s_.G, 1));
     }
-
-    bool ok() const { return ok_; }
-    int64_t nq() const { return nq_; }
 
     // out[n] for the N configurations Q (N, nq) (row-major); false (nothing written) if Q holds
     // a NaN or an infinity. Clearances > 0 (the tests compare squares).
@@ -70,11 +87,6 @@ public:
     }
 
 private:
-    std::vector<int64_t> ints_;
-    std::vector<double> floats_;
-    Packed s_;
-    bool ok_ = false;
-    int64_t nq_ = 0;
     Buffer q_, R_, p_, Gc_, alive_, pbuf_, R1_, p1_, gc1_;
 
     void block(const double* Q, int64_t n0, int64_t m, int64_t nq, double clearance, double self_clearance,
@@ -98,20 +110,12 @@ private:
             const int64_t a = s_.g_anchor[g];
             const double* o = s_.g_offset + 3 * g;
             double *gx = Gx + g * L, *gy = Gy + g * L, *gz = Gz + g * L;
-            centres(a, o, R, p, nv, gx, gy, gz);
+            centres_v(a, o, R, p, L, nv, gx, gy, gz);
             const double reach = clearance + s_.g_radius[g];
             const bool grouped = s_.g_ustart[g + 1] - s_.g_ustart[g] > 1;
             for (int64_t k = 0; k < K; ++k) {
                 if (s_.o_gap[g * K + k] >= clearance) continue;  // no configuration brings them near
-                double lim = clearance + s_.g_radius[g] + s_.o_radius[k];
-                lim *= lim;
-                const double px = s_.p_WO[3 * k], py = s_.p_WO[3 * k + 1], pz = s_.p_WO[3 * k + 2];
-                vi close{};
-                for (int64_t v = 0; v < nv; ++v) {
-                    const vd dx = load(gx + v * W) - px, dy = load(gy + v * W) - py, dz = load(gz + v * W) - pz;
-                    close |= (dx * dx + dy * dy + dz * dz < lim) & alive[v];
-                }
-                if (!any(close)) continue;
+                if (!bounding_close(s_, g, k, clearance, gx, gy, gz, nv, alive)) continue;  // bounding spheres apart
                 for (int64_t v = 0; v < nv; ++v) {  // the link's bounding sphere vs the obstacle's shape
                     const vi hit = alive[v] & ~obstacle_free_v(s_, k, reach, load(gx + v * W), load(gy + v * W),
                                                                load(gz + v * W), alive[v]);
@@ -159,24 +163,6 @@ private:
             }
         }
         for (int64_t b = 0; b < m; ++b) out[n0 + b] = alive[b / W][b % W] != 0;
-    }
-
-    void centres(int64_t a, const double* o, const double* R, const double* p, int64_t nv, double* cx, double* cy,
-                 double* cz) const {
-        const int64_t L = LANES;
-        const double o0 = o[0], o1 = o[1], o2 = o[2];
-        for (int64_t v = 0; v < nv; ++v) {
-            const int64_t b = v * W;
-            if (a < 0) {
-                store(cx + b, splat(o0)), store(cy + b, splat(o1)), store(cz + b, splat(o2));
-                continue;
-            }
-            const double* Ra = R + a * 9 * L + b;
-            const double* pa = p + a * 3 * L + b;
-            store(cx + b, load(pa) + load(Ra) * o0 + load(Ra + L) * o1 + load(Ra + 2 * L) * o2);
-            store(cy + b, load(pa + L) + load(Ra + 3 * L) * o0 + load(Ra + 4 * L) * o1 + load(Ra + 5 * L) * o2);
-            store(cz + b, load(pa + 2 * L) + load(Ra + 6 * L) * o0 + load(Ra + 7 * L) * o1 + load(Ra + 8 * L) * o2);
-        }
     }
 
     bool one(const double* q, int64_t qs, double clearance, double self_clearance) {

@@ -12,9 +12,11 @@
 #include "collision.hpp"
 #include "dynamics.hpp"
 #include "exact_bind.hpp"
+#include "segments.hpp"
 #include "fk.hpp"
 #include "kdtree.hpp"
 #include "lm.hpp"
+#include "planner.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -25,11 +27,13 @@ using Batch = nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::c
 using One = nb::ndarray<const double, nb::ndim<1>, nb::device::cpu>;
 using BoolOut = nb::ndarray<nb::numpy, bool, nb::ndim<1>>;
 
-static void init_checker(dmh::CollisionChecker* self, Ints ints, Floats floats) {
-    new (self) dmh::CollisionChecker(std::vector<int64_t>(ints.data(), ints.data() + ints.shape(0)),
-                                     std::vector<double>(floats.data(), floats.data() + floats.shape(0)));
+// A CollisionChecker or Clearances (a dmh::PackedModel) built in place from copies of the buffers.
+template <class Model>
+static void init_model(Model* self, Ints ints, Floats floats) {
+    new (self) Model(std::vector<int64_t>(ints.data(), ints.data() + ints.shape(0)),
+                     std::vector<double>(floats.data(), floats.data() + floats.shape(0)));
     if (!self->ok()) {
-        self->~CollisionChecker();
+        self->~Model();
         throw nb::value_error("the packed buffers do not hold a collision model (drake_mh.scene.kernels.packing.pack)");
     }
 }
@@ -59,12 +63,26 @@ static int free_one(dmh::CollisionChecker& self, One q, double clearance, double
     return self.free_one(q.data(), (int64_t)q.stride(0), clearance, self_clearance);
 }
 
+static bool all_finite(const double* x, size_t n) {
+    for (size_t i = 0; i < n; ++i)
+        if (!std::isfinite(x[i])) return false;
+    return true;
+}
+
+// v_WO (K, 3) of the checker's K obstacles, finite, or a ValueError
+static void check_v_WO(const dmh::Clearances& self, Batch v_WO) {
+    if ((int64_t)v_WO.shape(0) != self.packed().K || v_WO.shape(1) != 3 || !all_finite(v_WO.data(), v_WO.size()))
+        throw nb::value_error("v_WO must be finite (K, 3) float64, K the packed obstacles");
+}
+
 static const char* FREE_ONE =
     "One configuration q (nq,) float64 (any stride): 1 free, 0 not, -1 not finite, -2 a clearance\n"
     "not in [0, inf), -3 a wrong size.";
 
 NB_MODULE(_native, m) {
-    m.doc() = "drake_mh's compiled core (C++): the sphere-model collision check, its forward kinematics and point clouds' k-d trees.";
+    m.doc() = "drake_mh's compiled core (C++): the sphere-model collision check and clearance values, certified "
+              "segments, forward kinematics, point clouds' k-d trees, rrt_connect's planner and certified motion check, "
+              "the Levenberg-Marquardt IK, inverse dynamics and trajectory bounds.";
     m.attr("simd_width") = dmh::W;
     m.attr("lanes") = dmh::CollisionChecker::LANES;
     dmh_bind::bind_exact(m);
@@ -122,7 +140,7 @@ NB_MODULE(_native, m) {
         "The boolean sphere-model check of a scene's packed arrays (drake_mh.scene.kernels.packing.pack):\n"
         "the answers of drake_mh.scene.kernels.collision.collision_free. Holds copies of the buffers and\n"
         "its own workspace: calls on one checker run one at a time; a batched call releases the GIL.")
-        .def("__init__", &init_checker, "ints"_a, "floats"_a)
+        .def("__init__", &init_model<dmh::CollisionChecker>, "ints"_a, "floats"_a)
         .def_prop_ro("nq", &dmh::CollisionChecker::nq)
         .def("free", [](dmh::CollisionChecker& self, Batch Q, double clearance, double self_clearance) -> nb::object {
             const int64_t N = (int64_t)Q.shape(0), nq = (int64_t)Q.shape(1);
@@ -140,6 +158,69 @@ NB_MODULE(_native, m) {
         }, "Q"_a, "clearance"_a, "self_clearance"_a,
         "(N,) bool for Q (N, nq) C-contiguous float64, clearances > 0 [m]; None if Q is not finite.")
         .def("free_one", &free_one, "q"_a, "clearance"_a, "self_clearance"_a, FREE_ONE);
+
+    nb::class_<dmh::Clearances>(m, "Clearances",
+        "Clearance values of a scene's packed arrays (drake_mh.scene.kernels.packing.pack): the values of\n"
+        "drake_mh.scene.kernels.collision.link_clearances and the verdicts of\n"
+        "drake_mh.scene.kernels.segments.certify_segments. Holds copies of the buffers and its own\n"
+        "workspace: calls on one object run one at a time, with the GIL released.")
+        .def("__init__", &init_model<dmh::Clearances>, "ints"_a, "floats"_a)
+        .def_prop_ro("nq", &dmh::Clearances::nq)
+        .def("values", [](dmh::Clearances& self, Batch Q, Floats tau, double fine_below, Floats pair_fine_below,
+                          int mode, Batch v_WO) -> nb::object {
+            const int64_t N = (int64_t)Q.shape(0);
+            const bool still = tau.shape(0) == 0;  // no tau: the obstacles where they are
+            if ((int64_t)Q.shape(1) != self.nq() || (!still && (int64_t)tau.shape(0) != N) ||
+                (int64_t)pair_fine_below.shape(0) != self.packed().P || mode < dmh::PER_LINK || mode > dmh::OVERALL)
+                throw nb::value_error("Q (N, nq), tau (N,), pair_fine_below (P,), mode 0, 1 or 2");
+            check_v_WO(self, v_WO);
+            if (!all_finite(tau.data(), tau.shape(0))) throw nb::value_error("tau must be finite");
+            if (!all_finite(Q.data(), Q.size())) return nb::none();
+            const size_t width = (size_t)self.width(mode);
+            double* out = new double[(size_t)N * width + 1];
+            {
+                nb::gil_scoped_release unlocked;
+                std::lock_guard<std::mutex> one_call(self.busy);
+                std::vector<double> zeros(still ? (size_t)N : 0, 0.0);
+                self.evaluate(Q.data(), N, still ? zeros.data() : tau.data(), fine_below, pair_fine_below.data(), mode,
+                              v_WO.data(), out);
+            }
+            return nb::cast(owned(out, {(size_t)N, width}));
+        }, "Q"_a, "tau"_a, "fine_below"_a, "pair_fine_below"_a, "mode"_a, "v_WO"_a,
+        "(N, width) float64 for Q (N, nq) C-contiguous (None if Q is not finite), obstacles at p_WO + tau v_WO\n"
+        "(tau (N,), or empty: 0):\n"
+        "mode 0 per link and pair (width G + P), 1 per obstacle (K), 2 over all obstacles (1).")
+        .def("certify_segments", [](dmh::Clearances& self, Batch QA, Batch QB, Batch reach, Batch v_WO, double speed,
+                                    double clearance, double self_clearance, double tolerance, double min_piece,
+                                    int64_t max_evals) {
+            const size_t M = QA.shape(0), nq = (size_t)self.nq(), C = (size_t)(self.packed().G + self.packed().P);
+            if (QA.shape(1) != nq || QB.shape(0) != M || QB.shape(1) != nq || reach.shape(0) != C || reach.shape(1) != nq)
+                throw nb::value_error("QA, QB (M, nq), reach (G + P, nq)");
+            check_v_WO(self, v_WO);
+            if (!all_finite(QA.data(), QA.size()) || !all_finite(QB.data(), QB.size()) ||
+                !all_finite(reach.data(), reach.size()) || !std::isfinite(speed) || !std::isfinite(clearance) ||
+                !std::isfinite(self_clearance) || !(tolerance > 0.0) || !(min_piece > 0.0) || max_evals < 2)
+                throw nb::value_error("finite QA, QB, reach, speed and clearances; tolerance > 0, min_piece > 0, max_evals >= 2");
+            int64_t* status = new int64_t[M + 1];
+            int64_t* evals = new int64_t[M + 1];
+            double* t_stop = new double[M + 1];
+            double* lower = new double[M + 1];
+            double* lower_self = new double[M + 1];
+            {
+                nb::gil_scoped_release unlocked;
+                std::lock_guard<std::mutex> one_call(self.busy);
+                dmh::certify_segments(self, QA.data(), QB.data(), (int64_t)M, reach.data(), v_WO.data(), speed,
+                                      clearance, self_clearance, tolerance, min_piece, max_evals, status, t_stop,
+                                      lower, lower_self, evals);
+            }
+            return nb::make_tuple(owned(status, {M}), owned(t_stop, {M}), owned(lower, {M}), owned(lower_self, {M}),
+                                  owned(evals, {M}));
+        }, "QA"_a, "QB"_a, "reach"_a, "v_WO"_a, "speed"_a, "clearance"_a, "self_clearance"_a, "tolerance"_a,
+        "min_piece"_a, "max_evals"_a,
+        "(status, t_stop, lower, lower_self, evals) (M,) each of the segments QA[i] -> QB[i] (M, nq):\n"
+        "drake_mh.scene.kernels.segments.certify_segments, v_WO (K, 3) the obstacles' displacement per segment.");
+
+    bind_planner(m);
 
     m.def("kd_build", [](Points P) {
         const size_t N = P.shape(0);

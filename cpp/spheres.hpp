@@ -4,8 +4,10 @@
 // (L = 1: one configuration's R (F, 3, 3), p (F, 3)).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 
 #include "packed.hpp"
@@ -121,6 +123,39 @@ inline vi obstacle_free_v(const Packed& s, int64_t k, double reach, vd x, vd y, 
     return u * u + v * v + w * w >= lim;
 }
 
+// Centres of offset o fixed in frame a over nv vectors of lanes (collision.py _centre_block).
+inline void centres_v(int64_t a, const double* o, const double* R, const double* p, int64_t L, int64_t nv,
+                      double* cx, double* cy, double* cz) {
+    const double o0 = o[0], o1 = o[1], o2 = o[2];
+    for (int64_t v = 0; v < nv; ++v) {
+        const int64_t b = v * W;
+        if (a < 0) {
+            store(cx + b, splat(o0)), store(cy + b, splat(o1)), store(cz + b, splat(o2));
+            continue;
+        }
+        const double* Ra = R + a * 9 * L + b;
+        const double* pa = p + a * 3 * L + b;
+        store(cx + b, load(pa) + load(Ra) * o0 + load(Ra + L) * o1 + load(Ra + 2 * L) * o2);
+        store(cy + b, load(pa + L) + load(Ra + 3 * L) * o0 + load(Ra + 4 * L) * o1 + load(Ra + 5 * L) * o2);
+        store(cz + b, load(pa + 2 * L) + load(Ra + 6 * L) * o0 + load(Ra + 7 * L) * o1 + load(Ra + 8 * L) * o2);
+    }
+}
+
+// Whether, in some lane set in mask (nv vectors), link g's bounding sphere (centres gx, gy, gz)
+// is closer than clearance to obstacle k's bounding sphere.
+inline bool bounding_close(const Packed& s, int64_t g, int64_t k, double clearance, const double* gx,
+                           const double* gy, const double* gz, int64_t nv, const vi* mask) {
+    double lim = clearance + s.g_radius[g] + s.o_radius[k];
+    lim *= lim;
+    const double px = s.p_WO[3 * k], py = s.p_WO[3 * k + 1], pz = s.p_WO[3 * k + 2];
+    vi close{};
+    for (int64_t v = 0; v < nv; ++v) {
+        const vd dx = load(gx + v * W) - px, dy = load(gy + v * W) - py, dz = load(gz + v * W) - pz;
+        close |= (dx * dx + dy * dy + dz * dz < lim) & mask[v];
+    }
+    return any(close);
+}
+
 // Spheres s0 .. s1-1 (frame a) of lane b all at least clearance from obstacle k.
 inline bool range_free(const Packed& s, int64_t b, int64_t a, int64_t s0, int64_t s1, double clearance,
                        const double* R, const double* p, int64_t L, int64_t k) {
@@ -165,6 +200,50 @@ inline double pair_floor(const Packed& s, int64_t i, const double* q, int64_t qs
         cell = cell * n2 + std::min((int64_t)y, n2 - 1);
     }
     return s.t_vals[meta[5] + cell];
+}
+
+// A lower bound of pair i's clearance on the whole straight motion qa -> qb (nq,) from its floor
+// table: the smallest floor of the cells the motion's projection on the table's joints passes
+// through (a grid walk, Amanatides and Woo 1987), or -inf without a table or with an end outside
+// the table's joint limits (pairs.py segment_floor, the same walk).
+inline double segment_floor(const Packed& s, int64_t i, const double* qa, const double* qb) {
+    const int64_t* meta = s.t_meta + 6 * i;
+    const double* grid = s.t_grid + GRID_COLUMNS * i;
+    const int64_t dims = meta[0];
+    if (dims == 0) return -INF;
+    const int64_t j1 = meta[1], j2 = meta[2], n1 = meta[3], n2 = meta[4];
+    const double* vals = s.t_vals + meta[5];
+    const double x0 = (qa[j1] - grid[0]) * grid[1], x1 = (qb[j1] - grid[0]) * grid[1];
+    if (!(x0 >= 0.0 && x0 <= (double)n1 && x1 >= 0.0 && x1 <= (double)n1)) return -INF;
+    int64_t cx = std::min((int64_t)x0, n1 - 1);
+    const int64_t ex = std::min((int64_t)x1, n1 - 1);
+    double best = INF;
+    if (dims == 1) {
+        for (int64_t c = std::min(cx, ex); c <= std::max(cx, ex); ++c) best = smin(best, vals[c]);
+        return best;
+    }
+    const double y0 = (qa[j2] - grid[2]) * grid[3], y1 = (qb[j2] - grid[2]) * grid[3];
+    if (!(y0 >= 0.0 && y0 <= (double)n2 && y1 >= 0.0 && y1 <= (double)n2)) return -INF;
+    int64_t cy = std::min((int64_t)y0, n2 - 1);
+    const int64_t ey = std::min((int64_t)y1, n2 - 1);
+    const double dx = x1 - x0, dy = y1 - y0;
+    const int64_t sx = ex > cx ? 1 : -1, sy = ey > cy ? 1 : -1;
+    // the motion's parameter where it leaves the current cell along x / along y, and per cell
+    double tx = dx != 0.0 ? (sx > 0 ? ((double)cx + 1.0 - x0) / dx : (x0 - (double)cx) / -dx) : INF;
+    double ty = dy != 0.0 ? (sy > 0 ? ((double)cy + 1.0 - y0) / dy : (y0 - (double)cy) / -dy) : INF;
+    const double ux = dx != 0.0 ? std::fabs(1.0 / dx) : INF, uy = dy != 0.0 ? std::fabs(1.0 / dy) : INF;
+    const int64_t steps = std::abs(ex - cx) + std::abs(ey - cy) + 1;
+    for (int64_t step = 0; step < steps; ++step) {  // a staircase from the first cell to the last
+        best = smin(best, vals[cx * n2 + cy]);
+        if (cx != ex && (cy == ey || tx < ty)) {
+            cx += sx;
+            tx += ux;
+        } else if (cy != ey) {
+            cy += sy;
+            ty += uy;
+        }
+    }
+    return best;
 }
 
 // A lower bound of links ga and gb's sphere-pair clearance in lane b: their bounding capsules'

@@ -26,6 +26,10 @@ downloaded here), and a third method runs interleaved on them: ``rrt_connect (no
 tables)``, the same planner on a copy of each scene whose self-collision pairs have no floor
 tables (:mod:`drake_mh.scene.pair_table`): the code before those tables, as the same-run
 baseline (same trees: the tables change the cost of each check, not its answer).
+Where the compiled core is built (``drake_mh._native``), ``rrt_connect`` plans through its C++
+planner, and a further method runs interleaved on every problem: ``rrt_connect (numba)``, the
+same planner through the numba kernel (a copy of each problem's scene bound with
+``DRAKE_MH_COMPILED_CORE=0``; same seed, same path), the same-run baseline of the port.
 The batched checks are the scene's :func:`drake_mh.scene.kernels.states.check_states` (early
 exit, two clearances per link and link pair); the MotionBenchMaker-like figures of
 :mod:`drake_mh.planning.rrt_connect` (its 0.5 ms median target) come from the problem sets of
@@ -47,6 +51,7 @@ from drake_mh.study.report.summary import cpu_and_load, finished, markdown_table
 SCENES = ("table", "shelf", "slot", "table self")
 METHODS = ("rrt_connect", "rrt_connect_smooth")
 BASELINE = "rrt_connect (no pair tables)"
+NUMBA = "rrt_connect (numba)"
 MBM_PROBLEMS = 5
 READY = (0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785)  # MotionBenchMaker's start
 PROBLEMS, SEEDS = 20, 3
@@ -123,44 +128,75 @@ def _mbm_problems(scene: str, count: int, tables: bool = True) -> list:
     return problems
 
 
+def _numba_bound(problems: list, fresh) -> dict:
+    """``{name: problem}``: each problem on a copy of its scene (``fresh(problem)``) whose planner
+    binding was made with ``DRAKE_MH_COMPILED_CORE=0``, so that ``rrt_connect`` plans there through
+    the numba kernel (:func:`drake_mh.planning.rrt_connect.prepare` compiles or loads it)."""
+    import os
+
+    from drake_mh.planning.rrt_connect import prepare
+    from drake_mh.scene.compiled_check import ENVIRONMENT
+
+    before = os.environ.get(ENVIRONMENT)
+    os.environ[ENVIRONMENT] = "0"
+    try:
+        copies = {p.name: fresh(p) for p in problems}
+        for copy in copies.values():
+            prepare(copy)
+    finally:
+        if before is None:
+            del os.environ[ENVIRONMENT]
+        else:
+            os.environ[ENVIRONMENT] = before
+    return copies
+
+
 def run(case: Case) -> dict:
     import drake_mh
-    from drake_mh.planning import solve_motion
+    from drake_mh.planning import MotionProblem, solve_motion
     from drake_mh.planning.rrt_connect import prepare
+    from drake_mh.scene.compiled_check import compiled_core
 
     mbm = case["scene"].startswith("mbm/")
+    native = compiled_core() is not None
     if mbm:
         count = 2 if case.quick else MBM_PROBLEMS
         problems = _mbm_problems(case["scene"], count)
         baseline = dict(zip((p.name for p in problems), _mbm_problems(case["scene"], count, tables=False)))
+        copies = iter(_mbm_problems(case["scene"], count)) if native else None
+        kernel = _numba_bound(problems, lambda p: next(copies)) if native else {}
     else:
         robot = drake_mh.load_robot("panda")
         problems = _problems(robot, case["scene"], 4 if case.quick else PROBLEMS, case.instance_rng)
         baseline = {}
-    methods = METHODS + ((BASELINE,) if mbm else ())
+        kernel = _numba_bound(problems, lambda p: MotionProblem(robot, _scene(robot, case["scene"])[0], p.q_start,
+                                                                p.goal, name=p.name)) if native else {}
+    methods = METHODS + ((BASELINE,) if mbm else ()) + ((NUMBA,) if native else ())
     seeds = 1 if case.quick else SEEDS
     prepared = prepare(problems[0])
+
+    def solve(problem, method, seed, **options):
+        if method == BASELINE:
+            return solve_motion(baseline[problem.name], "rrt_connect", seed=seed, timeout=10.0, retime=False,
+                                **options)
+        if method == NUMBA:
+            return solve_motion(kernel[problem.name], "rrt_connect", seed=seed, timeout=10.0, retime=False, **options)
+        return solve_motion(problem, method, seed=seed, timeout=10.0, retime=False, **options)
+
     rows = {m: [] for m in methods}
     straight = [solve_motion(p, "straight", retime=False).success for p in problems]
     loads = [load_average()]
     for problem in problems:
         for seed in range(seeds):
             for method in methods:  # interleaved
-                if method == BASELINE:
-                    r = solve_motion(baseline[problem.name], "rrt_connect", seed=seed, timeout=10.0, retime=False)
-                else:
-                    r = solve_motion(problem, method, seed=seed, timeout=10.0, retime=False)
+                r = solve(problem, method, seed)
                 rows[method].append((r.success, r.planning_time, r.cpu_time, r.verify_time, r.info.get("nodes", 0),
                                      r.info.get("motions", 0), r.info.get("states", 0), r.path_length))
         loads.append(load_average())
     split = {m: dict.fromkeys(SPLIT + ("t_total",), 0.0) for m in methods}
     for problem in problems:  # a profiled pass: where the time goes
         for method in methods:
-            if method == BASELINE:
-                r = solve_motion(baseline[problem.name], "rrt_connect", seed=0, timeout=10.0, retime=False,
-                                 profile=True)
-            else:
-                r = solve_motion(problem, method, seed=0, timeout=10.0, retime=False, profile=True)
+            r = solve(problem, method, 0, profile=True)
             for key in split[method]:
                 split[method][key] += r.info.get(key, 0.0)
     out = {"success": True, "problems": len(problems), "seeds": seeds, "straight_free": float(np.mean(straight)),
@@ -194,7 +230,7 @@ def summarize(records: list[dict]) -> str:
         return "no finished case"
     rows = []
     for r in ok:
-        for m in METHODS + ((BASELINE,) if f"{BASELINE} success" in r else ()):
+        for m in METHODS + tuple(m for m in (BASELINE, NUMBA) if f"{m} success" in r):
             ms = {k: r[f"{m} {k} [s]"] * 1e3 for k in ("wall median", "cpu median", "wall p95", "cpu p95",
                                                        "verify median", "plan+verify median")}
             rows.append([r["scene"], m, f"{r['problems']} × {r['seeds']}", f"{r['straight_free']:.0%}",
@@ -213,6 +249,12 @@ def summarize(records: list[dict]) -> str:
                   "(same run, interleaved): CPU median ratio " + ", ".join(
                       f"{r['scene']} {r[f'{BASELINE} cpu median [s]'] / r['rrt_connect cpu median [s]']:.1f}x"
                       for r in mbm)]
+    ported = [r for r in ok if f"{NUMBA} success" in r]
+    if ported:
+        lines += ["", "rrt_connect through the compiled core (C++) against the numba kernel (same run, interleaved, "
+                  "same seeds and paths): median ratio C++ / numba, wall (CPU): " + ", ".join(
+                      f"{r['scene']} {r['rrt_connect wall median [s]'] / r[f'{NUMBA} wall median [s]']:.2f} "
+                      f"({r['rrt_connect cpu median [s]'] / r[f'{NUMBA} cpu median [s]']:.2f})" for r in ported)]
     lines += ["", "Where rrt_connect's time goes (profiled pass, share of the kernel's time; shortcutting includes "
               "its own checks):", ""] + markdown_table(
         ["scene", "sampling", "nearest neighbours", "batched checks", "certification within margins", "shortcutting"],

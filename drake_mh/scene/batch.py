@@ -24,6 +24,7 @@ import functools
 
 import numpy as np
 
+from drake_mh.scene.compiled_check import compiled_core
 from drake_mh.scene.kernels import collision as K
 from drake_mh.scene.kernels import entry as E
 from drake_mh.scene.kernels.packing import pack
@@ -203,6 +204,7 @@ class CollisionModel:
         self.self_pairs = tuple((self.link_names[a], self.link_names[b]) for a, b in pairs)
         self.pair_index = (np.array([a for a, _ in pairs], np.int64), np.array([b for _, b in pairs], np.int64))
         self._use_tables = pair_tables
+        self._compiled = {}  # with pairs or not -> (obstacles, drake_mh._native.Clearances): compiled_clearances
 
     @functools.cached_property
     def pair_arrays(self) -> tuple:
@@ -323,14 +325,42 @@ class CollisionModel:
             raise ValueError("configurations must be finite")  # Scene checks them first
         return out
 
+    def compiled_clearances(self, obstacles: tuple, pairs: bool):
+        """The compiled core's ``drake_mh._native.Clearances`` of this model against ``obstacles``
+        (:func:`obstacle_arrays`), with the checked link pairs (``pairs``) or without, built once
+        per obstacles tuple (a new tuple, as a scene makes after add/move/remove, builds anew);
+        None where the core is not built or ``DRAKE_MH_COMPILED_CORE=0``
+        (:func:`drake_mh.scene.compiled_check.compiled_core`). Its ``values`` are
+        :func:`.kernels.collision.link_clearances`', its ``certify_segments`` the verdicts of
+        :func:`.kernels.segments.certify_segments` (the same to round-off: docs/native.md)."""
+        core = compiled_core()
+        if core is None:
+            return None
+        cached = self._compiled.get(pairs)
+        if cached is not None and cached[0] is obstacles:
+            return cached[1]
+        ints, floats = self.packed(obstacles, self.pair_arrays if pairs else self.no_pair_arrays)
+        compiled = core.Clearances(ints, floats)
+        self._compiled[pairs] = (obstacles, compiled)
+        return compiled
+
     def obstacle_clearance_function(self, obstacles: tuple):
         """``f(Q (N, nq), overall=False) -> (N, K)`` clearance per obstacle, or ``(N, 1)`` the
         smallest over them with ``overall`` (None if ``Q`` is not finite): :meth:`clearances`
         with ``per_obstacle`` for the obstacles where they are, every array packed and bound once
-        (:func:`.kernels.entry.obstacle_clearances_packed`). ``Q`` must be a C-contiguous
+        (the compiled core's :meth:`compiled_clearances` where it is built, else
+        :func:`.kernels.entry.obstacle_clearances_packed`). ``Q`` must be a C-contiguous
         float64 array: the caller checks it."""
+        v_WO = np.ascontiguousarray(obstacles[3], dtype=float).reshape(-1, 3)
+        compiled = self.compiled_clearances(obstacles, pairs=False)
+        if compiled is not None:
+            values, none, no_pairs = compiled.values, np.zeros(0), np.zeros(0)
+
+            def compiled_clearance(Q, overall=False):  # tau empty: the obstacles where they are
+                return values(Q, none, np.inf, no_pairs, K.OVERALL if overall else K.PER_OBSTACLE, v_WO)
+
+            return compiled_clearance
         ints, floats = self.packed(obstacles, self.no_pair_arrays)
-        v_WO = np.ascontiguousarray(obstacles[3], dtype=float)
         kernel, empty, K_obstacles = E.obstacle_clearances_packed, np.empty, len(obstacles[0])
 
         def clearance(Q, overall=False):
@@ -345,11 +375,17 @@ class CollisionModel:
         or ``(N, G + P)`` per link and link pair."""
         N = QT.shape[1]
         width = len(obstacles[0]) if per_obstacle else self.num_links + self.num_pairs
-        out = np.empty((N, width))
         tau = np.zeros(N) if tau is None else np.ascontiguousarray(tau, dtype=float)
         pairs = self.no_pair_arrays if per_obstacle else self.pair_arrays
         pair_fine = np.full(len(pairs[0]), float(fine_below))
         mode = K.PER_OBSTACLE if per_obstacle else K.PER_LINK
+        compiled = self.compiled_clearances(obstacles, pairs=not per_obstacle)
+        if compiled is not None:
+            out = compiled.values(np.ascontiguousarray(QT.T, dtype=float), tau, float(fine_below), pair_fine, mode,
+                                  np.ascontiguousarray(obstacles[3], dtype=float).reshape(-1, 3))
+            if out is not None:
+                return out  # (not finite: the kernel's values, as before)
+        out = np.empty((N, width))
         K.link_clearances(QT, tau, float(fine_below), pair_fine, mode, *self._kernel_args(), *obstacles,
                           *pairs, out)
         return out

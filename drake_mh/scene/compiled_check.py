@@ -6,6 +6,8 @@ sphere model against every obstacle kind and the checked link pairs with the tes
 :func:`drake_mh.scene.kernels.entry.collision_free_one`, in the same order: the same answers,
 with nothing compiled at call time. Where the module is not built, or the environment sets
 ``DRAKE_MH_COMPILED_CORE=0``, those kernels answer (:meth:`drake_mh.scene.batch.CollisionModel.free_function`).
+The clearance values and certified segments are bound the same way by
+:meth:`drake_mh.scene.batch.CollisionModel.compiled_clearances`.
 """
 
 from __future__ import annotations

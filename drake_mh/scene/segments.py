@@ -19,6 +19,10 @@ The sphere model never reads more clearance than the exact geometry has
 too. The converse is conservative: a segment that passes within ``sphere_model.bound`` of an
 obstacle may be reported blocked.
 
+Where the compiled core is built (:mod:`drake_mh.scene.compiled_check`), its port of that
+kernel answers (``drake_mh._native.Clearances.certify_segments``: the same verdicts, nothing
+compiled at call time); with ``DRAKE_MH_COMPILED_CORE=0`` or without it, the numba kernel.
+
 Moving obstacles (``durations``): an obstacle with velocity ``v`` moves ``v · duration`` during
 the segment; the bound then adds its displacement to every link's Lipschitz constant, and the
 configurations are evaluated against the obstacles where they are at that instant.
@@ -168,12 +172,18 @@ def certify_segments(scene, QA, QB, clearance: float = 0.0, self_clearance: floa
         v_WO = np.array([o.velocity_W * float(duration) for o in scene.obstacles.values()]).reshape(-1, 3)
         v_WO = v_WO[scene.obstacle_owners]  # per kernel obstacle (a mesh's pieces move with it)
         speed = float(np.max(np.linalg.norm(v_WO, axis=1), initial=0.0))
+    v_WO = np.ascontiguousarray(v_WO, dtype=float).reshape(-1, 3)
+    compiled = model.compiled_clearances(scene.obstacle_arrays, pairs=True)
+    if compiled is not None:  # the compiled core: the kernel's verdicts, nothing compiled at call time
+        status, t_stop, lower, lower_self, evals = compiled.certify_segments(
+            QA, QB, model.reach, v_WO, speed, clearance, self_clearance, float(tolerance), MIN_PIECE,
+            int(max_evaluations))
+        return SegmentCertificate(status, t_stop, lower, lower_self, evals, clearance, self_clearance)
     M = QA.shape[0]
     status, t_stop = np.empty(M, np.int64), np.empty(M)
     lower, lower_self, evals = np.empty(M), np.empty(M), np.empty(M, np.int64)
     SK.certify_segments(QA, QB, model.reach, speed, clearance, self_clearance, float(tolerance), MIN_PIECE,
-                        int(max_evaluations), *model._kernel_args(), kinds, R_WO, p_WO,
-                        np.ascontiguousarray(v_WO), dims, *model.pair_arrays,
+                        int(max_evaluations), *model._kernel_args(), kinds, R_WO, p_WO, v_WO, dims, *model.pair_arrays,
                         status, t_stop, lower, lower_self, evals)
     return SegmentCertificate(status, t_stop, lower, lower_self, evals, clearance, self_clearance)
 

@@ -54,7 +54,8 @@ def _rrt_connect() -> None:
     """``rrt_connect``'s kernel (:func:`drake_mh.planning.rrt_connect.planner.prepare`) and its
     motion check from Python (``certify_motions``). ``prepare`` reads only the problem's robot,
     scene, start and clearances: they are given without a MotionProblem, whose checks belong to
-    :func:`_motion_problem`."""
+    :func:`_motion_problem`. Where the compiled core is built both run in C++: nothing compiles
+    (``DRAKE_MH_COMPILED_CORE=0``: the numba kernels)."""
     from types import SimpleNamespace
 
     from drake_mh.planning.rrt_connect import planner

@@ -274,6 +274,10 @@ def certified_motion(qa, qb, ctx, lanes, v_WO, reach, clearance, self_clearance,
        from :func:`~drake_mh.scene.kernels.collision.link_clearances`). The choice is made at
        compile time from the argument's type, so the default (None) does not compile the
        second: 35 s less from an empty numba cache.
+
+    The compiled core ports this function with ``by_values`` None (``cpp/motion.hpp``, the same
+    steps, answers and statistics; ``rrt_connect`` calls it where the core is built); the
+    bisection (``by_values`` True, ``certify="bisection"``) runs here, in numba, only.
     """
     (parent, KR, Kp, perm, kind, qidx, g_anchor, g_offset, g_radius, g_start, s_offset, s_radius,
      kinds, R_WO, p_WO, dims, o_radius, o_gap, pair_a, pair_b, t_meta, t_grid, t_vals, g_capsule, g_ustart, u_start,

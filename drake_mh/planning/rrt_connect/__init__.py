@@ -17,9 +17,12 @@ Methods of :func:`drake_mh.planning.solve_motion`:
 Design (the one that makes VAMP fast: Thomason, Kingston, Kavraki, "Motions in Microseconds
 via Vectorized Sampling-Based Planning", ICRA 2024):
 
-* **one compiled call** (:func:`.search.plan_kernel`): sampling, nearest neighbours
-  (linear scan: trees stay small), motion checks, path extraction and shortcutting run in
-  numba without Python in the loop; the deadline is read inside the kernel from the
+* **one compiled call**: sampling, nearest neighbours (linear scan: trees stay small), motion
+  checks, path extraction and shortcutting run without Python in the loop, in the compiled
+  core's C++ planner where it is built (``drake_mh._native.MotionPlanner``, ``cpp/rrt_connect.hpp``:
+  nothing compiled at call time; the same draws and checks as the numba kernel, so the same
+  path for a seed), else in the numba kernel :func:`.search.plan_kernel` (also with
+  ``DRAKE_MH_COMPILED_CORE=0``, and for ``certify="bisection"``); the deadline is read inside the kernel from the
   monotonic clock (:mod:`drake_mh.planning.motion.clock`), the budget counts tree nodes; randomness is splitmix64
   seeded from the caller's generator (same seed, same path). Python calls it through the
   compiled entry point of its one signature, the options in one vector and the scene's arrays
@@ -70,14 +73,15 @@ via Vectorized Sampling-Based Planning", ICRA 2024):
 * the original MotionBenchMaker problems with the Panda's meshed hand (778 spheres, 66 problems,
   ``drake-mh study motion_benchmark``, docs/planning.md): 66/66 verified, median 0.52 ms CPU, of
   which the shortcut step 0.08 ms (``info["t_found"]``: 0.43 ms to the first certified path).
-* cold compilation (empty numba cache): :func:`prepare` takes about 1 minute of CPU time
-  (``plan_kernel`` and its callees; ``check_states`` alone 5 s).
+* cold compilation (empty numba cache, no compiled core): :func:`prepare` takes about 1 minute
+  of CPU time (``plan_kernel`` and its callees; ``check_states`` alone 5 s); with the compiled
+  core nothing compiles.
 * the independent verification (:func:`drake_mh.planning.verify_motion` without retiming)
   takes 3-17 ms per path, 6.7 ms median, of which 0.24 ms is the certificate and the rest the
   1 mm refinement of the reported clearance.
-=======
-:func:`prepare` loads the kernel once per process (from numba's on-disk cache; after a change of
-the kernels the first call compiles them, a minute or two); :func:`certify_motions` exposes the
+:func:`prepare` binds the scene and, without the compiled core, loads the kernel once per
+process (from numba's on-disk cache; after a change of the kernels the first call compiles them,
+a minute or two); :func:`certify_motions` exposes the
 motion check. Options and the figures that chose their defaults: :class:`RRTConnectConfig` and
 docs/planning.md; measured results: docs/benchmarks.md.
 """

@@ -1,9 +1,13 @@
 """``rrt_connect`` and ``rrt_connect_smooth``: the Python side of the compiled planner.
 
 :func:`plan` reads the problem, binds the scene's compiled arrays (once per obstacle set),
-and makes one call into :func:`.search.plan_kernel`, which plans, certifies and shortcuts.
-:func:`prepare` compiles (or loads from numba's cache) that kernel once per process, so that
-no planning clock counts it.
+and makes one call that plans, certifies and shortcuts: into the compiled core's
+``MotionPlanner`` (C++, ``cpp/rrt_connect.hpp``: the same draws and checks, so the same path for
+the same seed, and nothing compiled at call time) where it is built
+(:func:`drake_mh.scene.compiled_check.compiled_core`, ``DRAKE_MH_COMPILED_CORE=0`` leaves it
+out) and ``certify`` is ``"boolean"``, else into the numba kernel :func:`.search.plan_kernel`.
+:func:`prepare` compiles (or loads from numba's cache) that kernel once per process where it
+is the one called, so that no planning clock counts it.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from drake_mh.errors import InvalidArgument
 from drake_mh.planning.motion import PROBES, clock_address, scene_arguments
 from drake_mh.planning.motion import stats as S
 from drake_mh.planning.rrt_connect import search as K
+from drake_mh.scene.compiled_check import compiled_core
 
 _CLOCK = clock_address()
 
@@ -63,7 +68,8 @@ class RRTConnectConfig:
             margins) or ``"bisection"`` (the scene's
             :func:`drake_mh.scene.segments.certify_segments` on clearance values). Each is a
             compiled variant of the kernel: the first ``"bisection"`` plan of a machine compiles
-            its own (cached on disk after).
+            its own (cached on disk after). ``"bisection"`` always runs in the numba kernel;
+            ``"boolean"`` in the compiled core where it is built.
         goal_bias: probability of sampling a root of the other tree (a goal configuration when
             the start tree grows, the start when the goal tree grows) instead of a uniform
             sample.
@@ -176,34 +182,39 @@ _PREPARED = False
 _ENTRIES: dict = {}
 
 
-def _arguments(scene) -> tuple:
-    """``(ints, floats, v_WO, reach)`` of the scene's current obstacles (cached until they change)."""
-    return _binding(scene)[:4]
-
-
 def _binding(scene) -> tuple:
-    """``(ints, floats, v_WO, reach, lower, upper, entries, stats)`` of the scene's current
+    """``(ints, floats, v_WO, reach, lower, upper, entries, stats, native)`` of the scene's current
     obstacles: the arrays as the kernels take them (:func:`~drake_mh.planning.motion.scene_arguments`), the kernel's entry
     points for them (:func:`_call`; shared by every binding whose arrays have the same types, so
-    that a new scene costs no compilation in a plan) and the statistics array a plan writes
-    (read at once: like the scene's Drake context, not for plans in concurrent threads). Kept on
-    the scene until its obstacles change (:meth:`~drake_mh.scene.Scene.planner_binding`)."""
+    that a new scene costs no compilation in a plan), the statistics array a plan writes
+    (read at once: like the scene's Drake context, not for plans in concurrent threads) and the
+    compiled core's ``MotionPlanner`` on copies of the arrays (None where the core is not built or
+    ``DRAKE_MH_COMPILED_CORE=0`` when the binding is made). Kept on the scene until its obstacles
+    change (:meth:`~drake_mh.scene.Scene.planner_binding`)."""
     return scene.planner_binding(_binding, _bind)
 
 
 def _bind(scene) -> tuple:
     """:func:`_binding` built anew."""
     bound = scene_arguments(scene)
-    return bound + (_ENTRIES.setdefault(tuple(numba.typeof(a) for a in bound), {}), np.zeros(_NSTATS))
+    core = compiled_core()
+    native = None if core is None else core.MotionPlanner(bound[0], bound[1], bound[3])
+    return bound + (_ENTRIES.setdefault(tuple(numba.typeof(a) for a in bound), {}), np.zeros(_NSTATS), native)
 
 
 def _call(binding: tuple, arguments: tuple):
-    """:func:`.search.plan_kernel` on ``arguments`` (which hold the ``binding``'s arrays) through
-    the compiled entry point of their types, kept in the binding per ``by_values`` (compiled or
-    loaded from numba's cache on first use). The entry point skips numba's type dispatch (about
-    10 µs of a plan called after other work, its code and data out of the CPU's caches) and
-    checks no type: every call for a binding must pass the same types (numba's entry points do
-    not check an array's dtype or dimensions), which :func:`_arguments_of` guarantees."""
+    """:func:`.search.plan_kernel` on ``arguments`` (which hold the ``binding``'s arrays): the
+    binding's compiled-core planner where it has one and ``by_values`` is None (its ``plan`` takes
+    the kernel's arguments less the arrays it holds), else the numba entry point of their types,
+    kept in the binding per ``by_values`` (compiled or loaded from numba's cache on first use).
+    The entry point skips numba's type dispatch (about 10 µs of a plan called after other work,
+    its code and data out of the CPU's caches) and checks no type: every call for a binding must
+    pass the same types (numba's entry points do not check an array's dtype or dimensions),
+    which :func:`_arguments_of` guarantees."""
+    native = binding[8]
+    if native is not None and arguments[14] is None:
+        q, goals, lower, upper = arguments[:4]
+        return native.plan(q, goals, lower, upper, *arguments[8:14], arguments[15])
     entries = binding[6]
     entry = entries.get(arguments[14])
     if entry is None:
@@ -227,7 +238,8 @@ def _arguments_of(problem, goals, binding: tuple, seed, max_nodes: int, time_lim
 
 
 def prepare(problem) -> float:
-    """Compile or load the kernel (once per process) and bind the problem's scene; seconds taken.
+    """Bind the problem's scene and, where the numba kernel is the one called (no compiled core),
+    compile or load it (once per process); seconds taken.
 
     Without it, the first :func:`plan` of a process does it (its ``info["prepare_time"]``;
     the deadline is then extended by that time: it measures planning, not loading, as
@@ -236,7 +248,7 @@ def prepare(problem) -> float:
     global _PREPARED
     start = time.perf_counter()
     binding = _binding(problem.scene)
-    if not _PREPARED:
+    if not _PREPARED and binding[8] is None:
         config = RRTConnectConfig(max_certify_evaluations=16, shortcut_iterations=1)
         _call(binding, _arguments_of(problem, problem.q_start[None], binding, 0, 1, 1.0, config))
         _PREPARED = True
@@ -267,8 +279,8 @@ def _run(problem, goals, rng, deadline, budget, config: RRTConnectConfig):
     # few Python steps here: a plan is often called after other work, with this code and its data out
     # of the CPU's caches, where each step costs microseconds (about 50 µs of Python around a 0.5 ms
     # kernel on MotionBenchMaker's problems)
-    prepare_time = prepare(problem) if not _PREPARED else 0.0
     binding = _binding(problem.scene)
+    prepare_time = prepare(problem) if not _PREPARED and binding[8] is None else 0.0
     # the deadline measures planning, not loading (as solve_ik's timeout)
     time_limit = np.inf if deadline is None else deadline + prepare_time - time.perf_counter()
     arguments = _arguments_of(problem, goals, binding, rng.bit_generator.random_raw(),  # the splitmix64 state
@@ -296,7 +308,8 @@ def certify_motions(scene, QA, QB, clearance: float = 0.0, self_clearance: float
     motion ``QA[i] -> QB[i]`` collision-free with these clearances (``QA[i]`` must be free: the
     planner only extends from free nodes). ``options``: those of :class:`RRTConnectConfig`
     that concern the check (``resolution``, ``margin``, ``lanes``, ``block``, ``probes``,
-    ``max_certify_evaluations``, ``certify``)."""
+    ``max_certify_evaluations``, ``certify``). The compiled core's check where it is built and
+    ``certify`` is ``"boolean"`` (the same answers), else the numba kernel."""
     from drake_mh.scene.segments import check_clearance
 
     config = RRTConnectConfig.from_options(options)
@@ -305,9 +318,15 @@ def certify_motions(scene, QA, QB, clearance: float = 0.0, self_clearance: float
     QB = np.ascontiguousarray(np.atleast_2d(robot.check_Q(np.atleast_2d(QB))), dtype=float)
     if QA.shape != QB.shape:
         raise InvalidArgument(f"QA and QB must hold as many configurations, got {len(QA)} and {len(QB)}")
-    ints, floats, v_WO, reach = _arguments(scene)
-    return K.certify_motions(QA, QB, ints, floats, v_WO, reach, check_clearance(clearance, "clearance"),
-                             check_clearance(self_clearance, "self_clearance"), float(config.resolution),
+    clearance = check_clearance(clearance, "clearance")
+    self_clearance = check_clearance(self_clearance, "self_clearance")
+    binding = _binding(scene)
+    stats = np.zeros(len(S.STAT_NAMES))
+    if binding[8] is not None and _by_values(config) is None:
+        return binding[8].certify_motions(QA, QB, clearance, self_clearance, float(config.resolution),
+                                          float(config.margin), int(config.lanes), int(config.block),
+                                          int(config.probes), int(config.max_certify_evaluations), stats)
+    ints, floats, v_WO, reach = binding[:4]
+    return K.certify_motions(QA, QB, ints, floats, v_WO, reach, clearance, self_clearance, float(config.resolution),
                              float(config.margin), int(config.lanes), int(config.block), int(config.probes),
-                             int(config.max_certify_evaluations), _by_values(config), _CLOCK,
-                             np.zeros(len(S.STAT_NAMES)))
+                             int(config.max_certify_evaluations), _by_values(config), _CLOCK, stats)

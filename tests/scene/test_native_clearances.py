@@ -1,0 +1,197 @@
+"""The compiled core's clearance values and certified segments (``drake_mh._native.Clearances``,
+cpp/clearances.hpp and cpp/segments.hpp) against the numba kernels they port
+(:func:`drake_mh.scene.kernels.collision.link_clearances`,
+:func:`drake_mh.scene.kernels.segments.certify_segments`), and what they certify against Drake's
+own distance on a fresh plant. Skipped where the core is not built."""
+
+from __future__ import annotations
+
+import importlib.util
+
+import numpy as np
+import pytest
+
+import drake_mh
+from drake_mh.planning.problems import load_problem_robot
+from drake_mh.scene import Box, Capsule, Cylinder, Mesh, PointCloud, Scene, Sphere
+from drake_mh.scene.benchmark import mesh_file
+from drake_mh.scene.kernels import collision as K
+from drake_mh.scene.kernels import segments as SK
+from drake_mh.scene.segments import MIN_PIECE
+from references import FreshDrake, dense_path
+
+pytestmark = pytest.mark.skipif(importlib.util.find_spec("drake_mh._native") is None,
+                                reason="the compiled core (drake_mh._native) is not built: pip install builds it")
+
+PANDA = drake_mh.load_robot("panda")
+
+
+@pytest.fixture(scope="module")
+def hand():
+    return load_problem_robot("panda_hand_mbm")
+
+
+def every_kind(robot, seed: int) -> Scene:
+    """Self-collision on; two of each primitive kind, a box as a mesh (its convex pieces) and a
+    point cloud of 400 balls (1 cm), at random poses in the arm's reach."""
+    rng = np.random.default_rng(seed)
+    scene = Scene(robot, self_collision=True)
+    shapes = [Sphere(0.08), Box([0.1, 0.15, 0.05]), Cylinder(0.06, 0.3), Capsule(0.05, 0.2)]
+    for i in range(8):
+        scene.add(f"o{i}", shapes[i % 4], rng.uniform([-0.7, -0.7, 0.0], [0.7, 0.7, 0.9]), rpy=rng.uniform(-3, 3, 3))
+    scene.add("mesh", Mesh(mesh_file(Box([0.1, 0.2, 0.15]))), rng.uniform([-0.6, -0.6, 0.2], [0.6, 0.6, 0.8]),
+              rpy=rng.uniform(-3, 3, 3))
+    centre = rng.uniform([-0.5, -0.5, 0.3], [0.5, 0.5, 0.7])
+    scene.add("cloud", PointCloud(centre + rng.uniform(-0.15, 0.15, (400, 3)), 0.01))
+    return scene
+
+
+def numba_values(model, obstacles, v_WO, Q, tau, fine_below, pair_fine, mode) -> np.ndarray:
+    pairs = model.no_pair_arrays if mode != K.PER_LINK else model.pair_arrays
+    kinds, R_WO, p_WO, _, dims = obstacles
+    width = model.num_links + model.num_pairs if mode == K.PER_LINK else len(kinds) if mode == K.PER_OBSTACLE else 1
+    out = np.empty((len(Q), width))
+    K.link_clearances(np.ascontiguousarray(Q.T), tau, fine_below, pair_fine, mode, *model._kernel_args(), kinds,
+                      R_WO, p_WO, v_WO, dims, *pairs, out)
+    return out
+
+
+def numba_certificate(model, obstacles, v_WO, QA, QB, speed, clearance, self_clearance, tolerance) -> tuple:
+    kinds, R_WO, p_WO, _, dims = obstacles
+    M = len(QA)
+    out = (np.empty(M, np.int64), np.empty(M), np.empty(M), np.empty(M), np.empty(M, np.int64))
+    SK.certify_segments(QA, QB, model.reach, speed, clearance, self_clearance, tolerance, MIN_PIECE, 1 << 16,
+                        *model._kernel_args(), kinds, R_WO, p_WO, v_WO, dims, *model.pair_arrays, *out)
+    return out
+
+
+@pytest.mark.parametrize("which", ["panda", "hand"])
+def test_clearance_values_are_the_numba_kernels(which, hand):
+    """Every mode (per link and pair with finite and infinite fine_below, some pairs at -inf; per
+    obstacle; overall), obstacles moving (v_WO nonzero, tau per configuration) and standing: the
+    same values to 1e-9 on 300 random configurations (and on 1 and 129: a lane block's edges)."""
+    robot = PANDA if which == "panda" else hand
+    scene = every_kind(robot, 3)
+    model, obstacles = scene.collision_model, scene.obstacle_arrays
+    assert set(obstacles[0]) == {0, 1, 2, 3, 4, 5} and model.num_pairs > 0
+    assert np.any(model.pair_arrays[2][:, 0] > 0) or which == "panda"  # the hand's pairs have floor tables
+    rng = np.random.default_rng(4)
+    Q = robot.random_configurations(300, rng=rng)
+    tau = rng.uniform(0.0, 1.0, len(Q))
+    moving = rng.normal(0.0, 0.2, obstacles[3].shape)
+    for v_WO in (np.zeros_like(moving), moving):
+        for mode, fine in ((K.PER_LINK, 0.05), (K.PER_LINK, np.inf), (K.PER_OBSTACLE, np.inf), (K.OVERALL, np.inf)):
+            compiled = model.compiled_clearances(obstacles, pairs=mode == K.PER_LINK)
+            pair_fine = np.full(model.num_pairs if mode == K.PER_LINK else 0, fine)
+            pair_fine[::3] = -np.inf
+            for N in (1, 129, 300):
+                expected = numba_values(model, obstacles, v_WO, Q[:N], tau[:N], fine, pair_fine, mode)
+                got = compiled.values(Q[:N], tau[:N], fine, pair_fine, mode, v_WO)
+                assert got.shape == expected.shape
+                np.testing.assert_allclose(got, expected, rtol=0.0, atol=1e-9)
+            if mode == K.PER_LINK and fine < np.inf:
+                assert np.sum(expected[:, :model.num_links] < fine) > 50  # fine spheres were used
+                assert np.sum(expected[:, :model.num_links] >= fine) > 50  # and bounds
+
+
+@pytest.mark.parametrize("which", ["panda", "hand"])
+def test_certified_segments_are_the_numba_verdicts(which, hand):
+    """60 random segments (short and long), obstacles standing and moving, certification only and
+    with a tolerance: the same status and evaluations, t_stop and the lower bounds to 1e-9; both
+    verdicts occur."""
+    robot = PANDA if which == "panda" else hand
+    scene = every_kind(robot, 5)
+    model, obstacles = scene.collision_model, scene.obstacle_arrays
+    compiled = model.compiled_clearances(obstacles, pairs=True)
+    rng = np.random.default_rng(6)
+    Q = robot.random_configurations(400, rng=rng)
+    QA = Q[scene.collision_free(Q, 0.0, 0.002)][:60]
+    QB = np.clip(QA + rng.normal(0.0, 1.0, QA.shape) * rng.choice([0.05, 0.3, 1.0], (len(QA), 1)),
+                 robot.lower, robot.upper)
+    moving = rng.normal(0.0, 0.05, obstacles[3].shape)
+    seen = set()
+    for v_WO in (np.zeros_like(moving), moving):
+        speed = float(np.max(np.linalg.norm(v_WO, axis=1)))
+        for clearance, self_clearance, tolerance in ((0.0, 0.002, np.inf), (0.01, 0.0, 1e-3)):
+            expected = numba_certificate(model, obstacles, v_WO, QA, QB, speed, clearance, self_clearance, tolerance)
+            got = compiled.certify_segments(QA, QB, model.reach, v_WO, speed, clearance, self_clearance, tolerance,
+                                            MIN_PIECE, 1 << 16)
+            np.testing.assert_array_equal(got[0], expected[0])
+            np.testing.assert_array_equal(got[4], expected[4])
+            for x, y in zip(got[1:4], expected[1:4]):
+                np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-9)  # NaN where the other is NaN
+            seen.update(expected[0].tolist())
+    assert {SK.CERTIFIED, SK.BLOCKED} <= seen
+
+
+def test_scene_certificates_and_clearances_with_and_without_the_core(monkeypatch):
+    """Scene.certify_segments (with a duration: moving obstacles), certify_path with a tolerance and
+    batch_obstacle_distances / batch_min_distance: the same answers with the compiled core and with
+    DRAKE_MH_COMPILED_CORE=0 (the numba kernels)."""
+    rng = np.random.default_rng(9)
+    Q = PANDA.random_configurations(200, rng=rng)
+    QA = Q[every_kind(PANDA, 7).collision_free(Q)][:20]
+    QB = np.clip(QA + rng.normal(0.0, 0.4, QA.shape), PANDA.lower, PANDA.upper)
+
+    def answers():  # a new scene: its functions bound under the environment as it is
+        scene = every_kind(PANDA, 7)
+        scene.move("o0", velocity=[0.3, 0.0, -0.2])
+        assert (scene.collision_model.compiled_clearances(scene.obstacle_arrays, True) is None) == kernels
+        cert = scene.certify_segments(QA, QB, 0.005, 0.002, duration=0.5)
+        path = scene.certify_path(QA[:4], 0.0, tolerance=1e-3)
+        return (cert.status, cert.evaluations, cert.t_stop, cert.lower, cert.lower_self,
+                np.atleast_1d(path.min_clearance), scene.batch_obstacle_distances(Q), scene.batch_min_distance(Q))
+
+    kernels = False
+    compiled = answers()
+    monkeypatch.setenv("DRAKE_MH_COMPILED_CORE", "0")
+    kernels = True
+    for x, y in zip(compiled, answers()):
+        np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_what_the_core_certifies_is_free_by_drake(seed):
+    """Segments the compiled core certifies (spheres, boxes, cylinders: Drake's reference kinds),
+    sampled at 2 mrad of their fastest joint, keep their certified lower bound by Drake's own
+    distance on a fresh plant; at least 6 certified per seed."""
+    rng = np.random.default_rng(20 + seed)
+    scene = Scene(PANDA)
+    shapes = [Sphere(0.08), Box((0.3, 0.2, 0.05)), Cylinder(0.05, 0.4)]
+    for i in range(6):
+        scene.add(f"o{i}", shapes[i % 3], rng.uniform([-0.7, -0.7, 0.0], [0.7, 0.7, 0.9]), rpy=rng.uniform(-3, 3, 3))
+    assert scene.collision_model.compiled_clearances(scene.obstacle_arrays, True) is not None
+    drake = FreshDrake(PANDA, scene)
+    Q = PANDA.random_configurations(300, rng=rng)
+    QA = Q[scene.collision_free(Q, 0.01)][:12]
+    QB = np.clip(QA + rng.normal(0.0, 0.4, QA.shape), PANDA.lower, PANDA.upper)
+    cert = scene.certify_segments(QA, QB, 0.01)
+    certified = 0
+    for i in np.flatnonzero(cert.certified):
+        sampled = drake.min_distances(dense_path(np.stack([QA[i], QB[i]]), 0.002))
+        assert sampled.min() >= cert.lower[i] - 1e-9 and cert.lower[i] >= 0.01
+        certified += 1
+    assert certified >= 6, certified
+
+
+def test_clearances_reject_bad_buffers_and_shapes():
+    """A ValueError naming what is wrong for buffers that are not a model, arrays of wrong shapes
+    and non-finite segment ends; None for configurations that are not finite."""
+    from drake_mh import _native
+
+    scene = every_kind(PANDA, 1)
+    model, obstacles = scene.collision_model, scene.obstacle_arrays
+    ints, floats = model.packed(obstacles, model.pair_arrays)
+    with pytest.raises(ValueError, match="do not hold a collision model"):
+        _native.Clearances(ints[:-1], floats)
+    compiled = _native.Clearances(ints, floats)
+    v_WO, Q = np.zeros((len(obstacles[0]), 3)), PANDA.random_configurations(3)
+    pair_fine = np.zeros(model.num_pairs)
+    with pytest.raises(ValueError, match="v_WO"):
+        compiled.values(Q, np.zeros(3), 0.05, pair_fine, K.PER_LINK, np.zeros((1, 3)))
+    with pytest.raises(ValueError, match="pair_fine_below"):
+        compiled.values(Q, np.zeros(3), 0.05, pair_fine[1:], K.PER_LINK, v_WO)
+    Q[1, 2] = np.nan
+    assert compiled.values(Q, np.zeros(3), 0.05, pair_fine, K.PER_LINK, v_WO) is None
+    with pytest.raises(ValueError, match="finite QA"):
+        compiled.certify_segments(Q, Q, model.reach, v_WO, 0.0, 0.0, 0.0, np.inf, MIN_PIECE, 100)
