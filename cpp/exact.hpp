@@ -225,7 +225,8 @@ inline bool geometry_poses(const Pairs& P, const double* q, int64_t qs, std::vec
             } else {
                 const double* Ra = R.data() + 9 * a + 3 * i;
                 P.p_WG[3 * g + i] = p[3 * a + i] + Ra[0] * f[9] + Ra[1] * f[10] + Ra[2] * f[11];
-                for (int j = 0; j < 3; ++j) P.R_WG[9 * g + 3 * i + j] = Ra[0] * f[j] + Ra[1] * f[3 + j] + Ra[2] * f[6 + j];
+                for (int j = 0; j < 3; ++j)
+                    P.R_WG[9 * g + 3 * i + j] = Ra[0] * f[j] + Ra[1] * f[3 + j] + Ra[2] * f[6 + j];
             }
         }
     }
@@ -237,7 +238,8 @@ inline double lower_bound(const Pairs& P, int64_t g, int64_t k) {
     const double* f = P.g_float + g * GW;
     const double* R = P.R_WG + 9 * g;
     double c[3], c_O[3];
-    for (int i = 0; i < 3; ++i) c[i] = P.p_WG[3 * g + i] + R[3 * i] * f[16] + R[3 * i + 1] * f[17] + R[3 * i + 2] * f[18];
+    for (int i = 0; i < 3; ++i)
+        c[i] = P.p_WG[3 * g + i] + R[3 * i] * f[16] + R[3 * i + 1] * f[17] + R[3 * i + 2] * f[18];
     const double* o = P.o_float + k * OW;
     to_obstacle(o, c, c_O);
     return sdf(P.o_int[2 * k], o + 12, c_O[0], c_O[1], c_O[2]) - f[19];
@@ -369,7 +371,8 @@ inline double exact_pairs(const Pairs& P, const double* q, int64_t qs, double ma
     if (!min_only) {
         for (int64_t i = 0; i < n; ++i)
             if (P.status[i] == EXACT && P.out[10 * i] <= max_distance) P.order[n_rows++] = i;
-        std::stable_sort(P.order, P.order + n_rows, [&](int64_t x, int64_t y) { return P.out[10 * x] < P.out[10 * y]; });
+        std::stable_sort(P.order, P.order + n_rows,
+                         [&](int64_t x, int64_t y) { return P.out[10 * x] < P.out[10 * y]; });
     }
     return best;
 }

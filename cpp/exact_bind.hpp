@@ -108,10 +108,11 @@ inline nb::tuple exact_pairs(Q1 q, InI parent, In KR, In Kp, InI perm, InI kind,
                       R_WG, p_WG, out, status, need, order)(q, max_distance, min_only);
 }
 
-inline void correct_clearances(Out values, nb::ndarray<const double, nb::ndim<3>, nb::device::cpu> points_W, In radii, In c_G, In g_bound, InI g_start, InI g_kind,
-                               In half_length, In radius, In VH, InI v_start, In NH, In OH, InI f_start, In EH,
-                               InI e_start, In excess, InI kinds, In R_WO, In p_WO, In dims, In corners, InI n_corners,
-                               In normals, InI n_normals, In edges, InI n_edges) {
+inline void correct_clearances(Out values, nb::ndarray<const double, nb::ndim<3>, nb::device::cpu> points_W,
+                               In radii, In c_G, In g_bound, InI g_start, InI g_kind, In half_length, In radius, In VH,
+                               InI v_start, In NH, In OH, InI f_start, In EH, InI e_start, In excess, InI kinds,
+                               In R_WO, In p_WO, In dims, In corners, InI n_corners, In normals, InI n_normals,
+                               In edges, InI n_edges) {
     require(values.ndim() == 2, "values (n, K)");
     const int64_t n = (int64_t)values.shape(0), K = (int64_t)values.shape(1), G = (int64_t)g_bound.size(),
                   S = (int64_t)radii.size();
@@ -132,7 +133,8 @@ inline void correct_clearances(Out values, nb::ndarray<const double, nb::ndim<3>
             if (start.data()[i] < 0 || start.data()[i] > start.data()[i + 1]) return false;
         return start.data()[start.size() - 1] <= end;
     };
-    require(in_range(g_start, S) && in_range(v_start, (int64_t)VH.shape(0)) && in_range(f_start, (int64_t)NH.shape(0)) &&
+    require(in_range(g_start, S) && in_range(v_start, (int64_t)VH.shape(0)) &&
+                in_range(f_start, (int64_t)NH.shape(0)) &&
                 in_range(e_start, (int64_t)EH.shape(0)),
             "a geometry's rows out of range");
     for (int64_t k = 0; k < K; ++k)

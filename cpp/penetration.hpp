@@ -176,7 +176,8 @@ inline double polytope_bound(int64_t kind, const double* dims, const double* R_W
                             R_GO[3 * i + 2] * corners[v][2];
     for (int64_t m = 0; m < normals.n; ++m)
         for (int i = 0; i < 3; ++i)
-            NO[3 * m + i] = R_GO[3 * i] * normals[m][0] + R_GO[3 * i + 1] * normals[m][1] + R_GO[3 * i + 2] * normals[m][2];
+            NO[3 * m + i] =
+                R_GO[3 * i] * normals[m][0] + R_GO[3 * i + 1] * normals[m][1] + R_GO[3 * i + 2] * normals[m][2];
     for (int64_t m = 0; m < edges.n; ++m)
         for (int i = 0; i < 3; ++i)
             EO[3 * m + i] = R_GO[3 * i] * edges[m][0] + R_GO[3 * i + 1] * edges[m][1] + R_GO[3 * i + 2] * edges[m][2];
