@@ -11,6 +11,7 @@
 
 #include "collision.hpp"
 #include "dynamics.hpp"
+#include "exact_bind.hpp"
 #include "segments.hpp"
 #include "fk.hpp"
 #include "kdtree.hpp"
@@ -84,6 +85,7 @@ NB_MODULE(_native, m) {
               "the Levenberg-Marquardt IK, inverse dynamics and trajectory bounds.";
     m.attr("simd_width") = dmh::W;
     m.attr("lanes") = dmh::CollisionChecker::LANES;
+    dmh_bind::bind_exact(m);
 
     nb::class_<dmh::Kinematics>(m, "Kinematics",
         "Batched forward kinematics of a compiled chain (drake_mh.kinematics.BatchKinematics): ints =\n"

@@ -15,6 +15,10 @@ How distances are computed (:class:`ExactDistances`, one per scene):
   cylinders, the certified GJK of :mod:`drake_mh.scene.kernels.gjk` for the other shapes (Drake's
   GJK was measured up to 16 mm optimistic there). These pairs are filtered out of Drake's
   query in the scene's context (:meth:`ExactDistances.exclude`).
+  That call runs in the compiled core ``drake_mh._native`` where it is built (the same
+  arithmetic in C++, ``cpp/exact.hpp``: nothing compiled at call time), in the numba kernel
+  where it is not or ``DRAKE_MH_COMPILED_CORE=0`` (read when the scene builds its
+  :class:`ExactDistances`).
 * Where the exact method does not hold — a capsule's axis inside a box or cylinder, or
   overlapping GJK cores — Drake's ``ComputeSignedDistancePairClosestPoints`` is asked for that
   pair and the smaller value kept (Drake's penetration depth).
@@ -41,6 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drake_mh._support.native import compiled_core
 from drake_mh.scene.kernels import exact as X
 from drake_mh.scene.kernels import gjk
 from drake_mh.scene.segment_distance import primitive_code
@@ -228,6 +233,7 @@ class _ObstacleState:
                                   + [exact.links[b] for _, b in exact.self_pairs], dtype=object)
         self.row_self = np.array([False] * (G * K) + [True] * S, dtype=bool)
         self.query_needed = exact.drake_self or (exact.drake_links and K > 0)
+        self.compiled = None  # the compiled core's ExactPairs of these arrays, made on first use
 
 
 class ExactDistances:
@@ -271,6 +277,7 @@ class ExactDistances:
         self.R_WG = np.zeros((G, 3, 3))
         self.p_WG = np.zeros((G, 3))
         self._chain = robot.batch.chain_arrays
+        self._core = compiled_core()
         self._shape = (robot.nq,)
         self._state: _ObstacleState | None = None
 
@@ -295,10 +302,18 @@ class ExactDistances:
 
     def _run(self, q, max_distance: float, min_only: bool):
         state = self.state()
-        best, n_need, n_rows = X.exact_pairs(
-            q, *self._chain, self.g_int, self.g_float, state.vertices, state.o_int, state.o_float, self.self_pairs,
-            max_distance, min_only, gjk.TOLERANCE, self.R_WG, self.p_WG, state.out, state.status, state.need,
-            state.order)
+        if self._core is not None:  # the compiled core: the same arrays, checked and held once per state
+            if state.compiled is None:
+                state.compiled = self._core.ExactPairs(
+                    *self._chain, self.g_int, self.g_float, state.vertices, state.o_int, state.o_float,
+                    self.self_pairs, gjk.TOLERANCE, self.R_WG, self.p_WG, state.out, state.status, state.need,
+                    state.order)
+            best, n_need, n_rows = state.compiled(q, max_distance, min_only)
+        else:
+            best, n_need, n_rows = X.exact_pairs(
+                q, *self._chain, self.g_int, self.g_float, state.vertices, state.o_int, state.o_float,
+                self.self_pairs, max_distance, min_only, gjk.TOLERANCE, self.R_WG, self.p_WG, state.out, state.status,
+                state.need, state.order)
         if n_need < 0:
             self.robot.check_q(q)  # raises, naming the joints
         return state, best, n_need, n_rows

@@ -35,9 +35,10 @@ a cloud of radius ``r_O``, so where a geometry's spheres report penetration its 
 A cylinder obstacle is replaced by its circumscribed 16-gon prism (it contains the cylinder,
 so ``v`` stays a lower bound, up to 2 % of the radius low).
 
-All of it is compiled (:func:`correct_clearances`, numba): a (configuration, obstacle) pair at
-a time, a geometry skipped where its bounding sphere keeps out of the obstacle, only for the
-configurations where some sphere reports penetration.
+All of it is compiled (:func:`correct_clearances`: C++ in the compiled core where it is built,
+numba where not): a (configuration, obstacle) pair at a time, a geometry skipped where its
+bounding sphere keeps out of the obstacle, only for the configurations where some sphere
+reports penetration.
 """
 
 from __future__ import annotations
@@ -47,6 +48,7 @@ import functools
 import numba
 import numpy as np
 
+from drake_mh._support.native import compiled_core
 from drake_mh.scene.kernels.collision import point_distance
 from drake_mh.scene.kernels.exact import closest_segments
 from drake_mh.scene.segment_distance import CAPSULE, SPHERE, _sdf, primitive_code, segment_min_sdf
@@ -239,10 +241,18 @@ def _centre(p, R, c):
             + R[1, 2] * c[2], p[2] + R[2, 0] * c[0] + R[2, 1] * c[1] + R[2, 2] * c[2])
 
 
+def correct_clearances(values, *arrays) -> None:
+    """:func:`_correct_clearances` (the same arguments) in the compiled core ``drake_mh._native``
+    where it is built (``cpp/penetration.hpp``, the same arithmetic: nothing compiled at call
+    time), in the numba kernel where it is not or ``DRAKE_MH_COMPILED_CORE=0`` (read at each call)."""
+    core = compiled_core()
+    (_correct_clearances if core is None else core.correct_clearances)(values, *arrays)
+
+
 @numba.njit(cache=True)
-def correct_clearances(values, points_W, radii, c_G, g_bound, g_start, g_kind, half_length, radius, VH, v_start, NH,
-                       OH, f_start, EH, e_start, excess, kinds, R_WO, p_WO, dims, corners, n_corners, normals,
-                       n_normals, edges, n_edges):
+def _correct_clearances(values, points_W, radii, c_G, g_bound, g_start, g_kind, half_length, radius, VH, v_start, NH,
+                        OH, f_start, EH, e_start, excess, kinds, R_WO, p_WO, dims, corners, n_corners, normals,
+                        n_normals, edges, n_edges):
     """``values (n, K)`` in place: each negative one (the sphere model's clearance to obstacle k,
     or any negative number to have it computed) becomes ``min_g min(s_g, v_g)`` over the
     geometries g whose spheres' value ``s_g`` is negative, ``v_g`` the lower bound of g
