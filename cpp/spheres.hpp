@@ -35,19 +35,31 @@ inline void lane_point(int64_t a, const double* o, const double* R, const double
 
 // Whether point (x, y, z) is at least reach from obstacle k (squared distances; a mesh piece
 // and a cloud: pieces.hpp).
+// Point (x, y, z) relative to obstacle k's origin (dx, dy, dz), and in its frame (rotated: u, v, w).
+struct Relative {
+    const double* d;  // the obstacle's dims (3,)
+    double dx, dy, dz;
+    void rotated(const Packed& s, int64_t k, double& u, double& v, double& w) const {
+        const double* Rw = s.R_WO + 9 * k;
+        u = Rw[0] * dx + Rw[3] * dy + Rw[6] * dz;
+        v = Rw[1] * dx + Rw[4] * dy + Rw[7] * dz;
+        w = Rw[2] * dx + Rw[5] * dy + Rw[8] * dz;
+    }
+};
+inline Relative relative(const Packed& s, int64_t k, double x, double y, double z) {
+    const double* pw = s.p_WO + 3 * k;
+    return Relative{s.dims + 3 * k, x - pw[0], y - pw[1], z - pw[2]};
+}
+
 inline bool point_free(const Packed& s, int64_t k, double reach, double x, double y, double z) {
     const int64_t kind = s.kinds[k];
-    const double* pw = s.p_WO + 3 * k;
-    const double* Rw = s.R_WO + 9 * k;
-    const double* d = s.dims + 3 * k;
-    const double dx = x - pw[0], dy = y - pw[1], dz = z - pw[2];
-    const double d0 = d[0];
+    const Relative r = relative(s, k, x, y, z);
+    const double *d = r.d, d0 = d[0], dx = r.dx, dy = r.dy, dz = r.dz;
     if (kind == SPHERE) return dx * dx + dy * dy + dz * dz >= (reach + d0) * (reach + d0);
     if (kind == CONVEX) return convex_free(s, k, dx, dy, dz, reach);
     if (kind == CLOUD) return cloud_free(s, k, x, y, z, reach + cloud_radius(s, k));
-    const double u = Rw[0] * dx + Rw[3] * dy + Rw[6] * dz;
-    const double v = Rw[1] * dx + Rw[4] * dy + Rw[7] * dz;
-    double w = Rw[2] * dx + Rw[5] * dy + Rw[8] * dz;
+    double u, v, w;
+    r.rotated(s, k, u, v, w);
     if (kind == BOX) {
         const double ox = smax(std::fabs(u) - d0, 0.0), oy = smax(std::fabs(v) - d[1], 0.0),
                      oz = smax(std::fabs(w) - d[2], 0.0);
@@ -65,17 +77,13 @@ inline bool point_free(const Packed& s, int64_t k, double reach, double x, doubl
 // point_distance: the value point_free compares with its reach, with a square root).
 inline double point_distance(const Packed& s, int64_t k, double x, double y, double z) {
     const int64_t kind = s.kinds[k];
-    const double* pw = s.p_WO + 3 * k;
-    const double* Rw = s.R_WO + 9 * k;
-    const double* d = s.dims + 3 * k;
-    const double dx = x - pw[0], dy = y - pw[1], dz = z - pw[2];
-    const double d0 = d[0];
+    const Relative r = relative(s, k, x, y, z);
+    const double *d = r.d, d0 = d[0], dx = r.dx, dy = r.dy, dz = r.dz;
     if (kind == SPHERE) return std::sqrt(dx * dx + dy * dy + dz * dz) - d0;
     if (kind == CONVEX) return convex_value(s, k, dx, dy, dz);
     if (kind == CLOUD) return std::sqrt(cloud_nearest2(s, k, x, y, z, INF)) - cloud_radius(s, k);
-    const double u = Rw[0] * dx + Rw[3] * dy + Rw[6] * dz;
-    const double v = Rw[1] * dx + Rw[4] * dy + Rw[7] * dz;
-    double w = Rw[2] * dx + Rw[5] * dy + Rw[8] * dz;
+    double u, v, w;
+    r.rotated(s, k, u, v, w);
     if (kind == BOX) {
         const double ox = smax(std::fabs(u) - d0, 0.0), oy = smax(std::fabs(v) - d[1], 0.0),
                      oz = smax(std::fabs(w) - d[2], 0.0);

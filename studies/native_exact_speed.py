@@ -25,12 +25,10 @@ Run: ``drake-mh study native_exact_speed [--quick]`` or ``python studies/native_
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from drake_mh.study import Case, Fields, Study
-from drake_mh.study.machine import cpu_model, load_average
+from drake_mh.study.machine import cpu_model, interleaved, load_average
 from drake_mh.study.report.summary import cell, cpu_and_load, finished, markdown_table
 
 ROBOTS = ("panda", "panda_hand")  # the bundled capsule Panda; drake_mh.robot.examples' mesh Panda
@@ -45,21 +43,6 @@ def _robot(name: str):
     from drake_mh.robot.examples import load_example_arm
 
     return drake_mh.load_robot(name) if name == ROBOTS[0] else load_example_arm(name)
-
-
-def _interleaved(functions: dict, calls: int, rounds: int) -> dict:
-    """``{name: (wall s, CPU s)}`` per call of ``function(i)``, ``i`` cycling through
-    ``calls``: medians over rounds, the functions' order alternating from round to round."""
-    names, samples = list(functions), {name: ([], []) for name in functions}
-    for r in range(rounds):
-        for name in names if r % 2 == 0 else names[::-1]:
-            function = functions[name]
-            wall, cpu = time.perf_counter(), time.process_time()
-            for i in range(calls):
-                function(i)
-            samples[name][0].append((time.perf_counter() - wall) / calls)
-            samples[name][1].append((time.process_time() - cpu) / calls)
-    return {name: (float(np.median(w)), float(np.median(c))) for name, (w, c) in samples.items()}
 
 
 def _exact(scene, native, Q, min_only: bool, rounds: int) -> tuple[dict, float]:
@@ -86,7 +69,8 @@ def _exact(scene, native, Q, min_only: bool, rounds: int) -> tuple[dict, float]:
         return pairs(Q[i], np.inf, min_only)[0]
 
     worst = max(abs(numba(i) - compiled(i)) for i in range(len(Q)))
-    return _interleaved({"numba": numba, "native": compiled}, len(Q), rounds), worst
+    times = interleaved({"numba": numba, "native": compiled}, range(len(Q)), len(Q), rounds)
+    return {name: (wall, cpu) for name, (wall, _, cpu) in times.items()}, worst
 
 
 def _correction(scene, native, Q, rounds: int) -> tuple[dict, float]:
@@ -107,8 +91,8 @@ def _correction(scene, native, Q, rounds: int) -> tuple[dict, float]:
     a, b = numba(0), compiled(0)
     finite = np.isfinite(a)
     worst = float(np.abs(a[finite] - b[finite]).max(initial=0.0)) if np.array_equal(finite, np.isfinite(b)) else np.inf
-    times = _interleaved({"numba": numba, "native": compiled}, 1, rounds)
-    return {name: (wall / len(Q), cpu / len(Q)) for name, (wall, cpu) in times.items()}, worst
+    times = interleaved({"numba": numba, "native": compiled}, [0], 1, rounds)
+    return {name: (wall / len(Q), cpu / len(Q)) for name, (wall, _, cpu) in times.items()}, worst
 
 
 def run_case(case: Case) -> dict:

@@ -42,12 +42,10 @@ Run: ``drake-mh study native_speed [--quick]`` or ``python studies/native_speed.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from drake_mh.study import Case, Fields, Study
-from drake_mh.study.machine import cpu_model, load_average
+from drake_mh.study.machine import cpu_model, interleaved, load_average
 from drake_mh.study.report.summary import cell, cpu_and_load, finished, markdown_table
 
 ROBOTS = ("panda", "panda_hand")  # the bundled capsule Panda (47 spheres); drake_mh.robot.examples' mesh Panda (778)
@@ -87,22 +85,6 @@ def _scene(robot, name: str):
     return scene
 
 
-def _interleaved(functions: dict, inputs: list, calls: int, rounds: int) -> dict:
-    """``{name: (wall s, least wall s, CPU s)}`` per call: medians (and the least wall time) over
-    rounds of ``calls`` calls cycling through ``inputs``, the functions' order alternating from
-    round to round."""
-    names, samples = list(functions), {name: ([], []) for name in functions}
-    for r in range(rounds):
-        for name in names if r % 2 == 0 else names[::-1]:
-            function = functions[name]
-            wall, cpu = time.perf_counter(), time.process_time()
-            for i in range(calls):
-                function(inputs[i % len(inputs)])
-            samples[name][0].append((time.perf_counter() - wall) / calls)
-            samples[name][1].append((time.process_time() - cpu) / calls)
-    return {name: (float(np.median(w)), float(np.min(w)), float(np.median(c))) for name, (w, c) in samples.items()}
-
-
 def _check(robot, native, name: str, Qs: list, rounds: int) -> tuple[dict, bool]:
     scene = _scene(robot, name)
     model = scene.collision_model
@@ -114,12 +96,12 @@ def _check(robot, native, name: str, Qs: list, rounds: int) -> tuple[dict, bool]
         qs = [Q[0] for Q in Qs]
         one = checker.free_one
         identical = all(entry(q, 0.0, 0.0, buffer) == one(q, 0.0, 0.0) for q in qs)
-        times = _interleaved({"numba": lambda q: entry(q, 0.0, 0.0, buffer), "native": lambda q: one(q, 0.0, 0.0)},
+        times = interleaved({"numba": lambda q: entry(q, 0.0, 0.0, buffer), "native": lambda q: one(q, 0.0, 0.0)},
                              qs, ONE_CALLS, rounds)
         return times, identical
     tiny, free = 1e-12, checker.free  # the clearance Scene.collision_free passes for 0
     identical = all(np.array_equal(batch(Q, tiny, tiny), free(Q, tiny, tiny)) for Q in Qs)
-    times = _interleaved({"numba": lambda Q: batch(Q, tiny, tiny), "native": lambda Q: free(Q, tiny, tiny)},
+    times = interleaved({"numba": lambda Q: batch(Q, tiny, tiny), "native": lambda Q: free(Q, tiny, tiny)},
                          Qs, max(1, 12800 // Qs[0].shape[0]), rounds)
     return times, identical
 
@@ -144,7 +126,7 @@ def _clearances(robot, native, overall: bool, Qs: list, rounds: int) -> tuple[di
 
     identical = all(np.allclose(numba(Q), compiled_values(Q), rtol=0.0, atol=1e-12) for Q in Qs)
     calls = ONE_CALLS if Qs[0].shape[0] == 1 else max(1, 12800 // Qs[0].shape[0])
-    return _interleaved({"numba": numba, "native": compiled_values}, Qs, calls, rounds), identical
+    return interleaved({"numba": numba, "native": compiled_values}, Qs, calls, rounds), identical
 
 
 def _segments(robot_name: str, mbm: bool, N: int, batches: int) -> tuple | None:
@@ -216,7 +198,7 @@ def _certify(robot_name: str, native, mbm: bool, N: int, rounds: int) -> tuple[d
         identical &= bool(np.array_equal(a[0], b[0]) and np.array_equal(a[4], b[4])
                           and all(np.allclose(x, y, rtol=0.0, atol=1e-9, equal_nan=True) for x, y in zip(a[1:4], b[1:4])))
     calls = max(1, 64 // N)
-    return _interleaved({"numba": numba, "native": compiled_certify}, pairs, calls, rounds), identical
+    return interleaved({"numba": numba, "native": compiled_certify}, pairs, calls, rounds), identical
 
 
 def _kinematics(robot, native, want_jac: bool, Qs: list, rounds: int) -> tuple[dict, bool]:
@@ -240,7 +222,7 @@ def _kinematics(robot, native, want_jac: bool, Qs: list, rounds: int) -> tuple[d
 
     identical = all(np.allclose(numba(Q)[0], compiled(Q)[0], rtol=0.0, atol=1e-12) for Q in Qs)
     calls = ONE_CALLS if Qs[0].shape[0] == 1 else max(1, 12800 // Qs[0].shape[0])
-    return _interleaved({"numba": numba, "native": compiled}, Qs, calls, rounds), identical
+    return interleaved({"numba": numba, "native": compiled}, Qs, calls, rounds), identical
 
 
 def run_case(case: Case) -> dict:

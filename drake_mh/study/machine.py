@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["cpu_model", "load_average", "machine_line"]
+__all__ = ["cpu_model", "interleaved", "load_average", "machine_line", "timed"]
 
 
 @functools.cache
@@ -61,6 +61,25 @@ def timed(function, rounds: int = 1) -> tuple[float, float]:
         wall.append(time.perf_counter() - w)
         cpu.append(time.process_time() - c)
     return float(np.median(wall)), float(np.median(cpu))
+
+
+def interleaved(functions: dict, inputs, calls: int, rounds: int) -> dict:
+    """``{name: (wall s, least wall s, CPU s)}`` per call of each ``function(x)``: medians (and the
+    least wall time) over ``rounds`` rounds of ``calls`` calls cycling through ``inputs``, the
+    functions' order alternating from round to round (so that neither always runs after the
+    other, with its caches warm)."""
+    import time
+
+    names, samples = list(functions), {name: ([], []) for name in functions}
+    for r in range(rounds):
+        for name in names if r % 2 == 0 else names[::-1]:
+            function = functions[name]
+            wall, cpu = time.perf_counter(), time.process_time()
+            for i in range(calls):
+                function(inputs[i % len(inputs)])
+            samples[name][0].append((time.perf_counter() - wall) / calls)
+            samples[name][1].append((time.process_time() - cpu) / calls)
+    return {name: (float(np.median(w)), float(np.min(w)), float(np.median(c))) for name, (w, c) in samples.items()}
 
 
 def load_average() -> float:
