@@ -1,10 +1,12 @@
 // drake_mh._native: the compiled core's entry points from Python (nanobind).
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
 
 #include <cmath>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -17,6 +19,8 @@
 #include "kdtree.hpp"
 #include "lm.hpp"
 #include "planner.hpp"
+#include "ppoly.hpp"
+#include "refine.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -47,6 +51,53 @@ template <class T>
 static nb::ndarray<nb::numpy, T> owned(T* data, std::initializer_list<size_t> shape) {
     nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<T*>(p); });
     return nb::ndarray<nb::numpy, T>(data, shape, owner);
+}
+
+// q(t) = p(s(t)) from scipy PPoly arrays (timed_derivatives, certify_samples)
+struct Timed {
+    dmh::PPoly path, timing;
+};
+
+static Timed timed_of(const Array& path_c, const Floats& path_x, const std::optional<Array>& timing_c,
+                      const std::optional<Floats>& timing_x) {
+    if (path_c.ndim() != 3 || path_c.shape(1) < 1 || path_x.shape(0) != path_c.shape(1) + 1)
+        throw nb::value_error("path: c (k + 1, m, nq) and x (m + 1,) of a scipy PPoly");
+    if (timing_c.has_value() != timing_x.has_value() ||
+        (timing_c && (timing_c->ndim() != 2 || timing_c->shape(1) < 1 || timing_x->shape(0) != timing_c->shape(1) + 1)))
+        throw nb::value_error("timing: c (k + 1, m) and x (m + 1,) of a scalar scipy PPoly, or both None");
+    Timed q{{path_c.data(), path_x.data(), (int64_t)path_c.shape(0) - 1, (int64_t)path_c.shape(1),
+             (int64_t)path_c.shape(2)},
+            {nullptr, nullptr, 0, 0, 1}};
+    if (timing_c)
+        q.timing = dmh::PPoly{timing_c->data(), timing_x->data(), (int64_t)timing_c->shape(0) - 1,
+                              (int64_t)timing_c->shape(1), 1};
+    return q;
+}
+
+// Checks the quantity kinds (0..4); where one is torque, reads the dynamics packed as
+// drake_mh.trajectories.dynamics.BatchDynamics.packed says into dyn and returns true.
+static bool kinds_need_dynamics(const int64_t* kinds, size_t n, int64_t nq, const std::optional<IntArray>& ints,
+                                const std::optional<Floats>& floats, dmh::ChainDynamics& dyn) {
+    bool torque = false;
+    for (size_t i = 0; i < n; ++i) {
+        if (kinds[i] < 0 || kinds[i] > dmh::TORQUE) throw nb::value_error("quantity kinds must be in 0..4");
+        torque |= kinds[i] == dmh::TORQUE;
+    }
+    if (!torque) return false;
+    if (!ints || !floats || ints->shape(0) % 3 != 0)
+        throw nb::value_error("torque needs the packed dynamics (BatchDynamics.packed)");
+    const int64_t F = (int64_t)ints->shape(0) / 3;
+    if ((int64_t)floats->shape(0) != 25 * F + 3 + 2 * nq)
+        throw nb::value_error("packed dynamics: floats must be 25 F + 3 + 2 nq");
+    const int64_t* I = ints->data();
+    const double* X = floats->data();
+    for (int64_t k = 0; k < F; ++k)
+        if (I[2 * F + k] < 0 || I[2 * F + k] >= nq || I[k] >= k)
+            throw nb::value_error("packed dynamics: qidx in [0, nq) and frames in topological order");
+    dyn.F = F, dyn.parent = I, dyn.kind = I + F, dyn.qidx = I + 2 * F;
+    dyn.KR = X, dyn.Kp = X + 9 * F, dyn.mass = X + 12 * F, dyn.com = X + 13 * F, dyn.inertia = X + 16 * F;
+    dyn.a_world = X + 25 * F, dyn.damping = X + 25 * F + 3, dyn.reflected = X + 25 * F + 3 + nq;
+    return true;
 }
 
 static void init_kinematics(dmh::Kinematics* self, Ints ints, Floats floats) {
@@ -357,6 +408,53 @@ NB_MODULE(_native, m) {
     }, "parent"_a, "KR"_a, "Kp"_a, "kind"_a, "qidx"_a, "mass"_a, "com"_a, "inertia"_a, "a_world"_a, "Q"_a, "V"_a, "A"_a,
     "Joint torques tau (N, nq) [N m] of Q, V, A (N, nq) C-contiguous float64: the recursive Newton-Euler\n"
     "algorithm of drake_mh.trajectories.dynamics.BatchDynamics (without its damping and rotor terms).");
+
+    m.def("timed_derivatives", [](Array path_c, Floats path_x, std::optional<Array> timing_c,
+                                  std::optional<Floats> timing_x, Floats T, int order) {
+        if (order < 0 || order > 3) throw nb::value_error("timed_derivatives: order 0..3");
+        const Timed q = timed_of(path_c, path_x, timing_c, timing_x);
+        const size_t M = T.shape(0), nq = (size_t)q.path.d, rows = (size_t)order + 1;
+        double* out = new double[rows * M * nq + 1];
+        {
+            nb::gil_scoped_release unlocked;
+            dmh::timed_derivatives(q.path, q.timing, T.data(), (int64_t)M, order, out);
+        }
+        return owned(out, {rows, M, nq});
+    }, "path_c"_a, "path_x"_a, "timing_c"_a.none(), "timing_x"_a.none(), "T"_a, "order"_a,
+    "[q, q', ..., q^(order)] (order + 1, M, nq) of q(t) = p(s(t)) at times T (M,): p a scipy PPoly's\n"
+    "c (k + 1, m, nq) and x (m + 1,), s the timing's c (k + 1, m) and x (None: q = p(t)); scipy's piece\n"
+    "choice (right-continuous, extrapolating) and drake_mh.trajectories.Trajectory.derivatives' chain rule.");
+
+    m.def("certify_samples", [](Array path_c, Floats path_x, std::optional<Array> timing_c,
+                                std::optional<Floats> timing_x, Floats breaks, Floats tau, IntArray kinds,
+                                Batch centre, Batch half, double threshold, int64_t per_joint, int64_t iterations,
+                                std::optional<IntArray> dyn_ints, std::optional<Floats> dyn_floats) {
+        const Timed q = timed_of(path_c, path_x, timing_c, timing_x);
+        const size_t nQ = kinds.shape(0), nq = (size_t)q.path.d, P = breaks.shape(0) - 1, K = tau.shape(0);
+        if (breaks.shape(0) < 2 || K < 2 || centre.shape(0) != nQ || centre.shape(1) != nq ||
+            half.shape(0) != nQ || half.shape(1) != nq || per_joint < 0 || iterations < 0)
+            throw nb::value_error("certify_samples: breaks (P + 1 >= 2,), tau (K >= 2,), centre and half (nQ, nq)");
+        dmh::ChainDynamics dyn;
+        const bool torque = kinds_need_dynamics(kinds.data(), nQ, q.path.d, dyn_ints, dyn_floats, dyn);
+        int order = 0;
+        for (size_t i = 0; i < nQ; ++i) order = std::max(order, kinds.data()[i] == dmh::TORQUE ? 2 : (int)kinds.data()[i]);
+        const size_t M = P * K;
+        double* D = new double[((size_t)order + 1) * M * nq + 1];
+        double* worst = new double[nQ * nq + 1];
+        double* when = new double[nQ * nq + 1];
+        {
+            nb::gil_scoped_release unlocked;
+            dmh::certify_samples(q.path, q.timing, torque ? &dyn : nullptr, breaks.data(), (int64_t)P, tau.data(),
+                                 (int64_t)K, kinds.data(), centre.data(), half.data(), (int64_t)nQ, order, threshold,
+                                 per_joint, iterations, D, worst, when);
+        }
+        return nb::make_tuple(owned(worst, {nQ, nq}), owned(when, {nQ, nq}), owned(D, {(size_t)order + 1, M, nq}));
+    }, "path_c"_a, "path_x"_a, "timing_c"_a.none(), "timing_x"_a.none(), "breaks"_a, "tau"_a, "kinds"_a, "centre"_a,
+    "half"_a, "threshold"_a, "per_joint"_a, "iterations"_a, "dyn_ints"_a.none() = nb::none(),
+    "dyn_floats"_a.none() = nb::none(),
+    "The sampled and refined ratios of drake_mh.trajectories.certify.certify for nQ quantities (kinds 0..3:\n"
+    "the derivative of that order, 4: torque; |x - centre| / half per joint) at fractions tau of every piece between breaks:\n"
+    "(worst (nQ, nq), when (nQ, nq) [s], D (order + 1, P K, nq) the derivatives at the samples).");
 
     m.def("bernstein_bound", [](Array B, Array V, Array centre, Array half, Array best, double slack,
                                 int64_t max_levels, Array left, Array right) {

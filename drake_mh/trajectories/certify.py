@@ -232,17 +232,22 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
     nq = robot.nq
     ratios, times, bounds = {}, {}, {}
     excess = np.zeros(nq)
-    order = max(_ORDER[q] for q in quantities)
-    D = trajectory.derivatives(T.ravel(), order)  # once for every quantity
-    jobs = []
-    for quantity in quantities:
-        norm = _normal(robot, limits, quantity, scale)
-        r = _normalized(D, robot, quantity, norm, torque_backend).reshape(P, K, nq)
-        flat = r.reshape(P * K, nq)
-        idx = np.argmax(flat, axis=0)
-        times[quantity] = T.ravel()[idx].copy()
-        jobs.append((quantity, r, norm, flat[idx, np.arange(nq)].copy(), times[quantity]))
-    _refine(trajectory, robot, jobs, T, lo, hi, torque_backend)
+    norms = [_normal(robot, limits, quantity, scale) for quantity in quantities]
+    core = trajectory._compiled if torque_backend == "rnea" and quantities else None
+    if core is not None:  # the compiled core: the same samples and refinement in one call
+        worst, when, D = _compiled_samples(core, trajectory, robot, quantities, norms, tau)
+        jobs = [(q, None, norm, worst[i], when[i]) for i, (q, norm) in enumerate(zip(quantities, norms))]
+        times = {q: when[i] for i, q in enumerate(quantities)}
+    else:
+        D = trajectory.derivatives(T.ravel(), max(_ORDER[q] for q in quantities))  # once for every quantity
+        jobs = []
+        for quantity, norm in zip(quantities, norms):
+            r = _normalized(D, robot, quantity, norm, torque_backend).reshape(P, K, nq)
+            flat = r.reshape(P * K, nq)
+            idx = np.argmax(flat, axis=0)
+            times[quantity] = T.ravel()[idx].copy()
+            jobs.append((quantity, r, norm, flat[idx, np.arange(nq)].copy(), times[quantity]))
+        _refine(trajectory, robot, jobs, T, lo, hi, torque_backend)
     for quantity, _, norm, worst, _ in jobs:
         if quantity != "torque":  # polynomial between breaks: a bound, not a sample (bound.py)
             worst = np.maximum(worst, kinematic_bound(trajectory, _ORDER[quantity], norm, breaks[:-1], breaks[1:],
@@ -298,10 +303,31 @@ def _normal(robot, limits, quantity: str, scale: float) -> tuple[np.ndarray, np.
 
 
 _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
+_KIND = {"position": 0, "velocity": 1, "acceleration": 2, "jerk": 3, "torque": 4}
+"""quantity codes of the compiled core's ``certify_samples`` and ``golden_refine``."""
 
 
-def _refine(trajectory, robot, jobs, T, lo, hi, backend, threshold: float = 0.9, per_joint: int = 8,
-            iterations: int = 8) -> None:
+def _compiled_samples(core, trajectory, robot, quantities, norms, tau):
+    """The samples and :func:`_refine` of :func:`certify` in the compiled core
+    (``certify_samples``, the same threshold, ranking and search): ``(worst (nQ, nq),
+    when (nQ, nq), D)``."""
+    nq = robot.nq
+    kinds = np.array([_KIND[q] for q in quantities], dtype=np.int64)
+    centre = np.ascontiguousarray([np.broadcast_to(c, (nq,)) for c, _ in norms], dtype=float)
+    half = np.ascontiguousarray([np.broadcast_to(h, (nq,)) for _, h in norms], dtype=float)
+    ints, floats = _batch_dynamics(robot).packed if "torque" in quantities else (None, None)
+    worst, when, D = core[0].certify_samples(*core[1:], np.ascontiguousarray(trajectory.breaks, dtype=float),
+                                             np.ascontiguousarray(tau, dtype=float), kinds, centre, half,
+                                             _THRESHOLD, _PER_JOINT, _ITERATIONS, ints, floats)
+    return worst, when, list(D)
+
+
+_THRESHOLD, _PER_JOINT, _ITERATIONS = 0.9, 8, 8
+"""refinement: sampled peaks at least this ratio, the best so many per joint, golden steps."""
+
+
+def _refine(trajectory, robot, jobs, T, lo, hi, backend, threshold: float = _THRESHOLD,
+            per_joint: int = _PER_JOINT, iterations: int = _ITERATIONS) -> None:
     """Sharpen the ratios between samples (golden-section search around local maxima).
 
     Dense samples miss a peak's top by ``O(c Δt²)`` (seen: 9e-6 at 20 gridpoints). Sampled
@@ -347,6 +373,21 @@ def _refine(trajectory, robot, jobs, T, lo, hi, backend, threshold: float = 0.9,
     ends = np.cumsum([0] + [len(x[4]) for x in found])
     order = max(_ORDER[x[0]] for x in found)
 
+    c, fc, d, fd = _search(trajectory, robot, found, J, a, b, ends, order, backend, iterations)
+    for (_, _, best, best_t, *_), i0, i1 in zip(found, ends[:-1], ends[1:]):
+        Jq = J[i0:i1]
+        for t_best, f_best in ((c[i0:i1], fc[i0:i1]), (d[i0:i1], fd[i0:i1])):
+            for j in np.unique(Jq):
+                mine = np.flatnonzero(Jq == j)
+                i = mine[np.argmax(f_best[mine])]
+                if f_best[i] > best[j]:
+                    best[j], best_t[j] = f_best[i], t_best[i]
+
+
+def _search(trajectory, robot, found, J, a, b, ends, order, backend, iterations):
+    """Golden-section search of every candidate of :func:`_refine` at once, in numpy:
+    ``(c, f(c), d, f(d))``, the last two probes of each bracket and their ratios."""
+
     def f(t):
         D = trajectory.derivatives(t, order)
         out = np.empty(len(t))
@@ -365,14 +406,7 @@ def _refine(trajectory, robot, jobs, T, lo, hi, backend, threshold: float = 0.9,
         f_new = f(t_new)
         fc, fd, c, d = (np.where(keep_left, f_new, fd), np.where(keep_left, fc, f_new),
                         np.where(keep_left, c_new, d), np.where(keep_left, c, d_new))
-    for (_, _, best, best_t, *_), i0, i1 in zip(found, ends[:-1], ends[1:]):
-        Jq = J[i0:i1]
-        for t_best, f_best in ((c[i0:i1], fc[i0:i1]), (d[i0:i1], fd[i0:i1])):
-            for j in np.unique(Jq):
-                mine = np.flatnonzero(Jq == j)
-                i = mine[np.argmax(f_best[mine])]
-                if f_best[i] > best[j]:
-                    best[j], best_t[j] = f_best[i], t_best[i]
+    return c, fc, d, fd
 
 
 def _batch_dynamics(robot):

@@ -27,6 +27,7 @@ offset c, inertia I_o about o_k): ``f = m (a_k + α × c + ω × (ω × c))``,
 
 from __future__ import annotations
 
+import functools
 import weakref
 
 import numba
@@ -116,6 +117,17 @@ class BatchDynamics:
         self.gravity_W = np.asarray(plant.gravity_field().gravity_vector(), dtype=float)
         self._K_R = np.ascontiguousarray(self.chain.K[:, :3, :3])
         self._K_p = np.ascontiguousarray(self.chain.K[:, :3, 3])
+
+    @functools.cached_property
+    def packed(self) -> tuple[np.ndarray, np.ndarray]:
+        """The chain and inertias in two flat arrays for the compiled core's searches: ints
+        ``(3 F,)`` = parent, kind, qidx; floats ``(25 F + 3 + 2 nq,)`` = K_R ``(F, 3, 3)``,
+        K_p ``(F, 3)``, mass ``(F,)``, com ``(F, 3)``, inertia ``(F, 3, 3)``, the base
+        acceleration ``-g (3,)``, damping ``(nq,)``, reflected inertia ``(nq,)``."""
+        ints = np.concatenate([self.chain.parent, self.chain.kind, self.chain.qidx]).astype(np.int64)
+        floats = np.concatenate([self._K_R.ravel(), self._K_p.ravel(), self.mass, self.com.ravel(),
+                                 self.inertia.ravel(), -self.gravity_W, self.damping, self.reflected])
+        return np.ascontiguousarray(ints), np.ascontiguousarray(floats, dtype=float)
 
     def inverse_dynamics(self, Q, V, A, gravity: bool = True) -> np.ndarray:
         """Joint torques ``(N, nq)`` [N·m] for states ``Q, V, A`` of shape ``(N, nq)``.

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import PPoly
 
+from drake_mh._support.native import compiled_core
 from drake_mh.errors import InvalidArgument
 from drake_mh.trajectories.polynomials import shift_coefficients
 
@@ -188,15 +189,31 @@ class Trajectory:
             t = np.atleast_1d(np.asarray(t, dtype=float))
         except (TypeError, ValueError):
             raise InvalidArgument(f"times must be numbers [s], got {t!r}") from None
-        if not np.all(np.isfinite(t)):
+        if not t.size:
+            return t
+        low, high = t.min(), t.max()  # NaN in t makes both NaN
+        if not (np.isfinite(low) and np.isfinite(high)):
             raise InvalidArgument("times must be finite numbers [s]")
         t0, t1 = self.start_time, self.end_time
+        if low >= t0 and high <= t1:
+            return t
         slack = 1e-9 * max(t1 - t0, 1.0)
-        if t.size and (t.min() < t0 - slack or t.max() > t1 + slack):
+        if low < t0 - slack or high > t1 + slack:
             raise InvalidArgument(
-                f"times must lie within the trajectory [{t0:g}, {t1:g}] s; got {t.min():g} .. {t.max():g} s "
+                f"times must lie within the trajectory [{t0:g}, {t1:g}] s; got {low:g} .. {high:g} s "
                 "(hold the end state yourself, e.g. traj(min(t, traj.end_time)), if that is meant)")
         return np.clip(t, t0, t1)
+
+    @functools.cached_property
+    def _compiled(self):
+        """``(core, path c, path x, timing c, timing x)`` as contiguous float64 arrays for the
+        compiled core's ``timed_derivatives``, or ``None`` (no core, or breakpoints not increasing)."""
+        core = compiled_core()
+        polys = (self.path,) if self.timing is None else (self.path, self.timing)
+        if core is None or any(not np.all(np.diff(p.x) > 0) for p in polys):
+            return None
+        arrays = [np.ascontiguousarray(a, dtype=float) for p in polys for a in (p.c, p.x)]
+        return (core, *arrays) if self.timing is not None else (core, *arrays, None, None)
 
     def derivatives(self, t, order: int = 3) -> list[np.ndarray]:
         """``[q, q', ..., q^(order)]``, each ``(len(t), nq)``, at times ``t`` [s].
@@ -207,6 +224,9 @@ class Trajectory:
         t = self._check_times(t)
         if order < 0 or order > 3:
             raise InvalidArgument(f"order must be 0..3, got {order}")
+        core = self._compiled
+        if core is not None:  # the compiled core: the same pieces and chain rule, one pass
+            return list(core[0].timed_derivatives(*core[1:], t, int(order)))
         if self.timing is None:
             return [self.path(t, nu=k) for k in range(order + 1)]
         s = [self.timing(t, nu=k) for k in range(order + 1)]

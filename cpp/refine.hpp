@@ -1,0 +1,163 @@
+// Golden-section refinement of sampled limit ratios of a timed path: the search of
+// drake_mh/trajectories/certify.py _refine, one candidate peak at a time, with the trajectory's
+// derivatives (ppoly.hpp) and the chain's inverse dynamics (dynamics.hpp) evaluated in place.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <cstdint>
+#include <vector>
+
+#include "dynamics.hpp"
+#include "ppoly.hpp"
+
+namespace dmh {
+
+// The inverse dynamics of drake_mh.trajectories.dynamics.BatchDynamics (RNEA plus the joints'
+// damping and reflected rotor inertia), its arrays borrowed.
+struct ChainDynamics {
+    int64_t F = 0;
+    const int64_t *parent = nullptr, *kind = nullptr, *qidx = nullptr;
+    const double *KR = nullptr, *Kp = nullptr, *mass = nullptr, *com = nullptr, *inertia = nullptr,
+                 *a_world = nullptr, *damping = nullptr, *reflected = nullptr;
+
+    void torques(const double* q, const double* v, const double* a, int64_t nq, double* tau) const {
+        rnea(F, parent, KR, Kp, kind, qidx, mass, com, inertia, a_world, q, v, a, 1, nq, tau);
+        for (int64_t j = 0; j < nq; ++j) tau[j] += damping[j] * v[j] + reflected[j] * a[j];
+    }
+};
+
+// Quantity codes of a candidate: 0 position, 1 velocity, 2 acceleration, 3 jerk (the derivative
+// of that order), 4 torque.
+constexpr int64_t TORQUE = 4;
+
+// For each of the C candidates (quantity kind[i], joint joint[i], bracket [a[i], b[i]], ratio
+// |x - centre[i]| / half[i]) the golden-section search of `iterations` steps for the ratio's
+// maximum; out (4, C): the last two probes and their ratios (c, f(c), d, f(d)).
+inline void golden_refine(const PPoly& path, const PPoly& timing, const ChainDynamics* dynamics,
+                          const int64_t* kind, const int64_t* joint, const double* a0, const double* b0,
+                          const double* centre, const double* half, int64_t C, int64_t iterations, double* out) {
+    const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+    const int64_t nq = path.d;
+    std::vector<double> D((size_t)(4 * nq)), tau((size_t)nq);
+    auto ratio = [&](int64_t i, double t) {
+        const int order = kind[i] == TORQUE ? 2 : (int)kind[i];
+        timed_derivatives(path, timing, &t, 1, order, D.data());  // (order + 1, 1, nq)
+        double x;
+        if (kind[i] == TORQUE) {
+            dynamics->torques(D.data(), D.data() + nq, D.data() + 2 * nq, nq, tau.data());
+            x = tau[joint[i]];
+        } else {
+            x = D[order * nq + joint[i]];
+        }
+        return std::fabs(x - centre[i]) / half[i];
+    };
+    for (int64_t i = 0; i < C; ++i) {
+        double a = a0[i], b = b0[i];
+        double c = b - golden * (b - a), d = a + golden * (b - a);
+        double fc = ratio(i, c), fd = ratio(i, d);
+        for (int64_t it = 0; it < iterations; ++it) {
+            if (fc >= fd) {  // the maximum in [a, d]
+                b = d, d = c, fd = fc;
+                c = b - golden * (b - a);
+                fc = ratio(i, c);
+            } else {
+                a = c, c = d, fc = fd;
+                d = a + golden * (b - a);
+                fd = ratio(i, d);
+            }
+        }
+        out[i] = c, out[C + i] = fc, out[2 * C + i] = d, out[3 * C + i] = fd;
+    }
+}
+
+}  // namespace dmh
+
+namespace dmh {
+
+// The sampling and refinement of drake_mh/trajectories/certify.py certify for nQ quantities
+// (kinds[iq] as golden_refine's kind; ratio |x - centre[iq, j]| / half[iq, j]):
+// samples T (P, K) at fractions tau (K,) of every piece between breaks (P + 1,), pulled inside by
+// 1e-9 of the piece (one-sided); D (order + 1, P K, nq) the derivatives there (written);
+// worst, when (nQ, nq): per joint the largest ratio sampled and refined, and its time.
+// Refinement: sampled local maxima >= threshold ranked per joint by the vertex of the parabola
+// through the sample and its neighbours, the per_joint highest searched (golden section,
+// `iterations` steps) between their neighbouring samples.
+inline void certify_samples(const PPoly& path, const PPoly& timing, const ChainDynamics* dynamics,
+                            const double* breaks, int64_t P, const double* tau, int64_t K, const int64_t* kinds,
+                            const double* centre, const double* half, int64_t nQ, int order, double threshold,
+                            int64_t per_joint, int64_t iterations, double* D, double* worst, double* when) {
+    const int64_t nq = path.d, M = P * K;
+    std::vector<double> T((size_t)M), lo((size_t)P), hi((size_t)P);
+    for (int64_t p = 0; p < P; ++p) {
+        const double h = breaks[p + 1] - breaks[p], eps = 1e-9 * h;
+        lo[p] = breaks[p] + eps, hi[p] = breaks[p + 1] - eps;
+        for (int64_t k = 0; k < K; ++k) T[p * K + k] = std::min(std::max(breaks[p] + tau[k] * h, lo[p]), hi[p]);
+    }
+    timed_derivatives(path, timing, T.data(), M, order, D);
+    std::vector<double> torque;
+    for (int64_t iq = 0; iq < nQ; ++iq)
+        if (kinds[iq] == TORQUE && torque.empty()) {
+            torque.resize((size_t)(M * nq));
+            const double *Q = D, *V = D + M * nq, *A = D + 2 * M * nq;
+            rnea(dynamics->F, dynamics->parent, dynamics->KR, dynamics->Kp, dynamics->kind, dynamics->qidx,
+                 dynamics->mass, dynamics->com, dynamics->inertia, dynamics->a_world, Q, V, A, M, nq, torque.data());
+            for (int64_t n = 0; n < M * nq; ++n)
+                torque[n] += dynamics->damping[n % nq] * V[n] + dynamics->reflected[n % nq] * A[n];
+        }
+    std::vector<double> r((size_t)(M * nq)), estimate;
+    std::vector<int64_t> kind_c, joint_c, order_c;
+    std::vector<double> a_c, b_c, centre_c, half_c;
+    std::vector<int64_t> owner;  // the quantity of each candidate
+    const double minus_inf = -std::numeric_limits<double>::infinity();
+    for (int64_t iq = 0; iq < nQ; ++iq) {
+        const double* X = kinds[iq] == TORQUE ? torque.data() : D + kinds[iq] * M * nq;
+        const double *c_q = centre + iq * nq, *h_q = half + iq * nq;
+        for (int64_t n = 0; n < M; ++n)
+            for (int64_t j = 0; j < nq; ++j) r[n * nq + j] = std::fabs(X[n * nq + j] - c_q[j]) / h_q[j];
+        for (int64_t j = 0; j < nq; ++j) {
+            int64_t best = 0;
+            for (int64_t n = 1; n < M; ++n)
+                if (r[n * nq + j] > r[best * nq + j]) best = n;
+            worst[iq * nq + j] = r[best * nq + j], when[iq * nq + j] = T[best];
+            // candidate peaks of joint j in sample order, then the per_joint best estimates
+            std::vector<int64_t> peaks;
+            estimate.clear();
+            for (int64_t p = 0; p < P; ++p)
+                for (int64_t k = 0; k < K; ++k) {
+                    const int64_t n = p * K + k;
+                    const double r1 = r[n * nq + j];
+                    const double r0 = k > 0 ? r[(n - 1) * nq + j] : minus_inf;
+                    const double r2 = k < K - 1 ? r[(n + 1) * nq + j] : minus_inf;
+                    if (!(r1 >= r0 && r1 >= r2 && r1 >= threshold && std::isfinite(r1))) continue;
+                    const double curvature = r0 - 2.0 * r1 + r2;
+                    const bool vertex = std::isfinite(r0) && std::isfinite(r2) && curvature < 0;
+                    peaks.push_back(n);
+                    estimate.push_back(vertex ? r1 - (r2 - r0) * (r2 - r0) / (8.0 * curvature) : r1);
+                }
+            std::vector<int64_t> rank(peaks.size());
+            for (size_t i = 0; i < rank.size(); ++i) rank[i] = (int64_t)i;
+            std::stable_sort(rank.begin(), rank.end(), [&](int64_t x, int64_t y) { return estimate[x] > estimate[y]; });
+            for (size_t i = 0; i < rank.size() && (int64_t)i < per_joint; ++i) {
+                const int64_t n = peaks[rank[i]], p = n / K, k = n % K;
+                kind_c.push_back(kinds[iq]), joint_c.push_back(j), owner.push_back(iq);
+                a_c.push_back(k > 0 ? T[n - 1] : lo[p]), b_c.push_back(k < K - 1 ? T[n + 1] : hi[p]);
+                centre_c.push_back(c_q[j]), half_c.push_back(h_q[j]);
+            }
+        }
+    }
+    const int64_t C = (int64_t)kind_c.size();
+    if (C == 0) return;
+    std::vector<double> out((size_t)(4 * C));
+    golden_refine(path, timing, dynamics, kind_c.data(), joint_c.data(), a_c.data(), b_c.data(), centre_c.data(),
+                  half_c.data(), C, iterations, out.data());
+    for (int side = 0; side < 2; ++side)  // the c probes, then the d probes (certify's order)
+        for (int64_t i = 0; i < C; ++i) {
+            const double t = out[2 * side * C + i], f = out[(2 * side + 1) * C + i];
+            double& w = worst[owner[i] * nq + joint_c[i]];
+            if (f > w) w = f, when[owner[i] * nq + joint_c[i]] = t;
+        }
+}
+
+}  // namespace dmh
