@@ -138,8 +138,7 @@ def solve_sd(rows: StageRows, spline, backend: str = "auto") -> tuple[np.ndarray
     Returns:
         ``(sd, solver)``: ``sd`` None where the rows admit no parameterization (an empty
         controllable set, a start that cannot be controlled, or a forward pass that fails after
-        toppra's retries); ``solver`` ``"compiled"`` or
-        ``"toppra"``, the one that answered.
+        toppra's retries); ``solver`` ``"compiled"`` or ``"toppra"``, the one that answered.
 
     Raises:
         InvalidArgument: an unknown backend, or ``"compiled"`` where the core is not built.
