@@ -21,6 +21,7 @@
 #include "planner.hpp"
 #include "ppoly.hpp"
 #include "refine.hpp"
+#include "topp.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -476,6 +477,36 @@ NB_MODULE(_native, m) {
     }, "B"_a, "V"_a, "centre"_a, "half"_a, "best"_a, "slack"_a, "max_levels"_a, "left"_a, "right"_a,
     "Per joint, the bound (nq,) of drake_mh.trajectories.bound.kinematic_bound's halving loop on the Bernstein\n"
     "coefficients B (P, n1, nq) (values seen V (Pv, m, nq); de Casteljau's halves left, right (n1, n1)).");
+
+    m.def("topp_ra", [](Floats gp, Batch A, Batch B, Batch C, Floats x_lo, Floats x_hi) {
+        const size_t N1 = gp.shape(0), R = A.shape(1);
+        if (N1 < 2 || A.shape(0) != N1 || B.shape(0) != N1 || C.shape(0) != N1 || B.shape(1) != R ||
+            C.shape(1) != R || x_lo.shape(0) != N1 || x_hi.shape(0) != N1)
+            throw nb::value_error("topp_ra: gridpoints (N+1,) with N >= 1; rows A, B, C (N+1, R); x_lo, x_hi (N+1,)");
+        for (size_t i = 0; i + 1 < N1; ++i)
+            if (!(gp.data()[i + 1] > gp.data()[i]) || !std::isfinite(gp.data()[i + 1]) || !std::isfinite(gp.data()[i]))
+                throw nb::value_error("topp_ra: the gridpoints must be finite and strictly increasing");
+        if (!all_finite(A.data(), A.size()) || !all_finite(B.data(), B.size()) || !all_finite(C.data(), C.size()))
+            throw nb::value_error("topp_ra: the rows A, B, C must be finite");
+        for (size_t i = 0; i < N1; ++i)
+            if (std::isnan(x_lo.data()[i]) || std::isnan(x_hi.data()[i]))
+                throw nb::value_error("topp_ra: x_lo, x_hi must not be NaN (-inf, inf: no bound)");
+        double* K = new double[2 * N1];
+        double* xs = new double[N1];
+        double* us = new double[N1];
+        int64_t stage;
+        {
+            nb::gil_scoped_release unlocked;
+            for (size_t i = 0; i < N1; ++i) xs[i] = NAN, us[i] = NAN, K[2 * i] = NAN, K[2 * i + 1] = NAN;
+            stage = dmh::topp_ra(gp.data(), (int64_t)N1, A.data(), B.data(), C.data(), (int64_t)R, x_lo.data(),
+                                 x_hi.data(), K, xs, us);
+        }
+        return nb::make_tuple(stage, owned(xs, {N1}), owned(us, {N1 - 1}), owned(K, {N1, 2}));
+    }, "gridpoints"_a, "A"_a, "B"_a, "C"_a, "x_lo"_a, "x_hi"_a,
+    "TOPP-RA from rest to rest (the toppra package's TOPPRA with its seidel solver): stage i's rows\n"
+    "A[i] u + B[i] x + C[i] <= 0 (N+1, R) in u = s'' on [s_i, s_{i+1}] and x = s'^2 at s_i, bounds\n"
+    "x_lo[i] <= x_i <= x_hi[i]. (stage, xs (N+1,), us (N,), K (N+1, 2)): stage -1 solved, else the\n"
+    "stage where it failed (xs then NaN from there on).");
 
     // the (entry, buffer) pair of drake_mh.scene.batch.CollisionModel.free_function's make_one:
     // entry(q, clearance, self_clearance, buffer), the checker as the buffer

@@ -8,7 +8,8 @@ robot's position limits and the requested limits within ``1 + tol``, or raises.
   reachability analysis", IEEE T-RO 2018; the ``toppra`` package): the path is the ``C²``
   cubic spline of :func:`~drake_mh.trajectories.paths.joint_path`; velocity, acceleration and
   torque limits (torque ``a(s) s̈ + b(s) ṡ² + c(s)`` with gravity, coefficients from the
-  plant-compiled RNEA of :mod:`~drake_mh.trajectories.dynamics`), seidel solver, toppra's
+  plant-compiled RNEA of :mod:`~drake_mh.trajectories.dynamics`), toppra's seidel TOPP-RA (ported to
+  the compiled core where it is built: the package's answers), toppra's
   interpolation discretization plus the same rows at ``check_points`` interior points of every
   gridpoint interval (:mod:`~drake_mh.trajectories.toppra_time`). The time law is built from toppra's gridpoints and ``ṡ`` with constant ``s̈``
   between gridpoints — the same law as toppra's ``ParametrizeConstAccel``, which does not

@@ -4,8 +4,10 @@
 (Pham & Pham, "A new approach to time-optimal path parameterization based on reachability
 analysis", IEEE T-RO 2018; the ``toppra`` package): velocity rows at the gridpoints, second-order
 rows (acceleration, torque with gravity from the plant-compiled RNEA) at both ends and at interior
-check points of every gridpoint interval (:func:`_dense_constraints`), seidel solver, and the time
-law with constant ``s̈`` between gridpoints (:func:`timing_from_gridpoints`). ``method=
+check points of every gridpoint interval (:func:`~drake_mh.trajectories.toppra_solve.stage_rows`),
+solved by the compiled core's port of toppra's seidel TOPP-RA where it is built, else by the
+package (:func:`~drake_mh.trajectories.toppra_solve.solve_sd`), and the time law with constant
+``s̈`` between gridpoints (:func:`timing_from_gridpoints`). ``method=
 "drake-toppra"`` solves the same spline and gridpoints with Drake's ``Toppra`` (:func:`_drake_toppra`).
 
 Limits come in as arrays (``limits["velocity"]`` etc., ``(nq,)``, ``inf`` for none) already
@@ -21,6 +23,7 @@ from scipy.interpolate import PPoly
 from drake_mh.errors import InfeasibleTrajectory, InvalidArgument
 from drake_mh.trajectories.dynamics import batch_dynamics
 from drake_mh.trajectories.paths import joint_path
+from drake_mh.trajectories.toppra_solve import solve_sd, stage_rows
 from drake_mh.trajectories.trajectory import Trajectory
 
 __all__ = ["toppra_like", "timing_from_gridpoints", "gravity_torques"]
@@ -107,125 +110,6 @@ def _gridpoints(spline, knots: np.ndarray, gridpoints: int | None) -> np.ndarray
     return gp
 
 
-class _ToppraPath:
-    """toppra's geometric-path interface over a scipy spline (``AbstractGeometricPath``)."""
-
-    def __init__(self, spline):
-        self.spline = spline
-        self.dof = spline.c.shape[2]
-        self.path_interval = np.array([spline.x[0], spline.x[-1]])
-        self.waypoints = (spline.x, spline(spline.x))
-
-    def __call__(self, s, order=0):
-        return self.spline(s, nu=order)
-
-    def eval(self, s):
-        return self.spline(s)
-
-    def evald(self, s):
-        return self.spline(s, nu=1)
-
-    def evaldd(self, s):
-        return self.spline(s, nu=2)
-
-    @property
-    def duration(self):
-        return self.path_interval[1] - self.path_interval[0]
-
-
-def _velocity_constraint(spline, vmax):
-    """toppra ``xbound`` constraint ``ṡ² <= min_j vmax_j² / p_j'(s_i)²`` at every gridpoint.
-
-    Same bound as toppra's ``JointVelocityConstraint`` (without its per-call string
-    formatting); the interior of each interval gets velocity rows in :func:`_dense_constraints`.
-    A rigorous variant (largest ``|p'|`` over both neighbouring intervals) was measured 3-6 %
-    slower than Drake's ``Toppra`` at 100 gridpoints on random Panda paths, against 1-2.5 %
-    faster for rows at interior check points followed by the certification's time scaling.
-    """
-    from toppra.constraint import LinearConstraint
-
-    class _Velocity(LinearConstraint):
-        def __init__(self):
-            super().__init__()
-            self.dof = spline.c.shape[2]
-
-        def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
-            ps = np.abs(spline(gridpoints, nu=1))
-            with np.errstate(divide="ignore"):
-                xmax = np.min(np.where(ps > 0, vmax ** 2 / ps ** 2, np.inf), axis=1)
-            xbound = np.column_stack([np.zeros(len(gridpoints)), np.minimum(xmax, 1e16)])
-            return None, None, None, None, None, None, xbound
-
-    return _Velocity()
-
-
-def _dense_constraints(robot, spline, vmax, amax, tmax, fractions) -> list:
-    """Velocity, acceleration and torque rows at several points of every gridpoint interval.
-
-    toppra's interpolation discretization checks the second-order constraint
-    ``a(s) u + b(s) x + c(s)`` at both ends of each interval, with ``x(s) = x_i + 2 u (s - s_i)``
-    (constant ``s̈ = u``). The same linear rows in ``(u_i, x_i)`` hold at any ``σ`` inside:
-    ``[a(σ) + 2 (σ - s_i) b(σ)] u_i + b(σ) x_i + c(σ)``. Checking at ``fractions`` of each
-    interval shrinks what can be missed between check points (the certification and, if
-    needed, a time scaling catch the rest). Velocity: ``a = 0``, ``b = p'²``, ``c = 0`` against
-    ``v_max²``; acceleration: ``a = p'``, ``b = p''``, ``c = 0``; torque: ``a = M p'``,
-    ``b = M p'' + C(p, p') p'``, ``c = g`` (gravity included).
-
-    One toppra constraint object per fraction: toppra's seidel wrapper multiplies each
-    object's ``F`` with its rows, and one object with every row (126 x 63 for the Panda) made
-    OpenBLAS go multi-threaded — measured 100-200 ms per solve on a loaded 2-core machine
-    instead of ~1 ms.
-    """
-    from toppra.constraint import DiscretizationType, LinearConstraint
-
-    use_vel = np.any(np.isfinite(vmax))
-    use_acc = np.any(np.isfinite(amax))
-    use_tau = np.any(np.isfinite(tmax))
-    lims = np.minimum(np.r_[vmax ** 2 if use_vel else [], amax if use_acc else [],
-                            tmax if use_tau else []], 1e12)
-    phi = np.asarray(fractions, dtype=float)
-    m = len(lims)
-    cache: dict = {}
-
-    def rows(gridpoints):
-        key = (len(gridpoints), float(gridpoints[-1]))
-        if key not in cache:
-            N1 = len(gridpoints)
-            h = np.r_[np.diff(gridpoints), 0.0]  # stage N: only its own point
-            sig = gridpoints[:, None] + phi[None, :] * h[:, None]  # (N+1, F)
-            S = sig.ravel()
-            P, Ps, Pss = spline(S), spline(S, nu=1), spline(S, nu=2)
-            A, B, C = [], [], []
-            if use_vel:
-                A.append(np.zeros_like(Ps)), B.append(Ps ** 2), C.append(np.zeros_like(Ps))
-            if use_acc:
-                A.append(Ps), B.append(Pss), C.append(np.zeros_like(Ps))
-            if use_tau:
-                a, b, c = batch_dynamics(robot).path_coefficients(P, Ps, Pss)
-                A.append(a), B.append(b), C.append(c)
-            A, B, C = (np.hstack(x) for x in (A, B, C))  # (N1*F, m)
-            off = (2.0 * (sig - gridpoints[:, None])).ravel()[:, None]
-            cache.clear()
-            cache[key] = ((A + off * B).reshape(N1, len(phi), m), B.reshape(N1, len(phi), m),
-                          C.reshape(N1, len(phi), m))
-        return cache[key]
-
-    class _Rows(LinearConstraint):
-        def __init__(self, k):
-            super().__init__()
-            self.k = k
-            self.dof = robot.nq
-            self.identical = True
-            self.discretization_type = DiscretizationType.Interpolation
-
-        def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
-            a, b, c = rows(gridpoints)
-            F = np.vstack([np.eye(m), -np.eye(m)])
-            return a[:, self.k], b[:, self.k], c[:, self.k], F, np.r_[lims, lims], None, None
-
-    return [_Rows(k) for k in range(len(phi))]
-
-
 def _diagnose(robot, method, spline, gp, factors, effort) -> InfeasibleTrajectory:
     """Turn a failed solve into an exception that says why (gravity or limits)."""
     if "torque" in factors:
@@ -242,7 +126,8 @@ def _diagnose(robot, method, spline, gp, factors, effort) -> InfeasibleTrajector
                                 "check the limits and the path")
 
 
-def toppra_like(W, robot, limits: dict, method: str, factors: dict, gridpoints, bc_type, check_points) -> Trajectory:
+def toppra_like(W, robot, limits: dict, method: str, factors: dict, gridpoints, bc_type, check_points,
+                backend: str = "auto") -> Trajectory:
     """One toppra (or Drake ``Toppra``) solve through the waypoints ``W (K, nq)``.
 
     Args:
@@ -252,6 +137,9 @@ def toppra_like(W, robot, limits: dict, method: str, factors: dict, gridpoints, 
         method: ``"toppra"`` or ``"drake-toppra"``.
         factors: quantity -> fraction of its limit; only these quantities are enforced.
         gridpoints, bc_type, check_points: as for :func:`~drake_mh.trajectories.retime.retime`.
+        backend: which solves ``"toppra"``'s rows (:data:`~drake_mh.trajectories.toppra_solve.BACKENDS`:
+            ``"auto"`` the compiled core where built, else the ``toppra`` package); the trajectory's
+            ``info["solver"]`` says which did.
 
     Raises:
         InfeasibleTrajectory: no parameterization (the message says whether gravity is why).
@@ -261,25 +149,17 @@ def toppra_like(W, robot, limits: dict, method: str, factors: dict, gridpoints, 
     vmax = limits["velocity"] * factors.get("velocity", np.inf)
     amax = limits["acceleration"] * factors.get("acceleration", np.inf)
     tmax = limits["torque"] * factors.get("torque", np.inf)
+    info = {"gridpoints": len(gp), "path_knots": len(spline.x)}
     if method == "toppra":
-        import toppra.algorithm as algo
-
-        cons = []
-        if "velocity" in factors:
-            cons.append(_velocity_constraint(spline, vmax))
-        if factors:
-            cons += _dense_constraints(robot, spline, vmax, amax, tmax,
-                                       np.linspace(0.0, 1.0, int(check_points) + 2))
-        instance = algo.TOPPRA(cons, _ToppraPath(spline), gridpoints=gp, solver_wrapper="seidel",
-                               parametrizer="ParametrizeConstAccel")
-        sdd, sd, _ = instance.compute_parameterization(0.0, 0.0)
+        rows = stage_rows(robot, spline, gp, vmax, amax, tmax, np.linspace(0.0, 1.0, int(check_points) + 2),
+                          velocity_bound="velocity" in factors)
+        sd, info["solver"] = solve_sd(rows, spline, backend)
         if sd is None:
             raise _diagnose(robot, method, spline, gp, factors, limits["torque"])
         timing = timing_from_gridpoints(gp, sd)
     else:
         timing = _drake_toppra(robot, spline, gp, factors, vmax, amax, tmax, limits["torque"])
-    return Trajectory(spline, timing, tuple(robot.joint_names), method,
-                      {"gridpoints": len(gp), "path_knots": len(spline.x)})
+    return Trajectory(spline, timing, tuple(robot.joint_names), method, info)
 
 
 _DRAKE_BIG = 1e9

@@ -6,7 +6,8 @@ import toppra
 
 import drake_mh
 from drake_mh.trajectories.paths import joint_path
-from drake_mh.trajectories.toppra_time import _ToppraPath, propose_gridpoints
+from drake_mh.trajectories.toppra_solve import _ToppraPath
+from drake_mh.trajectories.toppra_time import propose_gridpoints
 
 PANDA = drake_mh.load_robot("panda")
 
