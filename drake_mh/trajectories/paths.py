@@ -13,6 +13,8 @@ segment between its two waypoints and refits (the spline then hugs the polyline 
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 from scipy.interpolate import CubicSpline, PPoly
 
@@ -72,6 +74,11 @@ def piece_extrema(spline: PPoly) -> tuple[np.ndarray, np.ndarray]:
     return V.min(axis=0), V.max(axis=0)
 
 
+_LAST: dict = {}
+"""The last :func:`joint_path` answer, by robot, waypoints and options: verification fits the
+spline to certify it, then the retiming fits the same one."""
+
+
 def joint_path(W: np.ndarray, robot, method: str = "retime", bc_type: str = "not-a-knot",
                max_refinements: int = 8) -> tuple[CubicSpline, np.ndarray]:
     """Cubic spline ``s -> q`` through the waypoints, inside the position limits.
@@ -85,13 +92,28 @@ def joint_path(W: np.ndarray, robot, method: str = "retime", bc_type: str = "not
         max_refinements: rounds of straight-segment insertion before giving up.
 
     Returns:
-        ``(spline, s_waypoints)``: the spline and the parameter ``s`` [rad] of each original
-        waypoint (breakpoints include inserted points).
+        ``(spline, s_waypoints)``: the spline (its arrays read-only: the last answer is reused
+        for the same robot, waypoints and options) and the parameter ``s`` [rad] of each
+        original waypoint (breakpoints include inserted points).
 
     Raises:
         InfeasibleTrajectory: the spline still leaves the limits after the refinements.
     """
     P = np.array(W, dtype=float)
+    key = (id(robot), P.shape, P.tobytes(), bc_type, max_refinements, np.asarray(robot.lower).tobytes(),
+           np.asarray(robot.upper).tobytes(), np.asarray(robot.continuous).tobytes())
+    last = _LAST.get("answer")
+    if last is not None and last[0] == key and last[1]() is robot:
+        return last[2], last[3].copy()
+    spline, s_way = _fit(P, robot, method, bc_type, max_refinements)
+    for array in (spline.c, spline.x):  # shared by the callers that fit the same spline
+        array.flags.writeable = False
+    _LAST["answer"] = (key, weakref.ref(robot), spline, s_way)
+    return spline, s_way.copy()
+
+
+def _fit(P: np.ndarray, robot, method: str, bc_type: str, max_refinements: int) -> tuple[CubicSpline, np.ndarray]:
+    """:func:`joint_path`'s fit (its docstring), not cached."""
     orig = np.ones(len(P), dtype=bool)  # which rows of P are the caller's waypoints
     lower = np.where(robot.continuous, -np.inf, robot.lower)
     upper = np.where(robot.continuous, np.inf, robot.upper)
