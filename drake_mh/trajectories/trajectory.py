@@ -219,7 +219,8 @@ class Trajectory:
         """``[q, q', ..., q^(order)]``, each ``(len(t), nq)``, at times ``t`` [s].
 
         At a break the value of the piece to the right is returned (scipy's convention);
-        use :meth:`evaluate_piece` for one-sided values.
+        use :meth:`evaluate_piece` for one-sided values. Evaluated in the compiled core where it
+        is built (the same pieces and chain rule as scipy's ``PPoly``), else by scipy.
         """
         t = self._check_times(t)
         if order < 0 or order > 3:
