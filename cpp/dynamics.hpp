@@ -85,13 +85,13 @@ inline void rnea(int64_t F, const int64_t* parent, const double* KR, const doubl
                 const double* ck = com + 3 * k;
                 const double* Ik = inertia + 9 * k;
                 for (int a = 0; a < 3; ++a) c[a] = Rk[3 * a] * ck[0] + Rk[3 * a + 1] * ck[1] + Rk[3 * a + 2] * ck[2];
-                for (int a = 0; a < 3; ++a)  // I = R inertia R^T
-                    for (int b = 0; b < 3; ++b) {
-                        double s = 0.0;
-                        for (int e = 0; e < 3; ++e)
-                            for (int f = 0; f < 3; ++f) s += Rk[3 * a + e] * Ik[3 * e + f] * Rk[3 * b + f];
-                        I[3 * a + b] = s;
-                    }
+                double RI[9];  // I = (R inertia) R^T
+                for (int a = 0; a < 3; ++a)
+                    for (int f = 0; f < 3; ++f)
+                        RI[3 * a + f] = Rk[3 * a] * Ik[f] + Rk[3 * a + 1] * Ik[3 + f] + Rk[3 * a + 2] * Ik[6 + f];
+                for (int a = 0; a < 3; ++a)
+                    for (int b = 0; b < 3; ++b)
+                        I[3 * a + b] = RI[3 * a] * Rk[3 * b] + RI[3 * a + 1] * Rk[3 * b + 1] + RI[3 * a + 2] * Rk[3 * b + 2];
                 cross3(wk, c, t1);
                 cross3(wk, t1, t2);
                 cross3(dwk, c, t1);
