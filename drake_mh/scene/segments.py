@@ -211,13 +211,18 @@ class PathCertificate:
         return f"PathCertificate(segment {self.first_failure}: {self.segments.reason(self.first_failure)})"
 
 
+TIGHTEN_PROBES = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
+"""Fractions of every segment where :func:`_tighten` reads the sphere-model clearance first: the
+smaller the smallest value seen, the fewer raised certificates are blocked and tried again."""
+
+
 def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, self_clearance: float,
              tolerance: float, max_evaluations: int) -> SegmentCertificate:
     """Refine only the segments whose bound could hold the path's minimum down by more than
     ``tolerance``.
 
     The path's smallest clearance is at most ``U``, the sphere-model clearance at its waypoints
-    and segment midpoints (configurations on it). A segment certified with ``lower >= U -
+    and at :data:`TIGHTEN_PROBES` of every segment (configurations on it). A segment certified with ``lower >= U -
     tolerance`` already keeps the path's bound within ``tolerance`` of that minimum; only the
     others are first certified at the raised clearance ``U - tolerance / 2`` (a plain
     certificate: pieces are cut only until their bound clears that level, no per-segment minimum
@@ -234,7 +239,7 @@ def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, s
     """
     if not cert.all_certified or not len(cert.lower) or not np.all(np.isfinite(cert.lower)):
         return cert
-    probes = np.vstack([Q, 0.5 * (Q[:-1] + Q[1:])])
+    probes = np.vstack([Q] + [Q[:-1] + f * (Q[1:] - Q[:-1]) for f in TIGHTEN_PROBES])
     upper = float(np.min(scene.batch_min_distance(probes)))
     refine = np.flatnonzero(cert.lower < upper - tolerance)
     if not len(refine):
