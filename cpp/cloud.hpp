@@ -139,6 +139,15 @@ inline double cloud_nearest2(const Packed& s, int64_t k, double x, double y, dou
 // The radius [m] of cloud k's balls.
 inline double cloud_radius(const Packed& s, int64_t k) { return cloud_row(s.dims, (int64_t)cloud_row(s.dims, k)[0])[0]; }
 
+// Whether every point of cloud k is at least reach [m] (> 0) from (x, y, z) (in W), by the tree
+// alone (cloud_free without the grid's bounds: where they could not tell).
+inline bool cloud_exact_free(const Packed& s, int64_t k, double x, double y, double z, double reach) {
+    int64_t first, nodes;
+    cloud_rows(s, k, first, nodes);
+    const double lim = reach * reach;
+    return cloud_tree_nearest2(s.dims, first, nodes, x, y, z, lim, lim) >= lim;
+}
+
 // Whether every point of cloud k is at least reach [m] (> 0) from (x, y, z) (in W): the grid's
 // bounds first, the tree (stopping at the first point nearer) where they cannot tell. Not
 // inlined: its callers' loops stay small.
@@ -148,10 +157,7 @@ __attribute__((noinline)) inline bool cloud_free(const Packed& s, int64_t k, dou
     cloud_bounds(s, k, x, y, z, lower, upper);
     if (lower >= reach) return true;
     if (upper < reach) return false;
-    int64_t first, nodes;
-    cloud_rows(s, k, first, nodes);
-    const double lim = reach * reach;
-    return cloud_tree_nearest2(s.dims, first, nodes, x, y, z, lim, lim) >= lim;
+    return cloud_exact_free(s, k, x, y, z, reach);
 }
 
 }  // namespace dmh

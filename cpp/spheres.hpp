@@ -179,14 +179,24 @@ inline bool range_free(const Packed& s, int64_t b, int64_t a, int64_t s0, int64_
         const double rho = cloud_radius(s, k);
         for (int64_t i0 = s0; i0 < s1; i0 += 8) {
             const int64_t n = std::min<int64_t>(8, s1 - i0);
-            double cx[8], cy[8], cz[8], lower[8];
+            double cx[8], cy[8], cz[8], lower[8], upper[8], margin[8];
+            int64_t open[8], m = 0;
             for (int64_t j = 0; j < n; ++j) {
                 lane_point(a, s.s_offset + 3 * (i0 + j), R, p, L, b, cx[j], cy[j], cz[j]);
-                lower[j] = cloud_lower(s, k, cx[j], cy[j], cz[j]);
+                cloud_bounds(s, k, cx[j], cy[j], cz[j], lower[j], upper[j]);
             }
-            for (int64_t j = 0; j < n; ++j) {
+            for (int64_t j = 0; j < n; ++j) {  // the undecided spheres, the deepest inside its lower bound first
                 const double reach = clearance + s.s_radius[i0 + j] + rho;
-                if (lower[j] < reach && !cloud_free(s, k, cx[j], cy[j], cz[j], reach)) return false;
+                if (lower[j] >= reach) continue;
+                if (upper[j] < reach) return false;
+                margin[j] = lower[j] - reach;
+                int64_t at = m++;
+                for (; at > 0 && margin[open[at - 1]] > margin[j]; --at) open[at] = open[at - 1];
+                open[at] = j;
+            }
+            for (int64_t u = 0; u < m; ++u) {
+                const int64_t j = open[u];
+                if (!cloud_exact_free(s, k, cx[j], cy[j], cz[j], clearance + s.s_radius[i0 + j] + rho)) return false;
             }
         }
         return true;

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-GRID_CELLS = 65_536
+GRID_CELLS = 131_072
 """About the most cells of a point cloud's grid (:mod:`.kernels.cloud`)."""
 
 CELL_MIN = 0.02
