@@ -20,15 +20,19 @@ constexpr int64_t CLOUD_COUNT_BITS = 6;  // a leaf's code: -(1 + start * 64 + co
 constexpr int CLOUD_MORTON_BITS = 8;     // cloud.py MORTON_BITS: per axis
 constexpr int CLOUD_STACK = 3 * CLOUD_MORTON_BITS + 66;  // deeper than any path of the tree
 constexpr int64_t CLOUD_NODE_ROWS = 5;
+constexpr int64_t CLOUD_CELLS_PER_ROW = 12;  // cloud.py: a cell's value is a uint16, twelve to a row of three doubles
+constexpr double CLOUD_STEPS = 256.0;        // cloud.py STEPS: a cell's value counts steps of h / 256
+constexpr double CLOUD_SATURATED = 65535.0;  // a value at least this many steps
 const double CLOUD_UPPER = 2.0 * std::sqrt(3.0);  // [cells] a cell's upper bound exceeds its lower by this
 
 inline const double* cloud_row(const double* dims, int64_t row) { return dims + 3 * row; }
 
 // Bounds (lower, upper) [m] of the distance from (x, y, z) (in W) to the nearest point of cloud
-// k, from its grid (cloud.py cloud_bounds): inside the grid, the cell's value L (no point of the
-// cell is nearer to a point of the cloud) and L + 2 sqrt(3) h; outside, from the cell of the
-// point's projection y onto the grid's box: d(x)^2 >= |x - y|^2 + L^2 (every point of the cloud
-// lies in the box, on the far side of y) and d(x) <= |x - y| + L + 2 sqrt(3) h.
+// k, from its grid (cloud.py cloud_bounds): inside the grid, the cell's value u steps of h / 256
+// below L (no point of the cell is nearer than L to a point of the cloud), u h / 256, and
+// (u + 1) h / 256 + 2 sqrt(3) h (inf where u saturated); outside, from the cell of the point's
+// projection y onto the grid's box: d(x)^2 >= |x - y|^2 + L(y)^2 (every point of the cloud lies
+// in the box, on the far side of y) and d(x) <= |x - y| + L(y) + 2 sqrt(3) h.
 inline void cloud_bounds(const Packed& s, int64_t k, double x, double y, double z, double& lower, double& upper) {
     const double* d = s.dims;
     const int64_t st = (int64_t)cloud_row(d, k)[0];
@@ -36,22 +40,26 @@ inline void cloud_bounds(const Packed& s, int64_t k, double x, double y, double 
     const double h = head[1];
     const double ox = head[3], oy = head[4], oz = head[5];
     const int64_t nx = (int64_t)head[6], ny = (int64_t)head[7], nz = (int64_t)head[8];
+    const uint16_t* cells = reinterpret_cast<const uint16_t*>(cloud_row(d, st + 3));
+    const double step = h / CLOUD_STEPS;
     const double fx = (x - ox) / h, fy = (y - oy) / h, fz = (z - oz) / h;
     if (fx >= 0.0 && fy >= 0.0 && fz >= 0.0 && fx < (double)nx && fy < (double)ny && fz < (double)nz) {
-        lower = cloud_row(d, st + 3)[((int64_t)fx * ny + (int64_t)fy) * nz + (int64_t)fz];
-        upper = (lower + CLOUD_UPPER * h) * (1.0 + 1e-9) + 1e-9;
+        const double u = (double)cells[((int64_t)fx * ny + (int64_t)fy) * nz + (int64_t)fz];
+        lower = u * step;
+        upper = u < CLOUD_SATURATED ? ((u + 1.0) * step + CLOUD_UPPER * h) * (1.0 + 1e-9) + 1e-9 : INFINITY;
         return;
     }
     const int64_t ix = fx < 0.0 ? 0 : fx >= (double)nx ? nx - 1 : (int64_t)fx;
     const int64_t iy = fy < 0.0 ? 0 : fy >= (double)ny ? ny - 1 : (int64_t)fy;
     const int64_t iz = fz < 0.0 ? 0 : fz >= (double)nz ? nz - 1 : (int64_t)fz;
-    const double L = cloud_row(d, st + 3)[(ix * ny + iy) * nz + iz];
+    const double u = (double)cells[(ix * ny + iy) * nz + iz], L = u * step;
     const double gx = std::max(std::max(ox - x, 0.0), x - ox - (double)nx * h);
     const double gy = std::max(std::max(oy - y, 0.0), y - oy - (double)ny * h);
     const double gz = std::max(std::max(oz - z, 0.0), z - oz - (double)nz * h);
     const double out2 = gx * gx + gy * gy + gz * gz;
     lower = std::sqrt(out2 + L * L) * (1.0 - 1e-12);  // round-off: never above the distance
-    upper = (std::sqrt(out2) + L + CLOUD_UPPER * h) * (1.0 + 1e-9) + 1e-9;
+    upper = u < CLOUD_SATURATED ? (std::sqrt(out2) + (u + 1.0) * step + CLOUD_UPPER * h) * (1.0 + 1e-9) + 1e-9
+                                : INFINITY;
 }
 
 // The lower bound of cloud_bounds alone (the same value).

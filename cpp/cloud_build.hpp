@@ -194,7 +194,7 @@ inline CloudTable cloud_table(const double* P, int64_t N, double rho, double h_m
         if (split - f.lo > CLOUD_LEAF) stack.push_back({f.lo, split, id, 0});
     }
     const int64_t M = (int64_t)child.size() / 2;
-    const int64_t head = 3 + (n_cells + 2) / 3;
+    const int64_t head = 3 + (n_cells + CLOUD_CELLS_PER_ROW - 1) / CLOUD_CELLS_PER_ROW;
     CloudTable table;
     table.rows = head + N + CLOUD_NODE_ROWS * M;
     table.data.reset(new double[3 * table.rows]);  // every value written below
@@ -229,8 +229,11 @@ inline CloudTable cloud_table(const double* P, int64_t N, double rho, double h_m
         }
         n[14] = 0.0;
     }
-    for (int64_t c = 0; c < n_cells; ++c) t[9 + c] = std::max(h * std::sqrt(D[c]) - 1e-9, 0.0);
-    for (int64_t c = 9 + n_cells; c < 3 * head; ++c) t[c] = 0.0;
+    for (int64_t c = 9; c < 3 * head; ++c) t[c] = 0.0;
+    uint16_t* cells = reinterpret_cast<uint16_t*>(t + 9);  // the cells' values in steps of h / 256, rounded down
+    const double step = h / CLOUD_STEPS;
+    for (int64_t c = 0; c < n_cells; ++c)
+        cells[c] = (uint16_t)std::min(std::floor(std::max(h * std::sqrt(D[c]) - 1e-9, 0.0) / step), CLOUD_SATURATED);
     return table;
 }
 

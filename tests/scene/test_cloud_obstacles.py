@@ -80,16 +80,16 @@ def surface_cloud(seed: int, n: int) -> np.ndarray:
 
 @pytest.mark.parametrize("max_cells", [64.0, 4096.0])
 def test_grid_values_bound_every_point_of_their_cell(max_cells):
-    """Each cell's value is at most the distance from its box to the nearest point (sampled
-    densely in the box, corners included) and its value + 2 sqrt(3) h at least that distance at
-    every sample."""
-    from drake_mh.scene.kernels.cloud import UPPER
+    """Each cell's lower bound (its steps of h / 256) is at most the distance from its box to
+    the nearest point (sampled densely in the box, corners included), and one step more + 2
+    sqrt(3) h at least that distance at every sample."""
+    from drake_mh.scene.kernels.cloud import STEPS, UPPER
     from drake_mh.scene.kernels.cloud_table import cloud_table
 
     points = surface_cloud(8, 3000)
     table, low, high = cloud_table(points, 0.0, 0.01, max_cells)
-    h, shape = table[0, 1], table[2].astype(int)
-    values = table[3:].reshape(-1)[:np.prod(shape)].reshape(shape)
+    h, shape, head = table[0, 1], table[2].astype(int), int(table[0, 2])
+    steps = table[3:head].reshape(-1).view(np.uint16)[:np.prod(shape)].reshape(shape).astype(float)
     assert np.array_equal(low, points.min(axis=0)) and np.array_equal(high, points.max(axis=0))
     assert np.all(low + shape * h > high)  # the grid holds every point
     from scipy.spatial import cKDTree
@@ -98,8 +98,8 @@ def test_grid_values_bound_every_point_of_their_cell(max_cells):
     offsets = np.stack(np.meshgrid(*[np.linspace(0.0, 1.0, 4)] * 3, indexing="ij"), -1).reshape(-1, 3)
     for cell in np.random.default_rng(9).integers(0, shape, (300, 3)):
         d = tree.query(low + (cell + offsets) * h)[0]
-        value = values[tuple(cell)]
-        assert value <= d.min() + 1e-12 and value + UPPER * h >= d.max() - 1e-12
+        u = steps[tuple(cell)]
+        assert u * h / STEPS <= d.min() + 1e-12 and (u + 1) * h / STEPS + UPPER * h >= d.max() - 1e-12
 
 
 @pytest.mark.parametrize("build", ["numba", pytest.param("compiled", marks=NATIVE)])

@@ -6,8 +6,9 @@ about ``p_WO[k]`` that holds every point's ball); from row ``s`` the entry (:fun
 
 * row ``s``: ``rho``, the grid's cell size ``h``, where the points start ``f - s``; row ``s+1``
   the grid's corner ``o`` in W (the points' lowest coordinates), row ``s+2`` its cell counts
-  ``(nx, ny, nz)``; from row ``s+3`` one value per cell, three to a row (cell ``(i, j, l)``, the
-  box ``o + h [i, i+1] x [j, j+1] x [l, l+1]``, is number ``(i ny + j) nz + l``);
+  ``(nx, ny, nz)``; from row ``s+3`` one value per cell, a uint16 (the rows' bytes read as
+  :data:`CELLS_PER_ROW` uint16 a row; cell ``(i, j, l)``, the box ``o + h [i, i+1] x [j, j+1] x
+  [l, l+1]``, is number ``(i ny + j) nz + l``);
 * rows ``f .. f+N-1``: the points in W, sorted by their Morton codes (each coordinate's offset
   from ``o`` quantised to :data:`MORTON_BITS` bits over the largest side of the bounding box,
   the bits interleaved, x first; equal codes in their input order);
@@ -20,12 +21,14 @@ about ``p_WO[k]`` that holds every point's ball); from row ``s`` the entry (:fun
   more than :data:`LEAF` points is a node (code >= 0, its number; node 0 is the root, nodes in
   depth-first order), else a leaf, code ``-(1 + start * 64 + count)``.
 
-**The grid's bounds.** A cell's value ``L`` is the least distance between its box and the box of
-a cell that holds a point, ``h |max(|Δ| - 1, 0)|`` over the cell offsets Δ (the exact Euclidean
+**The grid's bounds.** Let ``L`` be the least distance between a cell's box and the box of a
+cell that holds a point, ``h |max(|Δ| - 1, 0)|`` over the cell offsets Δ (the exact Euclidean
 distance transform, in cells, of the occupied cells dilated by one cell, times h, less 1e-9 for
 round-off): no point of the cell is nearer than ``L`` to any point of the cloud. That occupied
 cell's box is within ``L`` of the cell and both have the diagonal ``sqrt(3) h``, so some point
-is within ``L + 2 sqrt(3) h`` of any point of the cell. Outside the grid, with y the projection
+is within ``L + 2 sqrt(3) h`` of any point of the cell. The cell holds ``u``, the whole steps of
+``h / STEPS`` in ``L`` (at most :data:`SATURATED`): ``u h / STEPS <= L < (u + 1) h / STEPS``
+(unbounded above where saturated); a grid of 2 bytes a cell stays in a core's cache. Outside the grid, with y the projection
 of x onto the grid's box (which holds every point, on the far side of y's tangent plane):
 ``d(x)^2 >= |x - y|^2 + L(y)^2`` and ``d(x) <= |x - y| + L(y) + 2 sqrt(3) h``
 (:func:`cloud_bounds`).
@@ -65,7 +68,16 @@ STACK = 3 * MORTON_BITS + 66
 codes): the searches' stack."""
 
 UPPER = 2.0 * np.sqrt(3.0)
-"""[cells] a cell's upper bound exceeds its lower bound by this."""
+"""[cells] a cell's upper bound exceeds its lower bound by this (and one step)."""
+
+STEPS = 256.0
+"""A cell's value counts steps of ``h / STEPS``."""
+
+SATURATED = 65535.0
+"""A cell's value of this many steps: at least that far (no upper bound)."""
+
+CELLS_PER_ROW = 12
+"""Cells' values (uint16) in a row of the table (three float64)."""
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
@@ -76,22 +88,27 @@ def cloud_bounds(k, dims, x, y, z):
     h = dims[s, 1]
     ox, oy, oz = dims[s + 1, 0], dims[s + 1, 1], dims[s + 1, 2]
     nx, ny, nz = int(dims[s + 2, 0]), int(dims[s + 2, 1]), int(dims[s + 2, 2])
+    cells = dims.view(np.uint16)  # (D, CELLS_PER_ROW)
+    step = h / STEPS
     fx, fy, fz = (x - ox) / h, (y - oy) / h, (z - oz) / h
     if fx >= 0.0 and fy >= 0.0 and fz >= 0.0 and fx < nx and fy < ny and fz < nz:
         c = (int(fx) * ny + int(fy)) * nz + int(fz)
-        lower = dims[s + 3 + c // 3, c % 3]
-        return lower, (lower + UPPER * h) * (1.0 + 1e-9) + 1e-9
+        u = float(cells[s + 3 + c // CELLS_PER_ROW, c % CELLS_PER_ROW])
+        upper = ((u + 1.0) * step + UPPER * h) * (1.0 + 1e-9) + 1e-9 if u < SATURATED else np.inf
+        return u * step, upper
     ix = 0 if fx < 0.0 else nx - 1 if fx >= nx else int(fx)
     iy = 0 if fy < 0.0 else ny - 1 if fy >= ny else int(fy)
     iz = 0 if fz < 0.0 else nz - 1 if fz >= nz else int(fz)
     c = (ix * ny + iy) * nz + iz
-    cell = dims[s + 3 + c // 3, c % 3]
+    u = float(cells[s + 3 + c // CELLS_PER_ROW, c % CELLS_PER_ROW])
+    cell = u * step
     gx = max(max(ox - x, 0.0), x - ox - nx * h)
     gy = max(max(oy - y, 0.0), y - oy - ny * h)
     gz = max(max(oz - z, 0.0), z - oz - nz * h)
     out2 = gx * gx + gy * gy + gz * gz
     # round-off: the lower bound never above the distance, the upper never below
-    return math.sqrt(out2 + cell * cell) * (1.0 - 1e-12), (math.sqrt(out2) + cell + UPPER * h) * (1.0 + 1e-9) + 1e-9
+    upper = (math.sqrt(out2) + (u + 1.0) * step + UPPER * h) * (1.0 + 1e-9) + 1e-9 if u < SATURATED else np.inf
+    return math.sqrt(out2 + cell * cell) * (1.0 - 1e-12), upper
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from drake_mh.scene.kernels.cloud import COUNT_BITS, LEAF, MORTON_BITS, NODE_ROWS
+from drake_mh.scene.kernels.cloud import CELLS_PER_ROW, COUNT_BITS, LEAF, MORTON_BITS, NODE_ROWS, SATURATED, STEPS
 
 _RADIX = 11
 """Bits per pass of the codes' radix sort."""
@@ -211,14 +211,15 @@ def cloud_table(P, radius, h_min, max_cells):
     code, order = _morton_order(P, low, high)
     children = _tree(code)
     M, n_cells = children.shape[0], nx * ny * nz
-    head = 3 + (n_cells + 2) // 3
+    head = 3 + (n_cells + CELLS_PER_ROW - 1) // CELLS_PER_ROW
     table = np.zeros((head + N + NODE_ROWS * M, 3))
     table[0, 0], table[0, 1], table[0, 2] = radius, h, head
     for a in range(3):
         table[1, a], table[2, a] = low[a], shape[a]
-    values = table[3:head].reshape(-1)
+    cells = table[3:head].reshape(-1).view(np.uint16)  # steps of h / STEPS, rounded down
+    step = h / STEPS
     for c in range(n_cells):
-        values[c] = max(h * D[c] - 1e-9, 0.0)
+        cells[c] = np.uint16(min(np.floor(max(h * D[c] - 1e-9, 0.0) / step), SATURATED))
     for j in range(N):
         for a in range(3):
             table[head + j, a] = P[order[j], a]
