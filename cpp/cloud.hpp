@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <vector>
 
 #include "packed.hpp"
 
@@ -19,7 +18,7 @@ constexpr int64_t CLOUD_LEAF = 16;       // cloud.py LEAF: a range of at most th
 constexpr int64_t CLOUD_COUNT_BITS = 6;  // a leaf's code: -(1 + start * 64 + count)
 constexpr int CLOUD_MORTON_BITS = 8;     // cloud.py MORTON_BITS: per axis
 constexpr int CLOUD_STACK = 3 * CLOUD_MORTON_BITS + 66;  // deeper than any path of the tree
-constexpr int64_t CLOUD_NODE_ROWS = 5;
+constexpr int64_t CLOUD_NODE_ROWS = 5;      // a node: its children's boxes (4 rows), their codes
 constexpr int64_t CLOUD_CELLS_PER_ROW = 12;  // cloud.py: a cell's value is a uint16, twelve to a row of three doubles
 constexpr double CLOUD_STEPS = 256.0;        // cloud.py STEPS: a cell's value counts steps of h / 256
 constexpr double CLOUD_SATURATED = 65535.0;  // a value at least this many steps
@@ -91,6 +90,8 @@ inline double cloud_tree_nearest2(const double* d, int64_t first, int64_t nodes,
         if (c >= 0) {
             const double* n = cloud_row(d, nodes + CLOUD_NODE_ROWS * c);
             const int64_t ca = (int64_t)n[12], cb = (int64_t)n[13];
+            // the children's rows on their way while this node's boxes are compared (the first
+            // child's first row follows this node's, the second child's may be far)
             if (ca >= 0) __builtin_prefetch(cloud_row(d, nodes + CLOUD_NODE_ROWS * ca) + 8);
             if (cb >= 0) {
                 __builtin_prefetch(cloud_row(d, nodes + CLOUD_NODE_ROWS * cb));
@@ -126,6 +127,7 @@ inline double cloud_tree_nearest2(const double* d, int64_t first, int64_t nodes,
     }
 }
 
+// The first point row and the first node row of cloud k.
 inline void cloud_rows(const Packed& s, int64_t k, int64_t& first, int64_t& nodes) {
     const int64_t st = (int64_t)cloud_row(s.dims, k)[0], N = (int64_t)cloud_row(s.dims, k)[1];
     first = st + (int64_t)cloud_row(s.dims, st)[2];
