@@ -16,7 +16,7 @@
 #include "exact_bind.hpp"
 #include "segments.hpp"
 #include "fk.hpp"
-#include "kdtree.hpp"
+#include "cloud_build.hpp"
 #include "lm.hpp"
 #include "planner.hpp"
 #include "ppoly.hpp"
@@ -133,7 +133,7 @@ static const char* FREE_ONE =
 
 NB_MODULE(_native, m) {
     m.doc() = "drake_mh's compiled core (C++): the sphere-model collision check and clearance values, certified "
-              "segments, forward kinematics, point clouds' k-d trees, rrt_connect's planner and certified motion check, "
+              "segments, forward kinematics, point clouds' tables, rrt_connect's planner and certified motion check, "
               "the Levenberg-Marquardt IK, inverse dynamics and trajectory bounds.";
     m.attr("simd_width") = dmh::W;
     m.attr("lanes") = dmh::CollisionChecker::LANES;
@@ -274,23 +274,27 @@ NB_MODULE(_native, m) {
 
     bind_planner(m);
 
-    m.def("kd_build", [](Points P) {
+    m.def("cloud_table", [](Points P, double radius, double h_min, double max_cells) {
         const size_t N = P.shape(0);
         const double* p = P.data();
+        if (N == 0 || N >= (size_t(1) << 32)) throw nb::value_error("cloud_table: from 1 to 2^32 - 1 points");
         for (size_t j = 0; j < 3 * N; ++j)
-            if (!std::isfinite(p[j])) throw nb::value_error("kd_build: the points must be finite");
-        int64_t* order = new int64_t[N + 1];
-        int64_t* axes = new int64_t[N + 1];
-        double* tree = new double[3 * N + 1];
-        double* boxes = new double[6 * N + 1];
+            if (!std::isfinite(p[j])) throw nb::value_error("cloud_table: the points must be finite");
+        if (!(radius >= 0.0 && h_min > 0.0 && max_cells >= 1.0 && std::isfinite(radius) && std::isfinite(h_min) &&
+              std::isfinite(max_cells)))
+            throw nb::value_error("cloud_table: radius >= 0, h_min > 0 and max_cells >= 1, finite");
+        double* low = new double[3];
+        double* high = new double[3];
+        dmh::CloudTable table;
         {
             nb::gil_scoped_release unlocked;
-            dmh::kd_build(p, (int64_t)N, order, axes, tree, boxes);
+            table = dmh::cloud_table(p, (int64_t)N, radius, h_min, max_cells, low, high);
         }
-        return nb::make_tuple(owned(order, {N}), owned(axes, {N}), owned(tree, {N, 3}), owned(boxes, {N, 6}));
-    }, "P"_a,
-    "(order (N,), axes (N,), tree (N, 3), boxes (N, 6)) of finite points P (N, 3) C-contiguous float64:\n"
-    "the implicit k-d tree of drake_mh.scene.kernels.pieces.kd_build, the same tree (the same selection).");
+        return nb::make_tuple(owned(table.data.release(), {(size_t)table.rows, 3}), owned(low, {3}), owned(high, {3}));
+    }, "P"_a, "radius"_a, "h_min"_a, "max_cells"_a,
+    "(table (rows, 3), low (3,), high (3,)) of finite points P (N, 3) C-contiguous float64: a point\n"
+    "cloud's shape-table entry, drake_mh.scene.kernels.cloud.cloud_table (the same table), and the\n"
+    "points' bounding box.");
 
     // lm.py lm_run / lm_step: the state arrays are BatchLM's, written in place
     using RW = nb::ndarray<double, nb::c_contig, nb::device::cpu>;

@@ -109,7 +109,15 @@ inline vi obstacle_free_v(const Packed& s, int64_t k, double reach, vd x, vd y, 
         const double lim = (reach + d[0]) * (reach + d[0]);
         return dx * dx + dy * dy + dz * dz >= lim;
     }
-    if (kind == CONVEX || kind == CLOUD) {  // one lane at a time (the scalar tests)
+    if (kind == CLOUD) {  // the grid's lower bounds of every lane first (their loads overlap), then the rest
+        const double r = reach + cloud_radius(s, k);
+        double lower[W];
+        for (int i = 0; i < W; ++i) lower[i] = cloud_lower(s, k, x[i], y[i], z[i]);
+        vi free;
+        for (int i = 0; i < W; ++i) free[i] = !alive[i] || lower[i] >= r ? -1 : 0;
+        return free;
+    }
+    if (kind == CONVEX) {  // one lane at a time (the scalar tests)
         vi free;
         for (int i = 0; i < W; ++i) free[i] = !alive[i] || point_free(s, k, reach, x[i], y[i], z[i]) ? -1 : 0;
         return free;
@@ -167,6 +175,32 @@ inline bool bounding_close(const Packed& s, int64_t g, int64_t k, double clearan
 // Spheres s0 .. s1-1 (frame a) of lane b all at least clearance from obstacle k.
 inline bool range_free(const Packed& s, int64_t b, int64_t a, int64_t s0, int64_t s1, double clearance,
                        const double* R, const double* p, int64_t L, int64_t k) {
+    if (s.kinds[k] == CLOUD) {  // eight spheres at a time: the grid's lower bounds first (their loads overlap)
+        const double rho = cloud_radius(s, k);
+        for (int64_t i0 = s0; i0 < s1; i0 += 8) {
+            const int64_t n = std::min<int64_t>(8, s1 - i0);
+            double cx[8], cy[8], cz[8], lower[8], upper[8], margin[8];
+            int64_t open[8], m = 0;
+            for (int64_t j = 0; j < n; ++j) {
+                lane_point(a, s.s_offset + 3 * (i0 + j), R, p, L, b, cx[j], cy[j], cz[j]);
+                cloud_bounds(s, k, cx[j], cy[j], cz[j], lower[j], upper[j]);
+            }
+            for (int64_t j = 0; j < n; ++j) {  // the undecided spheres, the deepest inside its lower bound first
+                const double reach = clearance + s.s_radius[i0 + j] + rho;
+                if (lower[j] >= reach) continue;
+                if (upper[j] < reach) return false;
+                margin[j] = lower[j] - reach;
+                int64_t at = m++;
+                for (; at > 0 && margin[open[at - 1]] > margin[j]; --at) open[at] = open[at - 1];
+                open[at] = j;
+            }
+            for (int64_t u = 0; u < m; ++u) {
+                const int64_t j = open[u];
+                if (!cloud_exact_free(s, k, cx[j], cy[j], cz[j], clearance + s.s_radius[i0 + j] + rho)) return false;
+            }
+        }
+        return true;
+    }
     for (int64_t i = s0; i < s1; ++i) {
         double x, y, z;
         lane_point(a, s.s_offset + 3 * i, R, p, L, b, x, y, z);
@@ -183,7 +217,9 @@ __attribute__((noinline)) inline bool groups_free(const Packed& s, int64_t b, in
     for (int64_t u = u0; u < u1; ++u) {
         double x, y, z;
         lane_point(a, s.u_offset + 3 * u, R, p, L, b, x, y, z);
-        if (!point_free(s, k, clearance + s.u_radius[u], x, y, z) &&
+        const bool bound_free = s.kinds[k] == CLOUD ? cloud_lower(s, k, x, y, z) >= clearance + s.u_radius[u] + cloud_radius(s, k)
+                                                    : point_free(s, k, clearance + s.u_radius[u], x, y, z);
+        if (!bound_free &&
             !range_free(s, b, a, s.u_start[u], s.u_start[u + 1], clearance, R, p, L, k))
             return false;
     }

@@ -5,10 +5,11 @@ Four parts, each a row of the grid (``part``):
 * ``decompose``: CoACD and the cover-excess bound of :mod:`drake_mh.geometry.convex_pieces` on
   the test meshes (``tests/data/``) from an empty cache (cold), then a cache hit (median of 5).
 * ``cloud_build``: the point-cloud structure of the batched checks for 50,000 points drawn
-  uniformly in [-0.8, 0.8]² x [0, 1] m — the whole shape-table entry (grid of distance bounds
-  + implicit k-d tree; median of 7), the k-d tree alone by the compiled core (where it is built:
-  the table's own) and by the numba kernel (median of 11 rounds, the two interleaved), and,
-  beside them, scipy's ``cKDTree`` and a 2 cm Euclidean distance transform (median of 7).
+  uniformly in [-0.8, 0.8]² x [0, 1] m — the whole shape table (``obstacle_arrays``: grid of
+  distance bounds + bounding-box tree; median of 7), the cloud's entry alone by the compiled
+  core (where it is built: the table's own) and by the numba kernel (median of 11 rounds, the
+  two interleaved), and, beside them, scipy's ``cKDTree`` and a 2 cm Euclidean distance
+  transform (median of 7).
 * ``batched``: ``Scene.collision_free`` (N = 1024 random configurations of the capsule Panda,
   ns per configuration, median over interleaved rounds; warm = 20 consecutive calls) on the
   shared benchmark scenes (:mod:`drake_mh.scene.benchmark`): ten mixed primitives, the same as
@@ -23,7 +24,7 @@ Four parts, each a row of the grid (``part``):
   (1 per cm²; VAMP samples a fixed 10,000 per obstacle, then thins to 2 cm), balls of 2.5 mm
   (VAMP's point radius), cropped to the robot's reach. Recorded per case: the scene build
   (meshes: decomposition from an empty cache and from a warm one; every form: the kernels'
-  arrays, for a cloud its grid and k-d tree), the batched check on 1024 random configurations
+  arrays, for a cloud its grid and tree), the batched check on 1024 random configurations
   (the same for every form of a problem), and ``solve_motion(problem, "rrt_connect")`` with its
   defaults (plan + verification + toppra retiming), timed whole (wall and CPU) after one untimed
   call per robot and form in the process. Success is ``solve_motion``'s verified success; a
@@ -127,13 +128,14 @@ def _cloud_build(case: Case) -> dict:
 
     from drake_mh.geometry.cloud import PointCloud
     from drake_mh.scene.batch import obstacle_arrays
+    from drake_mh.scene.cloud_grid import CELL_MIN, GRID_CELLS
     from drake_mh.scene.compiled_check import compiled_core
-    from drake_mh.scene.kernels.pieces import kd_build
+    from drake_mh.scene.kernels.cloud_table import cloud_table
     from drake_mh.scene.obstacle import Obstacle
 
     points = case.rng.uniform([-0.8, -0.8, 0.0], [0.8, 0.8, 1.0], (CLOUD_POINTS, 3))
     obstacle = Obstacle("cloud", PointCloud(points, 0.0), np.eye(4))
-    kd_build(points[:100])  # compiled before the clock
+    cloud_table(points[:100], 0.0, CELL_MIN, float(GRID_CELLS))  # compiled before the clock
 
     def edt():
         lo = points.min(axis=0)
@@ -143,11 +145,11 @@ def _cloud_build(case: Case) -> dict:
         ndimage.distance_transform_edt(grid)
 
     out = {"success": True, "points": CLOUD_POINTS, "load": load_average()}
-    builds = {"kd_numba": lambda: kd_build(points)}
+    builds = {"table_numba": lambda: cloud_table(points, 0.0, CELL_MIN, float(GRID_CELLS))}
     core = compiled_core()
     if core is not None:  # the table's own build, interleaved round by round with numba's
-        core.kd_build(points[:100])
-        builds["kd_compiled"] = lambda: core.kd_build(points)
+        core.cloud_table(points[:100], 0.0, CELL_MIN, float(GRID_CELLS))
+        builds["table_compiled"] = lambda: core.cloud_table(points, 0.0, CELL_MIN, float(GRID_CELLS))
     rounds = {key: [] for key in builds}
     for _ in range(11):
         for key, build in builds.items():
@@ -158,6 +160,7 @@ def _cloud_build(case: Case) -> dict:
                           ("ckdtree", lambda: cKDTree(points)), ("edt", edt)):
         out[f"{key}_wall"], out[f"{key}_cpu"] = timed(function, 7)
     out["build_structure"] = out["table_wall"]
+    out["load_end"] = load_average()
     return out
 
 
@@ -328,13 +331,14 @@ def summarize(records: list[dict]) -> str:
                                   f"{r['build_cold']:.2f} / {r['build_cold_cpu']:.2f}", _ms(r["build_warm"], ".2f")]
                                  for r in parts["decompose"]])
     for r in parts.get("cloud_build", []):
-        lines += ["", f"### Cloud structure, {r['points']:,} points (median of 7; k-d trees: of 11, "
+        lines += ["", f"### Cloud structure, {r['points']:,} points (median of 7; the entry alone: of 11, "
                       f"interleaved; load average {r.get('load', float('nan')):.1f})", ""]
         lines += markdown_table(["structure", "wall [ms]", "CPU [ms]"], [
             [label, _ms(r[f"{key}_wall"]), _ms(r[f"{key}_cpu"])]
-            for label, key in (("shape-table entry: grid of distance bounds + k-d tree", "table"),
-                               ("k-d tree alone, compiled core (the table's where built)", "kd_compiled"),
-                               ("k-d tree alone, numba kernel", "kd_numba"), ("scipy cKDTree", "ckdtree"),
+            for label, key in (("obstacle_arrays: the whole shape table of the cloud", "table"),
+                               ("the entry alone (grid + tree), compiled core (the table's where built)",
+                                "table_compiled"),
+                               ("the entry alone, numba kernel", "table_numba"), ("scipy cKDTree", "ckdtree"),
                                ("2 cm distance transform (scipy EDT)", "edt")) if f"{key}_wall" in r])
     for r in parts.get("batched", []):
         lines += ["", f"### Batched check, ten mixed obstacles, capsule Panda, N = {r['n_query']}", ""]
@@ -351,8 +355,8 @@ def summarize(records: list[dict]) -> str:
         lines += ["", f"### Planning: `solve_motion(problem, \"rrt_connect\")`, {timeouts} s per plan", "",
                   "Whole call = plan + verification + toppra retiming, over the verified motions; build = the "
                   "form's scene from the primitives (meshes: files, decomposition, cover bound; cloud: "
-                  "sampling and cropping), kernel arrays = the batched checks' tables (a cloud's grid and k-d "
-                  "tree); batched check on the same random configurations for every form."]
+                  "sampling and cropping), kernel arrays = the batched checks' tables (a cloud's grid and "
+                  "bounding-box tree); batched check on the same random configurations for every form."]
         lines += _plan_tables(plans)
     lines += ["", "### Anchors (not measured here)", ""]
     lines += markdown_table(["peer", "problems", "build", "query", "planning"], ANCHORS)

@@ -37,7 +37,8 @@ def obstacle_arrays(obstacles) -> tuple:
     as the kernels read them (``v_WO`` zero: the kernels' per-lane displacement, set by segment
     checks). A mesh is one kernel obstacle per convex piece (:func:`obstacle_owners` maps them
     back), a point cloud one; ``dims`` is the shape table of :mod:`.kernels.pieces`: the
-    obstacles' rows, then the pieces' planes and the clouds' k-d trees."""
+    obstacles' rows, then the pieces' planes and the clouds' grids and trees
+    (:mod:`.kernels.cloud`)."""
     from drake_mh.geometry.cloud import PointCloud
     from drake_mh.geometry.convex_pieces import convex_pieces
     from drake_mh.scene.cloud_grid import cloud_entry

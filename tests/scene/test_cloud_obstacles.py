@@ -1,7 +1,8 @@
 """Point-cloud obstacles in a Scene: the batched checks and segment certificates never call
 free what the brute-force distance of the robot's geometry to every point shows closer; the
-exact distances equal it; the k-d tree in the kernels finds the nearest point, built by the numba
-kernel or by the compiled core (a valid tree, numba's own, the same answers)."""
+exact distances equal it; the structure in the kernels (a grid of distance bounds and a tree of
+the points) finds the nearest point and bounds it, built by the numba kernel or by the compiled
+core (a valid tree, the same table, the same answers)."""
 
 from __future__ import annotations
 
@@ -44,33 +45,125 @@ def cloud_scene(seed: int, radius: float = 0.01):
 
 
 @pytest.mark.parametrize("core", CORES)
-def test_kd_tree_finds_the_nearest_point_and_the_grid_bounds_it(core, monkeypatch):
-    from drake_mh.scene.kernels.pieces import _cloud_bounds, cloud_floor, cloud_free, cloud_nearest2
+def test_tree_finds_the_nearest_point_and_the_grid_bounds_it(core, monkeypatch):
+    """Against the brute-force distance to every point: the search's nearest distance, the
+    grid's lower and upper bounds (inside and outside the grid), and "free" on both sides of the
+    exact distance."""
+    from drake_mh.scene.kernels.cloud import cloud_bounds, cloud_floor, cloud_free, cloud_nearest2
 
-    monkeypatch.setenv("DRAKE_MH_COMPILED_CORE", core)  # which builds the k-d tree
+    monkeypatch.setenv("DRAKE_MH_COMPILED_CORE", core)  # which builds the table
     rng = np.random.default_rng(0)
-    for n in (1, 7, 9, 1000, 20000):
-        points = rng.normal(size=(n, 3)) * [1.0, 0.3, 0.01]  # flat: one grid layer, splits on every axis
-        points[: n // 3] = points[0]  # repeated points
+    for n in (1, 7, 17, 1000, 20000):
+        points = rng.normal(size=(n, 3)) * [1.0, 0.3, 0.01]  # flat: one grid layer
+        points[: n // 3] = points[0]  # repeated points: equal codes, split at the middle
         scene = Scene(PANDA)
         scene.add("c", PointCloud(points, 0.0))
         dims = scene.obstacle_arrays[4]
-        far = rng.normal(size=(30, 3)) * 10.0  # outside the grid: the search prunes by its boxes alone
+        far = rng.normal(size=(30, 3)) * 10.0  # outside the grid: bounded from the grid's faces
         for x in np.vstack([rng.normal(size=(150, 3)), far,
                             points[rng.integers(0, n, 50)] + rng.normal(0, 0.03, (50, 3))]):
             exact = np.min(np.sum((points - x) ** 2, axis=1))
             assert cloud_nearest2(0, dims, *x, np.inf) == pytest.approx(exact, rel=1e-12, abs=1e-15)
             assert cloud_nearest2(0, dims, *x, exact * 0.5) == exact * 0.5  # nothing nearer than the bound
             assert cloud_floor(0, dims, *x) <= np.sqrt(exact)  # the grid's value is a lower bound
-            assert _cloud_bounds(0, dims, *x)[1] >= np.sqrt(exact)  # and its upper bound one above
+            assert cloud_bounds(0, dims, *x)[1] >= np.sqrt(exact)  # and its upper bound one above
             for reach in (0.5 * np.sqrt(exact), 2.0 * np.sqrt(exact) + 1e-9):
                 assert cloud_free(0, dims, *x, reach) == (np.sqrt(exact) >= reach)
+
+
+def surface_cloud(seed: int, n: int) -> np.ndarray:
+    """n points on two box surfaces (the clouds the structure is made for)."""
+    rng = np.random.default_rng(seed)
+    return np.vstack([box_surface(rng, n // 2, (0.6, 0.8, 0.04), (0.5, 0.0, 0.2)),
+                      box_surface(rng, n - n // 2, (0.2, 0.3, 0.3), (0.4, 0.1, 0.5))])
+
+
+@pytest.mark.parametrize("max_cells", [64.0, 4096.0])
+def test_grid_values_bound_every_point_of_their_cell(max_cells):
+    """Each cell's lower bound (its steps of h / 256) is at most the distance from its box to
+    the nearest point (sampled densely in the box, corners included), and one step more + 2
+    sqrt(3) h at least that distance at every sample."""
+    from drake_mh.scene.kernels.cloud import STEPS, UPPER
+    from drake_mh.scene.kernels.cloud_table import cloud_table
+
+    points = surface_cloud(8, 3000)
+    table, low, high = cloud_table(points, 0.0, 0.01, max_cells)
+    h, shape, head = table[0, 1], table[2].astype(int), int(table[0, 2])
+    steps = table[3:head].reshape(-1).view(np.uint16)[:np.prod(shape)].reshape(shape).astype(float)
+    assert np.array_equal(low, points.min(axis=0)) and np.array_equal(high, points.max(axis=0))
+    assert np.all(low + shape * h > high)  # the grid holds every point
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(points)
+    offsets = np.stack(np.meshgrid(*[np.linspace(0.0, 1.0, 4)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    for cell in np.random.default_rng(9).integers(0, shape, (300, 3)):
+        d = tree.query(low + (cell + offsets) * h)[0]
+        u = steps[tuple(cell)]
+        assert u * h / STEPS <= d.min() + 1e-12 and (u + 1) * h / STEPS + UPPER * h >= d.max() - 1e-12
+
+
+@pytest.mark.parametrize("build", ["numba", pytest.param("compiled", marks=NATIVE)])
+@pytest.mark.parametrize("n", [1, 2, 16, 17, 5000])
+def test_table_holds_the_points_in_a_valid_tree(build, n):
+    """The points once each, in Morton order; each node's two boxes are the bounding boxes of
+    its children's points, its children's ranges follow each other, a leaf holds at most LEAF
+    points."""
+    from drake_mh.scene.kernels.cloud import COUNT_BITS, LEAF, NODE_ROWS
+    from drake_mh.scene.kernels.cloud_table import cloud_table
+
+    rng = np.random.default_rng(4)
+    P = rng.normal(size=(n, 3)) * [1.0, 0.2, 0.05]
+    P[n // 2: n // 2 + n // 5] = P[0]  # repeated points
+    P[: n // 10, 2] = 0.0  # ties on one axis
+    if build == "numba":
+        table = cloud_table(P, 0.0, 0.02, 1000.0)[0]
+    else:
+        from drake_mh import _native
+
+        table = _native.cloud_table(P, 0.0, 0.02, 1000.0)[0]
+    first = int(table[0, 2])
+    tree = table[first:first + n]
+    assert np.array_equal(np.unique(tree, axis=0, return_counts=True)[1], np.unique(P, axis=0, return_counts=True)[1])
+    assert np.array_equal(np.unique(tree, axis=0), np.unique(P, axis=0))  # the same points, as often
+    nodes = table[first + n:]
+
+    def check(code, lo):  # -> hi, the end of the child's range
+        if code < 0:
+            v = -code - 1
+            assert v >> COUNT_BITS == lo and (v & 63) <= LEAF
+            return lo + (v & 63)
+        rows = nodes[NODE_ROWS * code: NODE_ROWS * code + NODE_ROWS]
+        mid = check(int(rows[4, 0]), lo)
+        hi = check(int(rows[4, 1]), mid)
+        for side, (a, b) in enumerate(((lo, mid), (mid, hi))):
+            if b > a:
+                assert np.array_equal(rows[2 * side], tree[a:b].min(axis=0))
+                assert np.array_equal(rows[2 * side + 1], tree[a:b].max(axis=0))
+        return hi
+
+    assert check(0, 0) == n
+    assert len(nodes) % NODE_ROWS == 0
+
+
+@NATIVE
+def test_compiled_table_equals_numbas():
+    from drake_mh import _native
+    from drake_mh.scene.kernels.cloud_table import cloud_table
+
+    rng = np.random.default_rng(5)
+    for P in (rng.normal(size=(20001, 3)), rng.integers(0, 4, (3000, 3)).astype(float), np.zeros((1, 3)),
+              surface_cloud(6, 30000)):
+        for cells in (1.0, 65536.0):
+            for mine, theirs in zip(_native.cloud_table(P, 0.01, 0.02, cells), cloud_table(P, 0.01, 0.02, cells)):
+                assert np.array_equal(mine, theirs)  # the same steps on the same values
+    with pytest.raises(ValueError, match="finite"):
+        _native.cloud_table(np.array([[0.0, np.nan, 1.0]]), 0.0, 0.02, 10.0)
 
 
 def test_grid_distance_transform_equals_scipys():
     from scipy import ndimage
 
-    from drake_mh.scene.kernels.pieces import distance_transform
+    from drake_mh.scene.kernels.cloud_table import distance_transform
 
     rng = np.random.default_rng(3)
     for shape, share in (((1, 1, 1), 1.0), ((5, 1, 9), 0.1), ((17, 12, 8), 0.02), ((30, 31, 29), 0.001)):
@@ -78,60 +171,6 @@ def test_grid_distance_transform_equals_scipys():
         zero.flat[rng.integers(zero.size)] = True
         assert np.allclose(distance_transform(zero), ndimage.distance_transform_edt(~zero), rtol=0, atol=1e-12)
     assert np.all(distance_transform(np.zeros((3, 4, 5), bool)) == np.inf)
-
-
-def compiled_kd_build(P):
-    from drake_mh import _native
-
-    return _native.kd_build(P)
-
-
-@pytest.mark.parametrize("build", ["numba", pytest.param("compiled", marks=NATIVE)])
-@pytest.mark.parametrize("n", [1, 9, 5000])
-def test_kd_build_orders_the_points_into_a_valid_tree(build, n):
-    from drake_mh.scene.kernels.pieces import _LEAF, kd_build
-
-    rng = np.random.default_rng(4)
-    P = rng.normal(size=(n, 3)) * [1.0, 0.2, 0.05]
-    P[n // 2: n // 2 + n // 5] = P[0]  # repeated points
-    P[: n // 10, 2] = 0.0  # ties on one axis
-    order, axes, tree, boxes = (kd_build if build == "numba" else compiled_kd_build)(P)
-    assert np.all(boxes[[i for i in range(n) if i not in mids(n)]] == 0.0)  # other rows: 0
-    assert np.array_equal(np.sort(order), np.arange(len(P))) and np.array_equal(tree, P[order])
-    stack = [(0, len(P))]
-    while stack:  # every median splits its range on its axis; its box is the range's bounding box
-        lo, hi = stack.pop()
-        if hi - lo <= _LEAF:
-            continue
-        mid, a = (lo + hi) // 2, axes[(lo + hi) // 2]
-        assert np.all(tree[lo:mid, a] <= tree[mid, a]) and np.all(tree[mid + 1:hi, a] >= tree[mid, a])
-        assert np.array_equal(boxes[mid], np.r_[tree[lo:hi].min(axis=0), tree[lo:hi].max(axis=0)])
-        stack += [(lo, mid), (mid + 1, hi)]
-
-
-def mids(n: int) -> set:
-    """The medians of the split ranges of an implicit k-d tree of n points."""
-    from drake_mh.scene.kernels.pieces import _LEAF
-
-    found, stack = set(), [(0, n)]
-    while stack:
-        lo, hi = stack.pop()
-        if hi - lo > _LEAF:
-            found.add((lo + hi) // 2)
-            stack += [(lo, (lo + hi) // 2), ((lo + hi) // 2 + 1, hi)]
-    return found
-
-
-@NATIVE
-def test_compiled_kd_build_builds_the_numba_tree():
-    from drake_mh.scene.kernels.pieces import kd_build
-
-    rng = np.random.default_rng(5)
-    for P in (rng.normal(size=(20001, 3)), rng.integers(0, 4, (3000, 3)).astype(float), np.zeros((0, 3))):
-        for mine, theirs in zip(compiled_kd_build(P), kd_build(P.copy())):
-            assert np.array_equal(mine, theirs)  # the same selection, step for step
-    with pytest.raises(ValueError, match="finite"):
-        compiled_kd_build(np.array([[0.0, np.nan, 1.0]]))
 
 
 @NATIVE

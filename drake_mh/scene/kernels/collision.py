@@ -34,8 +34,8 @@ import numpy as np
 from drake_mh._support.compilation import stable_calls
 from drake_mh.kinematics.kernels import frames_block
 from drake_mh.scene.kernels.pairs import FASTMATH, _lane_point, capsule_gap, pair_clearance, pair_floor
-from drake_mh.scene.kernels.pieces import (CLOUD, CONVEX, cloud_free, cloud_nearest2, cloud_radius, convex_free,
-                                           convex_value)
+from drake_mh.scene.kernels.cloud import cloud_free, cloud_nearest2, cloud_radius
+from drake_mh.scene.kernels.pieces import CLOUD, CONVEX, convex_free, convex_value
 
 LANES = 128
 """Configurations per block (measured: 32 / 64 / 128 lanes gave 164 / 137 / 123 ns per Panda
@@ -385,7 +385,7 @@ def _compact_centres(c, offsets, r, Rc, pc, ccx, ccy, ccz):
 def _cloud_sd(c, k, dims, v_WO, tc, ccx, ccy, ccz, cap, grow, sd):
     """``sd[i]``: the signed distance of point ``cc[i]`` to cloud k (at ``tc[i]``) where it is
     below ``cap[i] + grow``, else a lower bound of it at least ``cap[i] + grow`` (the search looks
-    no farther: :func:`.pieces.cloud_nearest2`). ``cap`` may be ``sd`` itself (each value is
+    no farther: :func:`.cloud.cloud_nearest2`). ``cap`` may be ``sd`` itself (each value is
     read before it is written). A cloud's signed distance is at least ``-rho``, the value given
     where the cap is below it."""
     rho = cloud_radius(k, dims)
