@@ -405,23 +405,24 @@ class CollisionModel:
         travel = np.maximum(np.abs(lower), np.abs(upper))
         nq = self.robot.nq
 
-        def row(anchor: int, offset: np.ndarray) -> np.ndarray:
-            out = np.zeros(nq)
-            length = float(np.linalg.norm(offset))  # from the anchor's origin to the point
-            k = anchor
+        s_offset = self.model_arrays[4]
+        anchors = np.asarray(self.sphere_anchor, dtype=np.int64)
+        out = np.zeros((len(anchors), nq))
+        link = [float(np.linalg.norm(Kp[k])) for k in range(len(parent))]  # from the parent's origin to k's
+        for anchor in np.unique(anchors):  # every sphere of one anchor at once, up its chain
+            mine = np.flatnonzero(anchors == anchor)
+            length = np.array([float(np.linalg.norm(o)) for o in s_offset[mine]])  # anchor's origin to the centre
+            k = int(anchor)
             while k >= 0:
                 j = chain.qidx[k]
                 if chain.kind[k] == 0:
-                    out[j] += length
+                    out[mine, j] += length
                 else:
-                    out[j] += 1.0
-                    length += travel[j]
-                length += float(np.linalg.norm(Kp[k]))  # from the parent's origin to k's
+                    out[mine, j] += 1.0
+                    length = length + travel[j]
+                length = length + link[k]
                 k = parent[k]
-            return out
-
-        s_offset = self.model_arrays[4]
-        return np.array([row(a, o) for a, o in zip(self.sphere_anchor, s_offset)]).reshape(-1, nq)
+        return out
 
     @functools.cached_property
     def reach(self) -> np.ndarray:
