@@ -304,7 +304,7 @@ def _normal(robot, limits, quantity: str, scale: float) -> tuple[np.ndarray, np.
 
 _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
 _KIND = {"position": 0, "velocity": 1, "acceleration": 2, "jerk": 3, "torque": 4}
-"""quantity codes of the compiled core's ``certify_samples`` and ``golden_refine``."""
+"""quantity codes of the compiled core's ``certify_samples``."""
 
 
 def _compiled_samples(core, trajectory, robot, quantities, norms, tau):

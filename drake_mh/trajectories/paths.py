@@ -13,6 +13,7 @@ segment between its two waypoints and refits (the spline then hugs the polyline 
 
 from __future__ import annotations
 
+import copy
 import weakref
 
 import numpy as np
@@ -104,12 +105,12 @@ def joint_path(W: np.ndarray, robot, method: str = "retime", bc_type: str = "not
            np.asarray(robot.upper).tobytes(), np.asarray(robot.continuous).tobytes())
     last = _LAST.get("answer")
     if last is not None and last[0] == key and last[1]() is robot:
-        return last[2], last[3].copy()
+        return copy.copy(last[2]), last[3].copy()
     spline, s_way = _fit(P, robot, method, bc_type, max_refinements)
     for array in (spline.c, spline.x):  # shared by the callers that fit the same spline
         array.flags.writeable = False
     _LAST["answer"] = (key, weakref.ref(robot), spline, s_way)
-    return spline, s_way.copy()
+    return copy.copy(spline), s_way.copy()
 
 
 def _fit(P: np.ndarray, robot, method: str, bc_type: str, max_refinements: int) -> tuple[CubicSpline, np.ndarray]:
