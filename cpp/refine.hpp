@@ -22,9 +22,12 @@ struct ChainDynamics {
     const double *KR = nullptr, *Kp = nullptr, *mass = nullptr, *com = nullptr, *inertia = nullptr,
                  *a_world = nullptr, *damping = nullptr, *reflected = nullptr;
 
-    void torques(const double* q, const double* v, const double* a, int64_t nq, double* tau) const {
-        rnea(F, parent, KR, Kp, kind, qidx, mass, com, inertia, a_world, q, v, a, 1, nq, tau);
-        for (int64_t j = 0; j < nq; ++j) tau[j] += damping[j] * v[j] + reflected[j] * a[j];
+    // tau (N, nq) of Q, V, A (N, nq) row-major
+    void torques(const double* Q, const double* V, const double* A, int64_t N, int64_t nq, double* tau) const {
+        rnea(F, parent, KR, Kp, kind, qidx, mass, com, inertia, a_world, Q, V, A, N, nq, tau);
+        for (int64_t n = 0; n < N; ++n)
+            for (int64_t j = 0; j < nq; ++j)
+                tau[n * nq + j] += damping[j] * V[n * nq + j] + reflected[j] * A[n * nq + j];
     }
 };
 
@@ -46,7 +49,7 @@ inline void golden_refine(const PPoly& path, const PPoly& timing, const ChainDyn
         timed_derivatives(path, timing, &t, 1, order, D.data());  // (order + 1, 1, nq)
         double x;
         if (kind[i] == TORQUE) {
-            dynamics->torques(D.data(), D.data() + nq, D.data() + 2 * nq, nq, tau.data());
+            dynamics->torques(D.data(), D.data() + nq, D.data() + 2 * nq, 1, nq, tau.data());
             x = tau[joint[i]];
         } else {
             x = D[order * nq + joint[i]];
@@ -100,11 +103,7 @@ inline void certify_samples(const PPoly& path, const PPoly& timing, const ChainD
     for (int64_t iq = 0; iq < nQ; ++iq)
         if (kinds[iq] == TORQUE && torque.empty()) {
             torque.resize((size_t)(M * nq));
-            const double *Q = D, *V = D + M * nq, *A = D + 2 * M * nq;
-            rnea(dynamics->F, dynamics->parent, dynamics->KR, dynamics->Kp, dynamics->kind, dynamics->qidx,
-                 dynamics->mass, dynamics->com, dynamics->inertia, dynamics->a_world, Q, V, A, M, nq, torque.data());
-            for (int64_t n = 0; n < M * nq; ++n)
-                torque[n] += dynamics->damping[n % nq] * V[n] + dynamics->reflected[n % nq] * A[n];
+            dynamics->torques(D, D + M * nq, D + 2 * M * nq, M, nq, torque.data());
         }
     std::vector<double> r((size_t)(M * nq)), estimate;
     std::vector<int64_t> kind_c, joint_c, order_c;
