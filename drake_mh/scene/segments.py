@@ -212,8 +212,9 @@ class PathCertificate:
 
 
 TIGHTEN_PROBES = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
-"""Fractions of every segment where :func:`_tighten` reads the sphere-model clearance first: the
-smaller the smallest value seen, the fewer raised certificates are blocked and tried again."""
+"""Fractions of a segment that may need refining where :func:`_tighten` reads the sphere-model
+clearance first: the smaller the smallest value seen, the fewer raised certificates are blocked
+and tried again."""
 
 
 def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, self_clearance: float,
@@ -222,11 +223,13 @@ def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, s
     ``tolerance``.
 
     The path's smallest clearance is at most ``U``, the sphere-model clearance at its waypoints
-    and at :data:`TIGHTEN_PROBES` of every segment (configurations on it). A segment certified with ``lower >= U -
-    tolerance`` already keeps the path's bound within ``tolerance`` of that minimum; only the
-    others are first certified at the raised clearance ``U - tolerance / 2`` (a plain
-    certificate: pieces are cut only until their bound clears that level, no per-segment minimum
-    is searched), which puts their ``lower`` within ``tolerance`` of ``U``. Where one is blocked
+    and at :data:`TIGHTEN_PROBES` of every segment whose ``lower`` is below the waypoints' ``U``
+    less ``tolerance`` (configurations on it; ``U`` only falls, so a segment not probed needs no
+    refining). A segment certified with ``lower >= U - tolerance`` already keeps the path's bound
+    within ``tolerance`` of that minimum; only the others are first certified at the raised
+    clearance ``U - tolerance / 2`` (a plain certificate: pieces are cut only until their bound
+    clears that level, no per-segment minimum is searched), which puts their ``lower`` within
+    ``tolerance`` of ``U``. Where one is blocked
     (a configuration on it is below that level), the smallest clearance of that configuration and
     of :data:`RAISED_PROBES` evenly spaced ones of the segment is a smaller value seen: ``U``
     takes it (a segment whose ``lower`` is within ``tolerance`` of it is done) and the segments
@@ -239,9 +242,13 @@ def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, s
     """
     if not cert.all_certified or not len(cert.lower) or not np.all(np.isfinite(cert.lower)):
         return cert
-    probes = np.vstack([Q] + [Q[:-1] + f * (Q[1:] - Q[:-1]) for f in TIGHTEN_PROBES])
-    upper = float(np.min(scene.batch_min_distance(probes)))
+    upper = float(np.min(scene.batch_min_distance(Q)))
     refine = np.flatnonzero(cert.lower < upper - tolerance)
+    if len(refine):  # only a segment that may need refining is probed: ``upper`` only falls
+        QA, dQ = Q[:-1][refine], Q[1:][refine] - Q[:-1][refine]
+        probes = np.vstack([QA + f * dQ for f in TIGHTEN_PROBES])
+        upper = min(upper, float(np.min(scene.batch_min_distance(probes))))
+        refine = refine[cert.lower[refine] < upper - tolerance]
     if not len(refine):
         return cert
     lower, evaluations = cert.lower.copy(), cert.evaluations.copy()
