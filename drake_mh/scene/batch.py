@@ -206,6 +206,7 @@ class CollisionModel:
         self.pair_index = (np.array([a for a, _ in pairs], np.int64), np.array([b for _, b in pairs], np.int64))
         self._use_tables = pair_tables
         self._compiled = {}  # with pairs or not -> (obstacles, drake_mh._native.Clearances): compiled_clearances
+        self._packs = {}  # id(pairs) -> (obstacles, pairs, (ints, floats)): packed
 
     @functools.cached_property
     def pair_arrays(self) -> tuple:
@@ -282,10 +283,17 @@ class CollisionModel:
     def packed(self, obstacles: tuple, pairs: tuple) -> tuple:
         """``(ints, floats)``: :func:`.kernels.packing.pack` of the chain, the spheres, ``obstacles``
         (:func:`obstacle_arrays`; their bounding radii and :meth:`static_gaps`) and ``pairs``
-        (:attr:`pair_arrays` or :attr:`no_pair_arrays`)."""
+        (:attr:`pair_arrays` or :attr:`no_pair_arrays`). The last buffers per ``pairs`` are kept
+        for the same ``obstacles`` tuple (the planner's binding, the batched check and the segment
+        certificates of a new scene share one packing); callers only read them."""
+        cached = self._packs.get(id(pairs))
+        if cached is not None and cached[0] is obstacles and cached[1] is pairs:
+            return cached[2]
         kinds, R_WO, p_WO, _, dims = obstacles
-        return pack(*self._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(obstacles),
-                    self.static_gaps(obstacles), *pairs)
+        buffers = pack(*self._kernel_args(), kinds, R_WO, p_WO, dims, bounding_radii(obstacles),
+                       self.static_gaps(obstacles), *pairs)
+        self._packs[id(pairs)] = (obstacles, pairs, buffers)
+        return buffers
 
     def free_function(self, obstacles: tuple):
         """``f(Q (N, nq), clearance, self_clearance) -> (N,) bool`` against ``obstacles`` (None if
