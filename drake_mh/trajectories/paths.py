@@ -18,6 +18,7 @@ import weakref
 
 import numpy as np
 from scipy.interpolate import CubicSpline, PPoly
+from scipy.linalg.lapack import dgtsv
 
 from drake_mh.errors import InfeasibleTrajectory, InvalidArgument
 
@@ -61,7 +62,7 @@ def piece_extrema(spline: PPoly) -> tuple[np.ndarray, np.ndarray]:
     x, c = spline.x, spline.c  # c: (4, m, nq), highest power first
     h = np.diff(x)[:, None]
     a3, a2, a1 = 3 * c[0], 2 * c[1], c[2]  # derivative 3c0 y² + 2c1 y + c2
-    vals = [spline(x[:-1]), spline(x[1:])]
+    vals = [c[3], ((c[0] * h + c[1]) * h + c[2]) * h + c[3]]  # each piece's own polynomial at its ends
     with np.errstate(divide="ignore", invalid="ignore"):
         disc = a2 ** 2 - 4 * a3 * a1
         sq = np.sqrt(np.maximum(disc, 0.0))
@@ -73,6 +74,35 @@ def piece_extrema(spline: PPoly) -> tuple[np.ndarray, np.ndarray]:
         vals.append(np.where(ok, v, vals[0]))
     V = np.stack(vals)
     return V.min(axis=0), V.max(axis=0)
+
+
+def not_a_knot(s: np.ndarray, P: np.ndarray) -> CubicSpline:
+    """``scipy.interpolate.CubicSpline(s, P)`` (not-a-knot ends) for strictly increasing ``s (K,)``
+    and finite ``P (K, nq)``, ``K >= 2``, without its input checks: scipy's equations for the
+    slopes at the knots (two points: the line; three: the parabola; more: its tridiagonal system,
+    solved by LAPACK's ``dgtsv``), the same coefficients to round-off."""
+    n, dx = len(s), np.diff(s)
+    dxr = dx[:, None]
+    slope = np.diff(P, axis=0) / dxr
+    if n == 2:
+        D = np.vstack([slope[0], slope[0]])
+    elif n == 3:
+        A = np.array([[1.0, 1.0, 0.0], [dx[1], 2.0 * (dx[0] + dx[1]), dx[0]], [0.0, 1.0, 1.0]])
+        D = np.linalg.solve(A, np.vstack([2.0 * slope[0], 3.0 * (dx[0] * slope[1] + dx[1] * slope[0]),
+                                          2.0 * slope[1]]))
+    else:
+        d0, d1 = s[2] - s[0], s[-1] - s[-3]
+        diagonal = np.r_[dx[1], 2.0 * (dx[:-1] + dx[1:]), dx[-2]]
+        upper, lower = np.r_[d0, dx[:-1]], np.r_[dx[1:], d1]
+        b = np.empty_like(P)
+        b[1:-1] = 3.0 * (dxr[1:] * slope[:-1] + dxr[:-1] * slope[1:])
+        b[0] = ((dx[0] + 2.0 * d0) * dx[1] * slope[0] + dx[0] ** 2 * slope[1]) / d0
+        b[-1] = (dx[-1] ** 2 * slope[-2] + (2.0 * d1 + dx[-1]) * dx[-2] * slope[-1]) / d1
+        *_, D, info = dgtsv(lower, diagonal, upper, b, overwrite_b=True)
+        if info != 0:  # a singular system (never for increasing s): scipy's own solve says why
+            return CubicSpline(s, P)
+    t = (D[:-1] + D[1:] - 2.0 * slope) / dxr
+    return CubicSpline.construct_fast(np.stack([t / dxr, (slope - D[:-1]) / dxr - t, D[:-1], P[:-1]]), s)
 
 
 _LAST: dict = {}
@@ -120,7 +150,7 @@ def _fit(P: np.ndarray, robot, method: str, bc_type: str, max_refinements: int) 
     upper = np.where(robot.continuous, np.inf, robot.upper)
     for _ in range(max_refinements + 1):
         s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))]
-        spline = CubicSpline(s, P, bc_type=bc_type)
+        spline = not_a_knot(s, P) if bc_type == "not-a-knot" else CubicSpline(s, P, bc_type=bc_type)
         lo, hi = piece_extrema(spline)
         bad = np.any((lo < lower - 1e-12) | (hi > upper + 1e-12), axis=1)  # (pieces,)
         if not np.any(bad):
