@@ -254,7 +254,7 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
                                                       worst, samples=(tau, D[_ORDER[quantity]].reshape(P, K, nq))))
         if quantity == "position":
             ratios[quantity] = worst
-            Q = trajectory.derivatives(np.r_[T.ravel(), times[quantity]], 0)[0]
+            Q = np.vstack([D[0], trajectory.derivatives(times[quantity], 0)[0]])  # the samples and the peaks
             excess = np.max(np.maximum(np.maximum(Q - robot.upper, robot.lower - Q), 0.0), axis=0)
             excess = np.where(robot.continuous, 0.0, excess)
             continue

@@ -103,7 +103,9 @@ def stage_rows(robot, spline, gridpoints: np.ndarray, vmax, amax, tmax, fraction
     N1, m = len(gp), len(lims)
     h = np.r_[np.diff(gp), 0.0]  # stage N: only its own point
     sig = gp[:, None] + phi[None, :] * h[:, None]  # (N+1, F)
-    S = sig.ravel()
+    sig[:, phi == 0.0] = gp[:, None]
+    sig[:-1, phi == 1.0] = gp[1:, None]  # an interval's end is the next gridpoint, exactly
+    S, back = np.unique(sig, return_inverse=True)  # each point once (ends are shared by two stages)
     Ps, Pss = spline(S, nu=1), spline(S, nu=2)
     A, B, C = [], [], []
     if use_vel:
@@ -113,6 +115,7 @@ def stage_rows(robot, spline, gridpoints: np.ndarray, vmax, amax, tmax, fraction
     if use_tau:
         a, b, c = batch_dynamics(robot).path_coefficients(spline(S), Ps, Pss)
         A.append(a), B.append(b), C.append(c)
+    A, B, C = ([x[back.ravel()] for x in X] for X in (A, B, C))  # per (stage, fraction) again
     if m:
         A, B, C = (np.hstack(x) for x in (A, B, C))  # (N1 F, m)
     else:
