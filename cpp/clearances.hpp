@@ -114,11 +114,12 @@ public:
 
     // out (N, width) row-major, width = G + P (PER_LINK), K (PER_OBSTACLE) or 1 (OVERALL): the
     // values of link_clearances for Q (N, nq) row-major at tau (N,), obstacles displaced by v_WO
-    // (K, 3) per unit of tau; fine_below and pair_fine (P,) as there (PER_LINK). Q must be finite.
+    // (K, 3) per unit of tau; fine_below and pair_fine (P,) as there (PER_LINK), or pair_fine (N, P)
+    // one row per configuration with per_configuration. Q must be finite.
     void evaluate(const double* Q, int64_t N, const double* tau, double fine_below, const double* pair_fine, int mode,
-                  const double* v_WO, double* out) {
+                  const double* v_WO, double* out, bool per_configuration = false) {
         for (int64_t n0 = 0; n0 < N; n0 += LANES)
-            block(Q, n0, std::min(LANES, N - n0), tau, fine_below, pair_fine, mode, v_WO, out);
+            block(Q, n0, std::min(LANES, N - n0), tau, fine_below, pair_fine, mode, v_WO, out, per_configuration);
     }
 
     int64_t width(int mode) const { return mode == OVERALL ? 1 : mode == PER_OBSTACLE ? s_.K : s_.G + s_.P; }
@@ -221,7 +222,7 @@ private:
     }
 
     void block(const double* Q, int64_t n0, int64_t m, const double* tau, double fine_below, const double* pair_fine,
-               int mode, const double* v_WO, double* out) {
+               int mode, const double* v_WO, double* out, bool per_configuration) {
         const int64_t L = LANES, G = s_.G, K = s_.K, P = s_.P, nq = nq_, nv = (m + W - 1) / W;
         const bool per_obstacle = mode != PER_LINK, overall = mode == OVERALL;
         const int64_t width = this->width(mode);
@@ -307,8 +308,8 @@ private:
         if (per_obstacle) return;
         for (int64_t i = 0; i < P; ++i) {
             const int64_t ga = s_.pair_a[i], gb = s_.pair_b[i];
-            const double fine = pair_fine[i];
             for (int64_t b = 0; b < m; ++b) {
+                const double fine = per_configuration ? pair_fine[(n0 + b) * P + i] : pair_fine[i];
                 const double dx = Gx[ga * L + b] - Gx[gb * L + b], dy = Gy[ga * L + b] - Gy[gb * L + b],
                              dz = Gz[ga * L + b] - Gz[gb * L + b];
                 double v = std::sqrt(dx * dx + dy * dy + dz * dz) - s_.g_radius[ga] - s_.g_radius[gb];

@@ -9,6 +9,7 @@
 // shorter than min_piece or the budget is spent (UNDECIDED).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -26,6 +27,13 @@ inline double piece_bound(double V0, double V1, double lam, double h) {
 // The verdicts on the M segments QA[i] -> QB[i] (M, nq) row-major: reach (C, nq) with C = G + P;
 // v_WO (K, 3) the obstacles' displacement over a whole segment, speed its largest norm; outputs
 // (M,) status, t_stop, lower, lower_self, evals as segments.py certify_segments.
+//
+// Every segment runs the bisection above on its own pieces, in the same order; the segments go
+// level by level together, so that each level's new configurations (and first the ends) of all
+// segments are evaluated in one batch (a batch of one or two configurations costs nearly as much
+// as a full block of lanes). With standing obstacles, a segment that starts where the one before
+// ended (a path) reads that end's values instead of evaluating it again, where its link pairs are
+// evaluated alike (the same pairs tabled); it counts among the segment's evaluations as before.
 inline void certify_segments(Clearances& cl, const double* QA, const double* QB, int64_t M, const double* reach,
                              const double* v_WO, double speed, double clearance, double self_clearance,
                              double tolerance, double min_piece, int64_t max_evals, int64_t* status, double* t_stop,
@@ -37,55 +45,94 @@ inline void certify_segments(Clearances& cl, const double* QA, const double* QB,
     // everywhere when a tight bound is asked for (segments.py)
     const double fine = tolerance == INF ? smin(clearance, self_clearance) + 0.05 : INF;
     const double pair_fine = tolerance == INF ? smin(clearance, self_clearance) + 0.05 : self_clearance + 0.05;
-    std::vector<double> lam(C), fines(P), floors(P), vals, ts, Q, tau;
-    std::vector<char> tabled(P), split;
-    std::vector<int64_t> pieces, fresh;
+    bool standing = true;
+    for (int64_t k = 0; k < 3 * s.K; ++k) standing &= v_WO[k] == 0.0;
+    // per segment: its Lipschitz constants, pair floors and fines (M, C) / (M, P) / (M, P), the
+    // parameters and values it evaluated (ts[i], vals[i] (n, C)), its open pieces, its bounds
+    std::vector<double> lam(M * C), floors(M * P), fines(M * P), low(M, INF), low_self(M, INF);
+    std::vector<char> tabled(M * P);
+    std::vector<std::vector<double>> ts(M), vals(M);
+    std::vector<std::vector<int64_t>> pieces(M);
     for (int64_t i = 0; i < M; ++i) {
         const double *qa = QA + i * nq, *qb = QB + i * nq;
         for (int64_t r = 0; r < P; ++r) {  // pairs whose floor table keeps them clear along the whole segment
-            floors[r] = s.t_meta[6 * r] != 0 ? segment_floor(s, r, qa, qb) : -INF;
-            tabled[r] = floors[r] >= self_clearance;
-            fines[r] = tabled[r] ? -INF : pair_fine;
+            floors[i * P + r] = s.t_meta[6 * r] != 0 ? segment_floor(s, r, qa, qb) : -INF;
+            tabled[i * P + r] = floors[i * P + r] >= self_clearance;
+            fines[i * P + r] = tabled[i * P + r] ? -INF : pair_fine;
         }
         for (int64_t c = 0; c < C; ++c) {
             double acc = 0.0;
             for (int64_t j = 0; j < nq; ++j) acc += reach[c * nq + j] * std::fabs(qb[j] - qa[j]);
-            lam[c] = acc + (c < G ? speed : 0.0);
+            lam[i * C + c] = acc + (c < G ? speed : 0.0);
         }
-        auto below = [&](const double* row, int64_t c) {
-            return row[c] < (c < G ? clearance : self_clearance) && !(c >= G && tabled[c - G]);
-        };
-        vals.resize(64 * C), ts.resize(64);
-        Q.assign(qa, qa + nq);
-        Q.insert(Q.end(), qb, qb + nq);
-        ts[0] = 0.0, ts[1] = 1.0;
-        cl.evaluate(Q.data(), 2, ts.data(), fine, fines.data(), PER_LINK, v_WO, vals.data());
-        int64_t n = 2;
         status[i] = CERTIFIED, t_stop[i] = NaN;
-        double low = INF, low_self = INF;
+    }
+    auto below = [&](int64_t i, const double* row, int64_t c) {
+        return row[c] < (c < G ? clearance : self_clearance) && !(c >= G && tabled[i * P + c - G]);
+    };
+    // one batch: configurations Qb (n, nq) at parameters tb (n,), pair fines fb (n, P); where each
+    // value row goes: segment own[b] (its row slot[b])
+    std::vector<double> Qb, tb, fb, out;
+    std::vector<int64_t> own, slot;
+    auto add = [&](int64_t i, int64_t e, double t) {
+        const double *qa = QA + i * nq, *qb = QB + i * nq;
+        for (int64_t j = 0; j < nq; ++j) Qb.push_back(qa[j] + t * (qb[j] - qa[j]));
+        if (t == 0.0) std::copy(qa, qa + nq, Qb.end() - nq);  // the ends exactly
+        if (t == 1.0) std::copy(qb, qb + nq, Qb.end() - nq);
+        tb.push_back(t), own.push_back(i), slot.push_back(e);
+        fb.insert(fb.end(), fines.begin() + i * P, fines.begin() + (i + 1) * P);
+    };
+    auto run = [&]() {
+        const int64_t n = (int64_t)tb.size();
+        out.resize(std::max<int64_t>(n * C, 1));
+        if (n) cl.evaluate(Qb.data(), n, tb.data(), fine, fb.data(), PER_LINK, v_WO, out.data(), true);
+        for (int64_t b = 0; b < n; ++b)
+            std::copy(out.begin() + b * C, out.begin() + (b + 1) * C, vals[own[b]].begin() + slot[b] * C);
+        Qb.clear(), tb.clear(), fb.clear(), own.clear(), slot.clear();
+    };
+    // the ends: each segment's start (or the last segment's end, read again) and end
+    std::vector<int64_t> reuse(M, 0);
+    for (int64_t i = 0; i < M; ++i) {
+        ts[i] = {0.0, 1.0};
+        vals[i].resize(2 * C);
+        reuse[i] = standing && i > 0 && std::equal(QA + i * nq, QA + (i + 1) * nq, QB + (i - 1) * nq) &&
+                   std::equal(tabled.begin() + i * P, tabled.begin() + (i + 1) * P, tabled.begin() + (i - 1) * P);
+        if (!reuse[i]) add(i, 0, 0.0);
+        add(i, 1, 1.0);
+    }
+    run();
+    for (int64_t i = 0; i < M; ++i) {
+        if (reuse[i]) std::copy(vals[i - 1].begin() + C, vals[i - 1].begin() + 2 * C, vals[i].begin());
         for (int64_t e = 0; e < 2 && status[i] == CERTIFIED; ++e)
             for (int64_t c = 0; c < C; ++c)
-                if (below(vals.data() + e * C, c)) {
-                    status[i] = BLOCKED, t_stop[i] = ts[e];
+                if (below(i, vals[i].data() + e * C, c)) {
+                    status[i] = BLOCKED, t_stop[i] = ts[i][e];
                     break;
                 }
-        if (status[i] == BLOCKED) {
-            lower[i] = lower_self[i] = NaN, evals[i] = n;
-            continue;
-        }
-        pieces.assign({0, 1});
-        while (!pieces.empty() && status[i] == CERTIFIED) {
-            const int64_t R = (int64_t)pieces.size() / 2;
-            split.assign(R, 0);
+        if (status[i] == CERTIFIED) pieces[i] = {0, 1};
+    }
+    std::vector<int64_t> fresh, first_new(M);
+    bool open = true;
+    while (open) {  // one level of every segment still open
+        open = false;
+        for (int64_t i = 0; i < M; ++i) {
+            std::vector<int64_t>& pc = pieces[i];
+            first_new[i] = (int64_t)ts[i].size();
+            if (status[i] != CERTIFIED || pc.empty()) continue;
+            const int64_t R = (int64_t)pc.size() / 2, n = (int64_t)ts[i].size();
+            const double* V = vals[i].data();
+            const double* lm = lam.data() + i * C;
+            fresh.clear();
             int64_t count = 0;
             for (int64_t r = 0; r < R; ++r) {
-                const int64_t e0 = pieces[2 * r], e1 = pieces[2 * r + 1];
-                const double h = ts[e1] - ts[e0];
+                const int64_t e0 = pc[2 * r], e1 = pc[2 * r + 1];
+                const double h = ts[i][e1] - ts[i][e0];
                 bool ok = true;
                 double lo = INF, lo_self = INF, seen = INF;
                 for (int64_t c = 0; c < C; ++c) {
-                    const double v0 = vals[e0 * C + c], v1 = vals[e1 * C + c];
-                    const double bound = c >= G && tabled[c - G] ? floors[c - G] : piece_bound(v0, v1, lam[c], h);
+                    const double v0 = V[e0 * C + c], v1 = V[e1 * C + c];
+                    const double bound = c >= G && tabled[i * P + c - G] ? floors[i * P + c - G]
+                                                                         : piece_bound(v0, v1, lm[c], h);
                     if (c < G) {
                         ok &= bound >= clearance;
                         lo = smin(lo, bound);
@@ -96,52 +143,48 @@ inline void certify_segments(Clearances& cl, const double* QA, const double* QB,
                     }
                 }
                 if (ok && !(lo < seen - tolerance)) {
-                    low = smin(low, lo), low_self = smin(low_self, lo_self);
+                    low[i] = smin(low[i], lo), low_self[i] = smin(low_self[i], lo_self);
                     continue;
                 }
                 if (h < min_piece || n + count + 1 > max_evals) {
                     if (ok) {  // certified, only not as tight as asked
-                        low = smin(low, lo), low_self = smin(low_self, lo_self);
+                        low[i] = smin(low[i], lo), low_self[i] = smin(low_self[i], lo_self);
                         continue;
                     }
-                    status[i] = UNDECIDED, t_stop[i] = ts[e0];
+                    status[i] = UNDECIDED, t_stop[i] = ts[i][e0];
                     break;
                 }
-                split[r] = 1;
+                fresh.insert(fresh.end(), {e0, n + count, n + count, e1});
                 ++count;
             }
-            if (status[i] != CERTIFIED || count == 0) break;
-            if ((int64_t)ts.size() < n + count) {  // grow the store
-                size_t cap = ts.size();
-                while ((int64_t)cap < n + count) cap *= 2;
-                ts.resize(cap), vals.resize(cap * C);
+            if (status[i] != CERTIFIED || count == 0) {
+                pc.clear();
+                continue;
             }
-            Q.resize(count * nq), tau.resize(count), fresh.resize(4 * count);
-            int64_t w = 0;
-            for (int64_t r = 0; r < R; ++r) {
-                if (!split[r]) continue;
-                const int64_t e0 = pieces[2 * r], e1 = pieces[2 * r + 1];
-                const double t = 0.5 * (ts[e0] + ts[e1]);
-                ts[n + w] = tau[w] = t;
-                for (int64_t j = 0; j < nq; ++j) Q[w * nq + j] = qa[j] + t * (qb[j] - qa[j]);
-                fresh[4 * w] = e0, fresh[4 * w + 1] = n + w, fresh[4 * w + 2] = n + w, fresh[4 * w + 3] = e1;
-                ++w;
+            for (int64_t w = 0; w < count; ++w) {  // the midpoints, in the order of the pieces
+                const double t = 0.5 * (ts[i][fresh[4 * w]] + ts[i][fresh[4 * w + 3]]);
+                ts[i].push_back(t);
+                add(i, n + w, t);
             }
-            cl.evaluate(Q.data(), count, tau.data(), fine, fines.data(), PER_LINK, v_WO, vals.data() + n * C);
-            double first = INF;
-            for (int64_t e = n; e < n + count; ++e)
-                for (int64_t c = 0; c < C; ++c)
-                    if (below(vals.data() + e * C, c)) first = smin(first, ts[e]);
-            n += count;
-            if (first < INF) {
-                status[i] = BLOCKED, t_stop[i] = first;
-                break;
-            }
-            pieces.swap(fresh);
+            vals[i].resize((n + count) * C);
+            pc.swap(fresh);
+            open = true;
         }
-        evals[i] = n;
+        if (!open) break;
+        run();
+        for (int64_t i = 0; i < M; ++i) {  // a new configuration below the requirement blocks its segment
+            if (status[i] != CERTIFIED || pieces[i].empty()) continue;
+            double first = INF;
+            for (int64_t e = first_new[i]; e < (int64_t)ts[i].size(); ++e)
+                for (int64_t c = 0; c < C; ++c)
+                    if (below(i, vals[i].data() + e * C, c)) first = smin(first, ts[i][e]);
+            if (first < INF) status[i] = BLOCKED, t_stop[i] = first, pieces[i].clear();
+        }
+    }
+    for (int64_t i = 0; i < M; ++i) {
+        evals[i] = (int64_t)ts[i].size();
         if (status[i] == CERTIFIED)
-            lower[i] = low, lower_self[i] = low_self;
+            lower[i] = low[i], lower_self[i] = low_self[i];
         else
             lower[i] = lower_self[i] = NaN;
     }

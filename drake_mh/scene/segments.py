@@ -21,7 +21,11 @@ obstacle may be reported blocked.
 
 Where the compiled core is built (:mod:`drake_mh.scene.compiled_check`), its port of that
 kernel answers (``drake_mh._native.Clearances.certify_segments``: the same verdicts, nothing
-compiled at call time); with ``DRAKE_MH_COMPILED_CORE=0`` or without it, the numba kernel.
+compiled at call time); with ``DRAKE_MH_COMPILED_CORE=0`` or without it, the numba kernel. The
+port runs all segments of a call level by level, each level's configurations in one batch, and
+a segment that starts where the last one ended reads that end's values; a value above the fine
+level (5 cm above the requirement) is a lower bound that may depend on its batch, so evaluations
+and loose bounds can differ from the numba kernel's, never a verdict's soundness.
 
 Moving obstacles (``durations``): an obstacle with velocity ``v`` moves ``v · duration`` during
 the segment; the bound then adds its displacement to every link's Lipschitz constant, and the

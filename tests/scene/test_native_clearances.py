@@ -94,11 +94,19 @@ def test_clearance_values_are_the_numba_kernels(which, hand):
                 assert np.sum(expected[:, :model.num_links] >= fine) > 50  # and bounds
 
 
+def compiled_one_by_one(compiled, model, v_WO, QA, QB, speed, clearance, self_clearance, tolerance) -> tuple:
+    """The compiled certificate of each segment in a call of its own (its batches then hold only
+    its own configurations, as the numba kernel's do)."""
+    rows = [compiled.certify_segments(QA[i:i + 1], QB[i:i + 1], model.reach, v_WO, speed, clearance, self_clearance,
+                                      tolerance, MIN_PIECE, 1 << 16) for i in range(len(QA))]
+    return tuple(np.concatenate([r[k] for r in rows]) for k in range(5))
+
+
 @pytest.mark.parametrize("which", ["panda", "hand"])
 def test_certified_segments_are_the_numba_verdicts(which, hand):
     """60 random segments (short and long), obstacles standing and moving, certification only and
-    with a tolerance: the same status and evaluations, t_stop and the lower bounds to 1e-9; both
-    verdicts occur."""
+    with a tolerance, each segment in a call of its own: the same status and evaluations, t_stop
+    and the lower bounds to 1e-9; both verdicts occur."""
     robot = PANDA if which == "panda" else hand
     scene = every_kind(robot, 5)
     model, obstacles = scene.collision_model, scene.obstacle_arrays
@@ -114,8 +122,7 @@ def test_certified_segments_are_the_numba_verdicts(which, hand):
         speed = float(np.max(np.linalg.norm(v_WO, axis=1)))
         for clearance, self_clearance, tolerance in ((0.0, 0.002, np.inf), (0.01, 0.0, 1e-3)):
             expected = numba_certificate(model, obstacles, v_WO, QA, QB, speed, clearance, self_clearance, tolerance)
-            got = compiled.certify_segments(QA, QB, model.reach, v_WO, speed, clearance, self_clearance, tolerance,
-                                            MIN_PIECE, 1 << 16)
+            got = compiled_one_by_one(compiled, model, v_WO, QA, QB, speed, clearance, self_clearance, tolerance)
             np.testing.assert_array_equal(got[0], expected[0])
             np.testing.assert_array_equal(got[4], expected[4])
             for x, y in zip(got[1:4], expected[1:4]):
@@ -124,10 +131,48 @@ def test_certified_segments_are_the_numba_verdicts(which, hand):
     assert {SK.CERTIFIED, SK.BLOCKED} <= seen
 
 
+@pytest.mark.parametrize("which", ["panda", "hand"])
+def test_segments_certified_together_keep_each_verdict(which, hand):
+    """One call on many segments (a path: each starts where the last ended, and unrelated ones)
+    evaluates their configurations in shared batches. A value above the fine level is a lower
+    bound that may depend on its batch, so the evaluations may differ from one call per segment;
+    the statuses do not, and every certified lower bound stays below the sphere model's exact
+    clearance at 2,001 configurations of its segment."""
+    robot = PANDA if which == "panda" else hand
+    scene = every_kind(robot, 3)
+    model, obstacles = scene.collision_model, scene.obstacle_arrays
+    compiled = model.compiled_clearances(obstacles, pairs=True)
+    rng = np.random.default_rng(11)
+    Q = robot.random_configurations(600, rng=rng)
+    Q = Q[scene.collision_free(Q, 0.0, 0.002)]
+    path = np.clip(Q[0] + np.cumsum(rng.normal(0.0, 0.15, (25, robot.nq)), axis=0), robot.lower, robot.upper)
+    QA = np.vstack([path[:-1], Q[1:21]])
+    QB = np.vstack([path[1:], np.clip(Q[1:21] + rng.normal(0.0, 0.5, (20, robot.nq)), robot.lower, robot.upper)])
+    v_WO = np.zeros_like(obstacles[3])
+    t = np.linspace(0.0, 1.0, 2001)
+    seen = set()
+    for clearance, self_clearance, tolerance in ((0.0, 0.002, np.inf), (0.01, 0.0, 1e-3)):
+        alone = compiled_one_by_one(compiled, model, v_WO, QA, QB, 0.0, clearance, self_clearance, tolerance)
+        together = compiled.certify_segments(QA, QB, model.reach, v_WO, 0.0, clearance, self_clearance, tolerance,
+                                             MIN_PIECE, 1 << 16)
+        np.testing.assert_array_equal(together[0], alone[0])
+        seen.update(alone[0].tolist())
+        for i in np.flatnonzero(together[0] == SK.CERTIFIED):
+            dense = QA[i] + t[:, None] * (QB[i] - QA[i])
+            exact = compiled.values(dense, np.zeros(0), np.inf, np.full(model.num_pairs, np.inf), K.PER_LINK, v_WO)
+            assert together[2][i] <= np.min(exact[:, :model.num_links]) + 1e-9
+            assert together[3][i] <= np.min(exact[:, model.num_links:], initial=np.inf) + 1e-9
+            if tolerance < np.inf:  # the links exact everywhere: within the tolerance as alone
+                assert abs(together[2][i] - alone[2][i]) <= tolerance
+    assert {SK.CERTIFIED, SK.BLOCKED} <= seen
+
+
 def test_scene_certificates_and_clearances_with_and_without_the_core(monkeypatch):
     """Scene.certify_segments (with a duration: moving obstacles), certify_path with a tolerance and
-    batch_obstacle_distances / batch_min_distance: the same answers with the compiled core and with
-    DRAKE_MH_COMPILED_CORE=0 (the numba kernels)."""
+    batch_obstacle_distances / batch_min_distance with the compiled core and with
+    DRAKE_MH_COMPILED_CORE=0 (the numba kernels): the same statuses, path clearances within the
+    tolerance of each other (the core batches the segments together: a value above the fine level
+    is a lower bound that may depend on its batch) and the same distances to 1e-9."""
     rng = np.random.default_rng(9)
     Q = PANDA.random_configurations(200, rng=rng)
     QA = Q[every_kind(PANDA, 7).collision_free(Q)][:20]
@@ -138,15 +183,20 @@ def test_scene_certificates_and_clearances_with_and_without_the_core(monkeypatch
         scene.move("o0", velocity=[0.3, 0.0, -0.2])
         assert (scene.collision_model.compiled_clearances(scene.obstacle_arrays, True) is None) == kernels
         cert = scene.certify_segments(QA, QB, 0.005, 0.002, duration=0.5)
-        path = scene.certify_path(QA[:4], 0.0, tolerance=1e-3)
-        return (cert.status, cert.evaluations, cert.t_stop, cert.lower, cert.lower_self,
-                np.atleast_1d(path.min_clearance), scene.batch_obstacle_distances(Q), scene.batch_min_distance(Q))
+        i = int(np.argmax(scene.certify_segments(QA, QB, 0.0).certified))  # a certified path along a segment
+        path = scene.certify_path(QA[i] + np.array([0.0, 0.3, 0.6, 1.0])[:, None] * (QB[i] - QA[i]), 0.0,
+                                  tolerance=1e-3)
+        assert path.certified
+        return cert.status, path.min_clearance, scene.batch_obstacle_distances(Q), scene.batch_min_distance(Q)
 
     kernels = False
     compiled = answers()
     monkeypatch.setenv("DRAKE_MH_COMPILED_CORE", "0")
     kernels = True
-    for x, y in zip(compiled, answers()):
+    numba = answers()
+    np.testing.assert_array_equal(compiled[0], numba[0])
+    assert abs(compiled[1] - numba[1]) <= 1e-3 + 1e-9
+    for x, y in zip(compiled[2:], numba[2:]):
         np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-9)
 
 
