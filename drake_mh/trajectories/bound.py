@@ -54,6 +54,14 @@ def _to_bernstein(u: tuple) -> np.ndarray:
     return np.linalg.inv(basis)
 
 
+@functools.lru_cache(maxsize=64)
+def _sample_nodes(tau: tuple, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(pick, M)``: ``n + 1`` of the sample fractions ``tau`` spread over them (indices) and
+    ``M`` from the values there (pulled inside by :data:`ONE_SIDED`) to Bernstein coefficients."""
+    pick = np.unique(np.round(np.linspace(0, len(tau) - 1, n + 1)).astype(int))
+    return pick, _to_bernstein(tuple(np.clip(np.asarray(tau)[pick], ONE_SIDED, 1.0 - ONE_SIDED)))
+
+
 @functools.lru_cache(maxsize=16)
 def _interpolation(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Chebyshev-Lobatto nodes ``u (n+1,)`` on [0, 1] and their ``M`` (values -> Bernstein)."""
@@ -166,14 +174,14 @@ def kinematic_bound(trajectory, order: int, ratio: tuple, t0: np.ndarray, t1: np
     # ONE_SIDED of the piece, as certify samples), so they interpolate at those fractions
     if samples is not None and len(samples[0]) > n:
         tau, V_all = samples
-        pick = np.unique(np.round(np.linspace(0, len(tau) - 1, n + 1)).astype(int))
-        V, M0 = V_all[:, pick], _to_bernstein(tuple(np.clip(np.asarray(tau)[pick], ONE_SIDED, 1.0 - ONE_SIDED)))
+        pick, M0 = _sample_nodes(tuple(np.asarray(tau, dtype=float).tolist()), n)
+        V = V_all[:, pick]
     else:
         h = b - a
         T = np.clip(a[:, None] + u[None, :] * h[:, None], (a + ONE_SIDED * h)[:, None], (b - ONE_SIDED * h)[:, None])
         V = trajectory.derivatives(T.ravel(), order)[order].reshape(len(a), n + 1, -1)  # (P, n+1, nq)
         M0 = _to_bernstein(tuple(np.clip(u, ONE_SIDED, 1.0 - ONE_SIDED))) if n > 0 else M
-    B = np.einsum("ij,pjk->pik", M0, V)  # (P, n+1, nq) Bernstein coefficients per piece
+    B = np.matmul(M0, V)  # (P, n+1, nq) Bernstein coefficients per piece
     arguments = (np.ascontiguousarray(B), np.ascontiguousarray(V), centre, half, best, float(slack), int(max_levels),
                  left, right)
     core = compiled_core()
