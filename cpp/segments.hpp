@@ -6,7 +6,8 @@
 // link rows); a piece [t0, t1] of length h is certified where min(V0, V1, (V0 + V1 - lam h) / 2)
 // keeps the clearance, else it is cut in two (all pieces of a level evaluated in one batch) until
 // every piece is certified, a configuration below the clearance is found (BLOCKED), or a piece is
-// shorter than min_piece or the budget is spent (UNDECIDED).
+// shorter than min_piece or the budget is spent (UNDECIDED). A link row's piece also has the
+// curvature bound of segments.py (curved_bound) where no obstacle is a convex mesh piece.
 #pragma once
 
 #include <algorithm>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "clearances.hpp"
+#include "pieces.hpp"
 
 namespace dmh {
 
@@ -22,6 +24,23 @@ constexpr int64_t CERTIFIED = 1, BLOCKED = 0, UNDECIDED = -1;
 
 inline double piece_bound(double V0, double V1, double lam, double h) {
     return smin(smin(V0, V1), 0.5 * (V0 + V1 - lam * h));
+}
+
+// A link row's bound on a piece from the curvature of its value (segments.py _curved_bound): each
+// sphere-obstacle value d(x(t)) - r is at least the Lipschitz bound L on the piece, so the
+// distance d of the sphere's centre to the convex obstacle (or cloud point) is at least
+// L + rmin there, and d(x(t))'' <= |x'|^2 / d + |x''| <= lam^2 / (L + rmin) + acc = K; the row
+// (their minimum) then keeps V >= chord - K (t - t0)(t1 - t) / 2 on the piece. The larger of
+// that minimum and L.
+inline double curved_bound(double V0, double V1, double lam, double acc, double rmin, double h) {
+    const double L = piece_bound(V0, V1, lam, h);
+    const double delta = L + rmin;
+    if (!(delta > 0.0) || !(std::fabs(V0) < INF) || !(std::fabs(V1) < INF)) return L;
+    const double a = 0.5 * (lam * lam / delta + acc) * h * h;
+    const double D = V1 - V0;
+    if (!(a > 0.0)) return smax(L, smin(V0, V1));
+    const double u = smin(smax((a - D) / (2.0 * a), 0.0), 1.0);
+    return smax(L, V0 + D * u - a * u * (1.0 - u));
 }
 
 // The verdicts on the M segments QA[i] -> QB[i] (M, nq) row-major: reach (C, nq) with C = G + P;
@@ -47,6 +66,13 @@ inline void certify_segments(Clearances& cl, const double* QA, const double* QB,
     const double pair_fine = tolerance == INF ? smin(clearance, self_clearance) + 0.05 : self_clearance + 0.05;
     bool standing = true;
     for (int64_t k = 0; k < 3 * s.K; ++k) standing &= v_WO[k] == 0.0;
+    // the curvature bound of the link rows: every obstacle's distance smooth and convex outside it
+    // (not a convex mesh piece's, the largest of its planes' distances); per link its smallest sphere
+    bool curved = true;
+    for (int64_t k = 0; k < s.K; ++k) curved &= s.kinds[k] != CONVEX;
+    std::vector<double> rmin(G, INF), acc(M * G, 0.0);
+    for (int64_t g = 0; g < G; ++g)
+        for (int64_t k = s.g_start[g]; k < s.g_start[g + 1]; ++k) rmin[g] = smin(rmin[g], s.s_radius[k]);
     // per segment: its Lipschitz constants, pair floors and fines (M, C) / (M, P) / (M, P), the
     // parameters and values it evaluated (ts[i], vals[i] (n, C)), its open pieces, its bounds
     std::vector<double> lam(M * C), floors(M * P), fines(M * P), low(M, INF), low_self(M, INF);
@@ -61,9 +87,17 @@ inline void certify_segments(Clearances& cl, const double* QA, const double* QB,
             fines[i * P + r] = tabled[i * P + r] ? -INF : pair_fine;
         }
         for (int64_t c = 0; c < C; ++c) {
-            double acc = 0.0;
-            for (int64_t j = 0; j < nq; ++j) acc += reach[c * nq + j] * std::fabs(qb[j] - qa[j]);
-            lam[i * C + c] = acc + (c < G ? speed : 0.0);
+            double sum = 0.0;
+            for (int64_t j = 0; j < nq; ++j) sum += reach[c * nq + j] * std::fabs(qb[j] - qa[j]);
+            lam[i * C + c] = sum + (c < G ? speed : 0.0);
+        }
+        for (int64_t c = 0; curved && c < G; ++c) {  // |x''| <= sum_jk |dq_j| |dq_k| max(reach_j, reach_k)
+            const double* rc = reach + c * nq;
+            double sum = 0.0;
+            for (int64_t j = 0; j < nq; ++j)
+                for (int64_t k = 0; k < nq; ++k)
+                    sum += std::fabs(qb[j] - qa[j]) * std::fabs(qb[k] - qa[k]) * smax(rc[j], rc[k]);
+            acc[i * G + c] = sum;
         }
         status[i] = CERTIFIED, t_stop[i] = NaN;
     }
@@ -131,8 +165,10 @@ inline void certify_segments(Clearances& cl, const double* QA, const double* QB,
                 double lo = INF, lo_self = INF, seen = INF;
                 for (int64_t c = 0; c < C; ++c) {
                     const double v0 = V[e0 * C + c], v1 = V[e1 * C + c];
-                    const double bound = c >= G && tabled[i * P + c - G] ? floors[i * P + c - G]
-                                                                         : piece_bound(v0, v1, lm[c], h);
+                    const double bound = c >= G ? (tabled[i * P + c - G] ? floors[i * P + c - G]
+                                                                         : piece_bound(v0, v1, lm[c], h))
+                                         : curved ? curved_bound(v0, v1, lm[c], acc[i * G + c], rmin[c], h)
+                                                  : piece_bound(v0, v1, lm[c], h);
                     if (c < G) {
                         ok &= bound >= clearance;
                         lo = smin(lo, bound);

@@ -10,9 +10,13 @@ finds a configuration on it that is not, by the bisection of :mod:`.kernels.segm
   pair: their spheres' distance) is Lipschitz along the segment, with a constant computed from
   the joint deltas and how far each sphere can be from each joint axis (read from the plant,
   :attr:`drake_mh.scene.batch.CollisionModel.reach`);
-* a piece is certified when the bound ``(V0 + V1 - Λ h) / 2`` is at least the clearance for
-  every value; otherwise it is cut in two, and all new midpoints of a level are evaluated in
-  one SIMD batch.
+* a link's value also curves by a bounded amount where no obstacle is a convex mesh piece (the
+  distance to a convex obstacle curves by at most one over the distance, and a sphere's
+  acceleration along the segment is bounded by the same reach), so on a piece it stays above
+  its chord less a parabola that shrinks as the square of the piece's length;
+* a piece is certified when the bound (the larger of ``(V0 + V1 - Λ h) / 2`` and the
+  parabola's minimum) is at least the clearance for every value; otherwise it is cut in two,
+  and all new midpoints of a level are evaluated in one SIMD batch.
 
 The sphere model never reads more clearance than the exact geometry has
 (:mod:`drake_mh.geometry.spheres`), so a certified segment is clear for the exact collision geometry

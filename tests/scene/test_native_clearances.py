@@ -31,16 +31,18 @@ def hand():
     return load_problem_robot("panda_hand_mbm")
 
 
-def every_kind(robot, seed: int) -> Scene:
-    """Self-collision on; two of each primitive kind, a box as a mesh (its convex pieces) and a
-    point cloud of 400 balls (1 cm), at random poses in the arm's reach."""
+def every_kind(robot, seed: int, mesh: bool = True) -> Scene:
+    """Self-collision on; two of each primitive kind, a box as a mesh (its convex pieces; not with
+    ``mesh=False``: the segments' curvature bound then applies) and a point cloud of 400 balls
+    (1 cm), at random poses in the arm's reach."""
     rng = np.random.default_rng(seed)
     scene = Scene(robot, self_collision=True)
     shapes = [Sphere(0.08), Box([0.1, 0.15, 0.05]), Cylinder(0.06, 0.3), Capsule(0.05, 0.2)]
     for i in range(8):
         scene.add(f"o{i}", shapes[i % 4], rng.uniform([-0.7, -0.7, 0.0], [0.7, 0.7, 0.9]), rpy=rng.uniform(-3, 3, 3))
-    scene.add("mesh", Mesh(mesh_file(Box([0.1, 0.2, 0.15]))), rng.uniform([-0.6, -0.6, 0.2], [0.6, 0.6, 0.8]),
-              rpy=rng.uniform(-3, 3, 3))
+    where = rng.uniform([-0.6, -0.6, 0.2], [0.6, 0.6, 0.8]), rng.uniform(-3, 3, 3)
+    if mesh:
+        scene.add("mesh", Mesh(mesh_file(Box([0.1, 0.2, 0.15]))), where[0], rpy=where[1])
     centre = rng.uniform([-0.5, -0.5, 0.3], [0.5, 0.5, 0.7])
     scene.add("cloud", PointCloud(centre + rng.uniform(-0.15, 0.15, (400, 3)), 0.01))
     return scene
@@ -102,13 +104,15 @@ def compiled_one_by_one(compiled, model, v_WO, QA, QB, speed, clearance, self_cl
     return tuple(np.concatenate([r[k] for r in rows]) for k in range(5))
 
 
+@pytest.mark.parametrize("mesh", [True, False])
 @pytest.mark.parametrize("which", ["panda", "hand"])
-def test_certified_segments_are_the_numba_verdicts(which, hand):
+def test_certified_segments_are_the_numba_verdicts(which, hand, mesh):
     """60 random segments (short and long), obstacles standing and moving, certification only and
-    with a tolerance, each segment in a call of its own: the same status and evaluations, t_stop
-    and the lower bounds to 1e-9; both verdicts occur."""
+    with a tolerance, each segment in a call of its own, with a mesh (the Lipschitz bound alone)
+    and without (the curvature bound too): the same status and evaluations, t_stop and the lower
+    bounds to 1e-9; both verdicts occur."""
     robot = PANDA if which == "panda" else hand
-    scene = every_kind(robot, 5)
+    scene = every_kind(robot, 5, mesh)
     model, obstacles = scene.collision_model, scene.obstacle_arrays
     compiled = model.compiled_clearances(obstacles, pairs=True)
     rng = np.random.default_rng(6)
@@ -131,15 +135,16 @@ def test_certified_segments_are_the_numba_verdicts(which, hand):
     assert {SK.CERTIFIED, SK.BLOCKED} <= seen
 
 
+@pytest.mark.parametrize("mesh", [True, False])
 @pytest.mark.parametrize("which", ["panda", "hand"])
-def test_segments_certified_together_keep_each_verdict(which, hand):
+def test_segments_certified_together_keep_each_verdict(which, hand, mesh):
     """One call on many segments (a path: each starts where the last ended, and unrelated ones)
     evaluates their configurations in shared batches. A value above the fine level is a lower
     bound that may depend on its batch, so the evaluations may differ from one call per segment;
     the statuses do not, and every certified lower bound stays below the sphere model's exact
-    clearance at 2,001 configurations of its segment."""
+    clearance at 1,001 configurations of its segment."""
     robot = PANDA if which == "panda" else hand
-    scene = every_kind(robot, 3)
+    scene = every_kind(robot, 3, mesh)
     model, obstacles = scene.collision_model, scene.obstacle_arrays
     compiled = model.compiled_clearances(obstacles, pairs=True)
     rng = np.random.default_rng(11)
@@ -149,7 +154,7 @@ def test_segments_certified_together_keep_each_verdict(which, hand):
     QA = np.vstack([path[:-1], Q[1:21]])
     QB = np.vstack([path[1:], np.clip(Q[1:21] + rng.normal(0.0, 0.5, (20, robot.nq)), robot.lower, robot.upper)])
     v_WO = np.zeros_like(obstacles[3])
-    t = np.linspace(0.0, 1.0, 2001)
+    t = np.linspace(0.0, 1.0, 1001)
     seen = set()
     for clearance, self_clearance, tolerance in ((0.0, 0.002, np.inf), (0.01, 0.0, 1e-3)):
         alone = compiled_one_by_one(compiled, model, v_WO, QA, QB, 0.0, clearance, self_clearance, tolerance)
