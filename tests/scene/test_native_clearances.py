@@ -96,6 +96,14 @@ def test_clearance_values_are_the_numba_kernels(which, hand):
                 assert np.sum(expected[:, :model.num_links] >= fine) > 50  # and bounds
 
 
+def scene_and_core(robot, seed: int, mesh: bool) -> tuple:
+    """``(scene, model, obstacles, compiled)``: :func:`every_kind` and its compiled clearances with
+    the link pairs."""
+    scene = every_kind(robot, seed, mesh)
+    model, obstacles = scene.collision_model, scene.obstacle_arrays
+    return scene, model, obstacles, model.compiled_clearances(obstacles, pairs=True)
+
+
 def compiled_one_by_one(compiled, model, v_WO, QA, QB, speed, clearance, self_clearance, tolerance) -> tuple:
     """The compiled certificate of each segment in a call of its own (its batches then hold only
     its own configurations, as the numba kernel's do)."""
@@ -112,9 +120,7 @@ def test_certified_segments_are_the_numba_verdicts(which, hand, mesh):
     and without (the curvature bound too): the same status and evaluations, t_stop and the lower
     bounds to 1e-9; both verdicts occur."""
     robot = PANDA if which == "panda" else hand
-    scene = every_kind(robot, 5, mesh)
-    model, obstacles = scene.collision_model, scene.obstacle_arrays
-    compiled = model.compiled_clearances(obstacles, pairs=True)
+    scene, model, obstacles, compiled = scene_and_core(robot, 5, mesh)
     rng = np.random.default_rng(6)
     Q = robot.random_configurations(400, rng=rng)
     QA = Q[scene.collision_free(Q, 0.0, 0.002)][:60]
@@ -144,9 +150,7 @@ def test_segments_certified_together_keep_each_verdict(which, hand, mesh):
     the statuses do not, and every certified lower bound stays below the sphere model's exact
     clearance at 1,001 configurations of its segment."""
     robot = PANDA if which == "panda" else hand
-    scene = every_kind(robot, 3, mesh)
-    model, obstacles = scene.collision_model, scene.obstacle_arrays
-    compiled = model.compiled_clearances(obstacles, pairs=True)
+    scene, model, obstacles, compiled = scene_and_core(robot, 3, mesh)
     rng = np.random.default_rng(11)
     Q = robot.random_configurations(600, rng=rng)
     Q = Q[scene.collision_free(Q, 0.0, 0.002)]
