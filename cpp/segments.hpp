@@ -1,5 +1,6 @@
 // Certified straight joint-space segments: drake_mh/scene/kernels/segments.py certify_segments,
-// the same bisection on the same values (clearances.hpp), so the same verdicts up to round-off.
+// the same bisection on the same values (clearances.hpp), so the same verdicts up to round-off for
+// a segment certified alone (many in one call share batches: see certify_segments below).
 //
 // Per segment q(t) = qa + t (qb - qa), every value V_c of the per-link evaluation is Lipschitz in
 // t with constant lam_c = sum_j reach[c, j] |dq_j| (plus the obstacles' largest displacement for

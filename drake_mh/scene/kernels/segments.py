@@ -12,6 +12,10 @@ because each value is a distance that changes no faster than the geometry moves
 
 so a piece whose bound is at least the required clearance is certified, *for every t in it*.
 
+Pieces that are not are cut in two (all of one level evaluated together, in SIMD blocks)
+until every piece is certified, a configuration below the clearance is found, or a piece is
+shorter than ``min_piece`` (undecided: a touching contact cannot be certified either way).
+
 A link's value has a second bound from its curvature where no obstacle is a convex mesh piece
 (whose value, the largest of its planes' distances, has kinks). Each of its sphere-obstacle
 values ``d(x(t)) - r`` is at least the Lipschitz bound ``L`` on the piece, so the centre keeps
@@ -25,11 +29,8 @@ later joint's axis; 1 for a prismatic joint)::
 
 and the minimum of such values keeps ``V_c(t) >= chord(t) - K (t - t0) (t1 - t) / 2``; the
 piece's bound is the larger of ``L`` and that parabola's smallest value. Near a minimum it
-shrinks as ``h²`` instead of ``h``: a tight bound needs far fewer configurations (5.5x fewer
-on MotionBenchMaker paths and the splines through them).
-Pieces that are not are cut in two (all of one level evaluated together, in SIMD blocks)
-until every piece is certified, a configuration below the clearance is found, or a piece is
-shorter than ``min_piece`` (undecided: a touching contact cannot be certified either way).
+shrinks as ``h²`` instead of ``h``: a tight bound needs far fewer configurations
+(``studies/segment_certificates.py``).
 
 A link pair with a floor table (:mod:`drake_mh.scene.pair_table`) whose cells along the segment
 all keep the self-clearance is certified by them on the whole segment
