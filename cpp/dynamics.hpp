@@ -11,111 +11,142 @@
 
 namespace dmh {
 
-inline void cross3(const double* a, const double* b, double* out) {
-    const double x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2], z = a[0] * b[1] - a[1] * b[0];
+template <class T>
+inline void cross3(const T* a, const T* b, T* out) {
+    const T x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2], z = a[0] * b[1] - a[1] * b[0];
     out[0] = x, out[1] = y, out[2] = z;
+}
+
+// Work space of rnea_lanes for a chain of F frames and nq coordinates (lane vectors).
+struct RneaWork {
+    std::vector<vd> R, o, w, dw, acc, force, moment, q, qd, qdd, tau;
+    RneaWork(int64_t F, int64_t nq)
+        : R(9 * F), o(3 * F), w(3 * F), dw(3 * F), acc(3 * F), force(3 * F), moment(3 * F), q(nq), qd(nq),
+          qdd(nq), tau(nq) {}
+};
+
+// The RNEA of rnea for W samples at once, one per lane of the vectors in ws.q, ws.qd, ws.qdd
+// (nq,); writes ws.tau (nq,). Every lane runs the same operations: a sample's torques do not
+// depend on its lane or on the other lanes.
+inline void rnea_lanes(int64_t F, const int64_t* parent, const double* KR, const double* Kp, const int64_t* kind,
+                       const int64_t* qidx, const double* mass, const double* com, const double* inertia,
+                       const double* a_world, RneaWork& ws) {
+    const vd one = splat(1.0), nil = splat(0.0);
+    const vd eye[9] = {one, nil, nil, nil, one, nil, nil, nil, one}, zero[3] = {nil, nil, nil};
+    const vd base[3] = {splat(a_world[0]), splat(a_world[1]), splat(a_world[2])};
+    vd r[3], z[3], t1[3], t2[3], c[3], I[9], RI[9];
+    vd *R = ws.R.data(), *o = ws.o.data(), *w = ws.w.data(), *dw = ws.dw.data(), *acc = ws.acc.data();
+    vd *force = ws.force.data(), *moment = ws.moment.data();
+    for (int64_t k = 0; k < F; ++k) {
+        const int64_t p = parent[k], i = qidx[k];
+        const vd q = ws.q[i], qd = ws.qd[i], qdd = ws.qdd[i];
+        const vd* Rp = p < 0 ? eye : &R[9 * p];
+        const vd* wp = p < 0 ? zero : &w[3 * p];
+        const vd* dwp = p < 0 ? zero : &dw[3 * p];
+        const vd* ap = p < 0 ? base : &acc[3 * p];
+        const double* K = KR + 9 * k;
+        const double* kp = Kp + 3 * k;
+        for (int a = 0; a < 3; ++a) r[a] = Rp[3 * a] * kp[0] + Rp[3 * a + 1] * kp[1] + Rp[3 * a + 2] * kp[2];
+        vd cq, sq;
+        vsincos(q, sq, cq);
+        vd* Rk = &R[9 * k];
+        for (int a = 0; a < 3; ++a) {
+            const vd* Ra = Rp + 3 * a;
+            const vd r0 = Ra[0] * K[0] + Ra[1] * K[3] + Ra[2] * K[6];
+            const vd r1 = Ra[0] * K[1] + Ra[1] * K[4] + Ra[2] * K[7];
+            const vd r2 = Ra[0] * K[2] + Ra[1] * K[5] + Ra[2] * K[8];
+            z[a] = r2;
+            if (kind[k] == 1) {
+                Rk[3 * a] = r0, Rk[3 * a + 1] = r1, Rk[3 * a + 2] = r2;
+            } else {
+                Rk[3 * a] = r0 * cq + r1 * sq;
+                Rk[3 * a + 1] = r1 * cq - r0 * sq;
+                Rk[3 * a + 2] = r2;
+            }
+        }
+        if (kind[k] == 1)
+            for (int a = 0; a < 3; ++a) r[a] += z[a] * q;
+        cross3(dwp, r, t1);  // a_k = a_p + dw_p x r + w_p x (w_p x r)
+        cross3(wp, r, c);
+        cross3(wp, c, t2);
+        for (int a = 0; a < 3; ++a) {
+            acc[3 * k + a] = ap[a] + t1[a] + t2[a];
+            o[3 * k + a] = (p < 0 ? nil : o[3 * p + a]) + r[a];
+        }
+        cross3(wp, z, t1);
+        for (int a = 0; a < 3; ++a) {
+            if (kind[k] == 1) {
+                w[3 * k + a] = wp[a];
+                dw[3 * k + a] = dwp[a];
+                acc[3 * k + a] += 2.0 * t1[a] * qd + z[a] * qdd;
+            } else {
+                w[3 * k + a] = wp[a] + z[a] * qd;
+                dw[3 * k + a] = dwp[a] + z[a] * qdd + t1[a] * qd;
+            }
+        }
+    }
+    std::fill(ws.force.begin(), ws.force.end(), nil);
+    std::fill(ws.moment.begin(), ws.moment.end(), nil);
+    for (int64_t k = F - 1; k >= 0; --k) {
+        const double m = mass[k];
+        const vd* Rk = &R[9 * k];
+        vd *wk = &w[3 * k], *dwk = &dw[3 * k], *ak = &acc[3 * k], *fk = &force[3 * k], *mk = &moment[3 * k];
+        if (m > 0.0) {
+            const double* ck = com + 3 * k;
+            const double* Ik = inertia + 9 * k;
+            for (int a = 0; a < 3; ++a) c[a] = Rk[3 * a] * ck[0] + Rk[3 * a + 1] * ck[1] + Rk[3 * a + 2] * ck[2];
+            for (int a = 0; a < 3; ++a)  // I = (R inertia) R^T
+                for (int f = 0; f < 3; ++f)
+                    RI[3 * a + f] = Rk[3 * a] * Ik[f] + Rk[3 * a + 1] * Ik[3 + f] + Rk[3 * a + 2] * Ik[6 + f];
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b)
+                    I[3 * a + b] = RI[3 * a] * Rk[3 * b] + RI[3 * a + 1] * Rk[3 * b + 1] + RI[3 * a + 2] * Rk[3 * b + 2];
+            cross3(wk, c, t1);
+            cross3(wk, t1, t2);
+            cross3(dwk, c, t1);
+            for (int a = 0; a < 3; ++a) fk[a] += m * (ak[a] + t1[a] + t2[a]);
+            for (int a = 0; a < 3; ++a) {  // t1 = I w, t2 = I dw
+                t1[a] = I[3 * a] * wk[0] + I[3 * a + 1] * wk[1] + I[3 * a + 2] * wk[2];
+                t2[a] = I[3 * a] * dwk[0] + I[3 * a + 1] * dwk[1] + I[3 * a + 2] * dwk[2];
+            }
+            cross3(wk, t1, z);
+            cross3(c, ak, t1);
+            for (int a = 0; a < 3; ++a) mk[a] += t2[a] + z[a] + m * t1[a];
+        }
+        const vd* v = kind[k] == 1 ? fk : mk;
+        ws.tau[qidx[k]] = Rk[2] * v[0] + Rk[5] * v[1] + Rk[8] * v[2];
+        const int64_t p = parent[k];
+        if (p >= 0) {
+            for (int a = 0; a < 3; ++a) r[a] = o[3 * k + a] - o[3 * p + a];
+            cross3(r, fk, t1);
+            for (int a = 0; a < 3; ++a) {
+                force[3 * p + a] += fk[a];
+                moment[3 * p + a] += mk[a] + t1[a];
+            }
+        }
+    }
 }
 
 // tau (N, nq) = RNEA of the chain (frames in topological order; KR (F, 3, 3), Kp (F, 3), kind 1
 // prismatic else revolute about z, qidx the frame's coordinate) with lumped masses mass (F,),
 // centres of mass com (F, 3) and rotational inertias inertia (F, 3, 3) in the frames, the base
-// accelerating at a_world (3,) (-gravity), for Q, V, A (N, nq) row-major.
+// accelerating at a_world (3,) (-gravity), for Q, V, A (N, nq) row-major. W samples per pass
+// (rnea_lanes; the last pass fills its spare lanes with the last sample).
 inline void rnea(int64_t F, const int64_t* parent, const double* KR, const double* Kp, const int64_t* kind,
                  const int64_t* qidx, const double* mass, const double* com, const double* inertia,
                  const double* a_world, const double* Q, const double* V, const double* A, int64_t N, int64_t nq,
                  double* tau) {
-    std::vector<double> R(9 * F), o(3 * F), w(3 * F), dw(3 * F), acc(3 * F), force(3 * F), moment(3 * F);
-    const double eye[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, zero[3] = {0, 0, 0};
-    double r[3], z[3], t1[3], t2[3], c[3], I[9];
-    for (int64_t n = 0; n < N; ++n) {
-        for (int64_t k = 0; k < F; ++k) {
-            const int64_t p = parent[k], i = qidx[k];
-            const double q = Q[n * nq + i], qd = V[n * nq + i], qdd = A[n * nq + i];
-            const double* Rp = p < 0 ? eye : &R[9 * p];
-            const double* wp = p < 0 ? zero : &w[3 * p];
-            const double* dwp = p < 0 ? zero : &dw[3 * p];
-            const double* ap = p < 0 ? a_world : &acc[3 * p];
-            const double* K = KR + 9 * k;
-            const double* kp = Kp + 3 * k;
-            for (int a = 0; a < 3; ++a) r[a] = Rp[3 * a] * kp[0] + Rp[3 * a + 1] * kp[1] + Rp[3 * a + 2] * kp[2];
-            const double cq = std::cos(q), sq = std::sin(q);
-            double* Rk = &R[9 * k];
-            for (int a = 0; a < 3; ++a) {
-                const double* Ra = Rp + 3 * a;
-                const double r0 = Ra[0] * K[0] + Ra[1] * K[3] + Ra[2] * K[6];
-                const double r1 = Ra[0] * K[1] + Ra[1] * K[4] + Ra[2] * K[7];
-                const double r2 = Ra[0] * K[2] + Ra[1] * K[5] + Ra[2] * K[8];
-                z[a] = r2;
-                if (kind[k] == 1) {
-                    Rk[3 * a] = r0, Rk[3 * a + 1] = r1, Rk[3 * a + 2] = r2;
-                } else {
-                    Rk[3 * a] = r0 * cq + r1 * sq;
-                    Rk[3 * a + 1] = -r0 * sq + r1 * cq;
-                    Rk[3 * a + 2] = r2;
-                }
-            }
-            if (kind[k] == 1)
-                for (int a = 0; a < 3; ++a) r[a] += z[a] * q;
-            cross3(dwp, r, t1);  // a_k = a_p + dw_p x r + w_p x (w_p x r)
-            cross3(wp, r, c);
-            cross3(wp, c, t2);
-            for (int a = 0; a < 3; ++a) {
-                acc[3 * k + a] = ap[a] + t1[a] + t2[a];
-                o[3 * k + a] = (p < 0 ? 0.0 : o[3 * p + a]) + r[a];
-            }
-            cross3(wp, z, t1);
-            for (int a = 0; a < 3; ++a) {
-                if (kind[k] == 1) {
-                    w[3 * k + a] = wp[a];
-                    dw[3 * k + a] = dwp[a];
-                    acc[3 * k + a] += 2.0 * t1[a] * qd + z[a] * qdd;
-                } else {
-                    w[3 * k + a] = wp[a] + z[a] * qd;
-                    dw[3 * k + a] = dwp[a] + z[a] * qdd + t1[a] * qd;
-                }
-            }
+    if (N <= 0) return;
+    RneaWork ws(F, nq);
+    for (int64_t n0 = 0; n0 < N; n0 += W) {
+        for (int l = 0; l < W; ++l) {
+            const int64_t n = std::min(n0 + l, N - 1);
+            for (int64_t j = 0; j < nq; ++j)
+                ws.q[j][l] = Q[n * nq + j], ws.qd[j][l] = V[n * nq + j], ws.qdd[j][l] = A[n * nq + j];
         }
-        std::fill(force.begin(), force.end(), 0.0);
-        std::fill(moment.begin(), moment.end(), 0.0);
-        for (int64_t k = F - 1; k >= 0; --k) {
-            const double m = mass[k];
-            const double* Rk = &R[9 * k];
-            double *wk = &w[3 * k], *dwk = &dw[3 * k], *ak = &acc[3 * k], *fk = &force[3 * k], *mk = &moment[3 * k];
-            if (m > 0.0) {
-                const double* ck = com + 3 * k;
-                const double* Ik = inertia + 9 * k;
-                for (int a = 0; a < 3; ++a) c[a] = Rk[3 * a] * ck[0] + Rk[3 * a + 1] * ck[1] + Rk[3 * a + 2] * ck[2];
-                double RI[9];  // I = (R inertia) R^T
-                for (int a = 0; a < 3; ++a)
-                    for (int f = 0; f < 3; ++f)
-                        RI[3 * a + f] = Rk[3 * a] * Ik[f] + Rk[3 * a + 1] * Ik[3 + f] + Rk[3 * a + 2] * Ik[6 + f];
-                for (int a = 0; a < 3; ++a)
-                    for (int b = 0; b < 3; ++b)
-                        I[3 * a + b] = RI[3 * a] * Rk[3 * b] + RI[3 * a + 1] * Rk[3 * b + 1] + RI[3 * a + 2] * Rk[3 * b + 2];
-                cross3(wk, c, t1);
-                cross3(wk, t1, t2);
-                cross3(dwk, c, t1);
-                for (int a = 0; a < 3; ++a) fk[a] += m * (ak[a] + t1[a] + t2[a]);
-                for (int a = 0; a < 3; ++a) {  // t1 = I w, t2 = I dw
-                    t1[a] = I[3 * a] * wk[0] + I[3 * a + 1] * wk[1] + I[3 * a + 2] * wk[2];
-                    t2[a] = I[3 * a] * dwk[0] + I[3 * a + 1] * dwk[1] + I[3 * a + 2] * dwk[2];
-                }
-                cross3(wk, t1, z);
-                cross3(c, ak, t1);
-                for (int a = 0; a < 3; ++a) mk[a] += t2[a] + z[a] + m * t1[a];
-            }
-            const double* v = kind[k] == 1 ? fk : mk;
-            tau[n * nq + qidx[k]] = Rk[2] * v[0] + Rk[5] * v[1] + Rk[8] * v[2];
-            const int64_t p = parent[k];
-            if (p >= 0) {
-                for (int a = 0; a < 3; ++a) r[a] = o[3 * k + a] - o[3 * p + a];
-                cross3(r, fk, t1);
-                for (int a = 0; a < 3; ++a) {
-                    force[3 * p + a] += fk[a];
-                    moment[3 * p + a] += mk[a] + t1[a];
-                }
-            }
-        }
+        rnea_lanes(F, parent, KR, Kp, kind, qidx, mass, com, inertia, a_world, ws);
+        for (int l = 0; l < W && n0 + l < N; ++l)
+            for (int64_t j = 0; j < nq; ++j) tau[(n0 + l) * nq + j] = ws.tau[j][l];
     }
 }
 

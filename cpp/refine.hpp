@@ -37,42 +37,53 @@ constexpr int64_t TORQUE = 4;
 
 // For each of the C candidates (quantity kind[i], joint joint[i], bracket [a[i], b[i]], ratio
 // |x - centre[i]| / half[i]) the golden-section search of `iterations` steps for the ratio's
-// maximum; out (4, C): the last two probes and their ratios (c, f(c), d, f(d)).
+// maximum; out (4, C): the last two probes and their ratios (c, f(c), d, f(d)). The searches run
+// in lockstep, each step's probes evaluated in one batch (the torques W at a time); each search
+// is the one it would be alone.
 inline void golden_refine(const PPoly& path, const PPoly& timing, const ChainDynamics* dynamics,
                           const int64_t* kind, const int64_t* joint, const double* a0, const double* b0,
                           const double* centre, const double* half, int64_t C, int64_t iterations, double* out) {
     const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
     const int64_t nq = path.d;
-    std::vector<double> D((size_t)(4 * nq)), tau((size_t)nq);
-    auto ratio = [&](int64_t i, double t) {
-        const int order = kind[i] == TORQUE ? 2 : (int)kind[i];
-        timed_derivatives(path, timing, &t, 1, order, D.data());  // (order + 1, 1, nq)
-        double x;
-        if (kind[i] == TORQUE) {
-            dynamics->torques(D.data(), D.data() + nq, D.data() + 2 * nq, 1, nq, tau.data());
-            x = tau[joint[i]];
-        } else {
-            x = D[order * nq + joint[i]];
-        }
-        return std::fabs(x - centre[i]) / half[i];
-    };
+    int order = 0;
+    std::vector<int64_t> torque_rows;  // the candidates asking for torque
     for (int64_t i = 0; i < C; ++i) {
-        double a = a0[i], b = b0[i];
-        double c = b - golden * (b - a), d = a + golden * (b - a);
-        double fc = ratio(i, c), fd = ratio(i, d);
-        for (int64_t it = 0; it < iterations; ++it) {
-            if (fc >= fd) {  // the maximum in [a, d]
-                b = d, d = c, fd = fc;
-                c = b - golden * (b - a);
-                fc = ratio(i, c);
+        order = std::max(order, kind[i] == TORQUE ? 2 : (int)kind[i]);
+        if (kind[i] == TORQUE) torque_rows.push_back(i);
+    }
+    const int64_t Ct = (int64_t)torque_rows.size();
+    std::vector<double> D((size_t)((order + 1) * C * nq)), Qt((size_t)(3 * Ct * nq)), tau((size_t)(Ct * nq));
+    auto ratios = [&](const double* t, double* f) {  // f[i]: candidate i's ratio at t[i]
+        timed_derivatives(path, timing, t, C, order, D.data());  // (order + 1, C, nq)
+        for (int64_t r = 0; r < Ct; ++r)
+            for (int64_t e = 0; e < 3; ++e)
+                std::copy_n(&D[(e * C + torque_rows[r]) * nq], nq, &Qt[(e * Ct + r) * nq]);
+        if (Ct) dynamics->torques(Qt.data(), Qt.data() + Ct * nq, Qt.data() + 2 * Ct * nq, Ct, nq, tau.data());
+        for (int64_t i = 0, r = 0; i < C; ++i) {
+            const double x = kind[i] == TORQUE ? tau[(r++) * nq + joint[i]] : D[(kind[i] * C + i) * nq + joint[i]];
+            f[i] = std::fabs(x - centre[i]) / half[i];
+        }
+    };
+    std::vector<double> a(a0, a0 + C), b(b0, b0 + C), c(C), d(C), fc(C), fd(C), probe(C), fp(C);
+    std::vector<char> left(C);
+    for (int64_t i = 0; i < C; ++i) c[i] = b[i] - golden * (b[i] - a[i]), d[i] = a[i] + golden * (b[i] - a[i]);
+    ratios(c.data(), fc.data());
+    ratios(d.data(), fd.data());
+    for (int64_t it = 0; it < iterations; ++it) {
+        for (int64_t i = 0; i < C; ++i) {
+            left[i] = fc[i] >= fd[i];
+            if (left[i]) {  // the maximum in [a, d]
+                b[i] = d[i], d[i] = c[i], fd[i] = fc[i];
+                probe[i] = c[i] = b[i] - golden * (b[i] - a[i]);
             } else {
-                a = c, c = d, fc = fd;
-                d = a + golden * (b - a);
-                fd = ratio(i, d);
+                a[i] = c[i], c[i] = d[i], fc[i] = fd[i];
+                probe[i] = d[i] = a[i] + golden * (b[i] - a[i]);
             }
         }
-        out[i] = c, out[C + i] = fc, out[2 * C + i] = d, out[3 * C + i] = fd;
+        ratios(probe.data(), fp.data());
+        for (int64_t i = 0; i < C; ++i) (left[i] ? fc[i] : fd[i]) = fp[i];
     }
+    for (int64_t i = 0; i < C; ++i) out[i] = c[i], out[C + i] = fc[i], out[2 * C + i] = d[i], out[3 * C + i] = fd[i];
 }
 
 }  // namespace dmh
