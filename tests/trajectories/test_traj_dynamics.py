@@ -91,3 +91,23 @@ def test_gravity_flag_and_path_coefficients():
     ref = np.array([robot.inverse_dynamics(p, ps * sd, ps * sdd + pss * sd ** 2)
                     for p, ps, pss in zip(P, Ps, Pss)])
     assert np.allclose(a * sdd + b * sd ** 2 + c, ref, atol=1e-10)
+
+
+@pytest.mark.parametrize("backend", ["core", "numba"])
+def test_angles_of_many_turns_and_odd_batches(monkeypatch, backend):
+    """Continuous joints can sit many turns from zero: the torques at ``q + 2πk`` (k up to 1e8,
+    and one beyond the vectorized sine's range) are Drake's at the same ``q``; a batch of any
+    length gives each sample the torques it gets alone."""
+    if backend == "numba":
+        monkeypatch.setenv(ENVIRONMENT, "0")
+    elif compiled_core() is None:
+        pytest.skip("the compiled core drake_mh._native is not built (pip install . builds it)")
+    robot = drake_mh.load_robot("panda")
+    rng = np.random.default_rng(3)
+    Q = robot.random_configurations(7, rng) + 2.0 * np.pi * np.array([0, 1, -3, 1e3, -1e5, 1e8, 1e10])[:, None]
+    V, A = rng.normal(size=Q.shape), rng.normal(size=Q.shape) * 4.0
+    tau = BatchDynamics(robot).inverse_dynamics(Q, V, A)
+    ref = np.array([robot.inverse_dynamics(q, v, a) for q, v, a in zip(Q, V, A)])
+    np.testing.assert_allclose(tau, ref, rtol=0, atol=1e-9 * np.max(np.abs(ref)))
+    alone = np.vstack([BatchDynamics(robot).inverse_dynamics(Q[i], V[i], A[i]) for i in range(len(Q))])
+    np.testing.assert_allclose(alone, tau, rtol=1e-14, atol=1e-14 * np.max(np.abs(tau)))
