@@ -361,9 +361,10 @@ class CollisionModel:
         :func:`.kernels.entry.obstacle_clearances_packed`). ``Q`` must be a C-contiguous
         float64 array: the caller checks it."""
         v_WO = np.ascontiguousarray(obstacles[3], dtype=float).reshape(-1, 3)
-        compiled = self.compiled_clearances(obstacles, pairs=False)
+        # per obstacle the link pairs are not read: the instance of the segment certificates serves
+        compiled = self.compiled_clearances(obstacles, pairs=True)
         if compiled is not None:
-            values, none, no_pairs = compiled.values, np.zeros(0), np.zeros(0)
+            values, none, no_pairs = compiled.values, np.zeros(0), np.zeros(len(self.pair_arrays[0]))
 
             def compiled_clearance(Q, overall=False):  # tau empty: the obstacles where they are
                 return values(Q, none, np.inf, no_pairs, K.OVERALL if overall else K.PER_OBSTACLE, v_WO)
@@ -388,9 +389,10 @@ class CollisionModel:
         pairs = self.no_pair_arrays if per_obstacle else self.pair_arrays
         pair_fine = np.full(len(pairs[0]), float(fine_below))
         mode = K.PER_OBSTACLE if per_obstacle else K.PER_LINK
-        compiled = self.compiled_clearances(obstacles, pairs=not per_obstacle)
+        compiled = self.compiled_clearances(obstacles, pairs=True)  # per obstacle the pairs are not read
         if compiled is not None:
-            out = compiled.values(np.ascontiguousarray(QT.T, dtype=float), tau, float(fine_below), pair_fine, mode,
+            fine_pairs = np.full(len(self.pair_arrays[0]), float(fine_below))
+            out = compiled.values(np.ascontiguousarray(QT.T, dtype=float), tau, float(fine_below), fine_pairs, mode,
                                   np.ascontiguousarray(obstacles[3], dtype=float).reshape(-1, 3))
             if out is not None:
                 return out  # (not finite: the kernel's values, as before)

@@ -54,12 +54,17 @@ def _to_bernstein(u: tuple) -> np.ndarray:
     return np.linalg.inv(basis)
 
 
-@functools.lru_cache(maxsize=64)
-def _sample_nodes(tau: tuple, n: int) -> tuple[np.ndarray, np.ndarray]:
+def _sample_nodes(tau: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     """``(pick, M)``: ``n + 1`` of the sample fractions ``tau`` spread over them (indices) and
     ``M`` from the values there (pulled inside by :data:`ONE_SIDED`) to Bernstein coefficients."""
+    return _nodes_of(np.ascontiguousarray(tau, dtype=float).tobytes(), n)
+
+
+@functools.lru_cache(maxsize=64)
+def _nodes_of(tau_bytes: bytes, n: int) -> tuple[np.ndarray, np.ndarray]:
+    tau = np.frombuffer(tau_bytes, dtype=float)
     pick = np.unique(np.round(np.linspace(0, len(tau) - 1, n + 1)).astype(int))
-    return pick, _to_bernstein(tuple(np.clip(np.asarray(tau)[pick], ONE_SIDED, 1.0 - ONE_SIDED)))
+    return pick, _to_bernstein(tuple(np.clip(tau[pick], ONE_SIDED, 1.0 - ONE_SIDED)))
 
 
 @functools.lru_cache(maxsize=16)
@@ -167,21 +172,24 @@ def kinematic_bound(trajectory, order: int, ratio: tuple, t0: np.ndarray, t1: np
     n = max(piece_degree(trajectory) - order, 0)
     u, M = _interpolation(n)
     left, right = _halves(n)
-    centre, half = (np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), np.shape(best))) for x in ratio)
     best = np.array(best, dtype=float)
+    centre, half = (x if isinstance(x, np.ndarray) and x.shape == best.shape and x.dtype == float
+                    and x.flags.c_contiguous else np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), best.shape))
+                    for x in ratio)
     a, b = np.asarray(t0, float), np.asarray(t1, float)
     # the values are taken one-sided (each piece's own polynomial at its ends: pulled inside by
     # ONE_SIDED of the piece, as certify samples), so they interpolate at those fractions
     if samples is not None and len(samples[0]) > n:
         tau, V_all = samples
-        pick, M0 = _sample_nodes(tuple(np.asarray(tau, dtype=float).tolist()), n)
+        pick, M0 = _sample_nodes(tau, n)
         V = V_all[:, pick]
     else:
         h = b - a
         T = np.clip(a[:, None] + u[None, :] * h[:, None], (a + ONE_SIDED * h)[:, None], (b - ONE_SIDED * h)[:, None])
         V = trajectory.derivatives(T.ravel(), order)[order].reshape(len(a), n + 1, -1)  # (P, n+1, nq)
         M0 = _to_bernstein(tuple(np.clip(u, ONE_SIDED, 1.0 - ONE_SIDED))) if n > 0 else M
-    B = np.matmul(M0, V)  # (P, n+1, nq) Bernstein coefficients per piece
+    P, n1, nq = V.shape  # B (P, n+1, nq): the Bernstein coefficients per piece, as one product
+    B = (M0 @ V.transpose(1, 0, 2).reshape(n1, P * nq)).reshape(n1, P, nq).transpose(1, 0, 2)
     arguments = (np.ascontiguousarray(B), np.ascontiguousarray(V), centre, half, best, float(slack), int(max_levels),
                  left, right)
     core = compiled_core()

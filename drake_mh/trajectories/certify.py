@@ -313,8 +313,8 @@ def _compiled_samples(core, trajectory, robot, quantities, norms, tau):
     when (nQ, nq), D)``."""
     nq = robot.nq
     kinds = np.array([_KIND[q] for q in quantities], dtype=np.int64)
-    centre = np.ascontiguousarray([np.broadcast_to(c, (nq,)) for c, _ in norms], dtype=float)
-    half = np.ascontiguousarray([np.broadcast_to(h, (nq,)) for _, h in norms], dtype=float)
+    centre = np.array([c for c, _ in norms], dtype=float).reshape(len(norms), nq)  # each (nq,)
+    half = np.array([h for _, h in norms], dtype=float).reshape(len(norms), nq)
     ints, floats = _batch_dynamics(robot).packed if "torque" in quantities else (None, None)
     worst, when, D = core[0].certify_samples(*core[1:], np.ascontiguousarray(trajectory.breaks, dtype=float),
                                              np.ascontiguousarray(tau, dtype=float), kinds, centre, half,

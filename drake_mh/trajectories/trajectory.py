@@ -105,17 +105,17 @@ class Trajectory:
 
     # --- basic properties -----------------------------------------------------------------------
 
-    @property
+    @functools.cached_property
     def nq(self) -> int:
         """Number of joints."""
         return int(self.path.c.shape[2])
 
-    @property
+    @functools.cached_property
     def start_time(self) -> float:
         """Start time [s] (0 for every trajectory the library makes)."""
         return float((self.timing or self.path).x[0])
 
-    @property
+    @functools.cached_property
     def end_time(self) -> float:
         """End time [s]."""
         return float((self.timing or self.path).x[-1])
