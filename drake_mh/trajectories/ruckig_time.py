@@ -25,12 +25,8 @@ def _profile_ppoly(profile, t_start: float, duration: float) -> PPoly:
     phases = []
     brake = profile.brake
     if brake.duration > 0:
-        for k in range(len(brake.t)):
-            if brake.t[k] > 0:
-                phases.append((brake.t[k], brake.j[k], brake.a[k], brake.v[k], brake.p[k]))
-    for k in range(7):
-        if profile.t[k] > 0:
-            phases.append((profile.t[k], profile.j[k], profile.a[k], profile.v[k], profile.p[k]))
+        phases += [row for row in zip(brake.t, brake.j, brake.a, brake.v, brake.p) if row[0] > 0]
+    phases += [row for row in zip(profile.t, profile.j, profile.a, profile.v, profile.p) if row[0] > 0]
     if getattr(profile, "accel", None) is not None and profile.accel.duration > 0:
         raise InfeasibleTrajectory("ruckig", "ruckig returned an acceleration pre-profile, which "
                                    "drake_mh does not convert; start from within the limits")
@@ -44,10 +40,11 @@ def _profile_ppoly(profile, t_start: float, duration: float) -> PPoly:
         x.append(t_start + duration)
     # a DOF that finishes early (time synchronization) rests at its target until `duration`
     if x[-1] < t_start + duration - 1e-12:
-        c.append([0.0, 0.0, profile.vf if abs(profile.vf) > 0 else 0.0, profile.pf])
+        vf = profile.vf
+        c.append([0.0, 0.0, vf if abs(vf) > 0 else 0.0, profile.pf])
         x.append(t_start + duration)
     x[-1] = t_start + duration
-    return PPoly(np.array(c).T, np.array(x))
+    return PPoly.construct_fast(np.array(c).T.copy(), np.array(x))  # increasing breaks by construction
 
 
 def ruckig_state_to_state(robot, q0, q1, v0=None, a0=None, v1=None, a1=None, *, factors=None,
@@ -175,20 +172,21 @@ def _ruckig_line(limits: dict, q_a: np.ndarray, q_b: np.ndarray, factors) -> PPo
     s = _profile_ppoly(out.profiles[0][0], 0.0, out.duration)  # cubic pieces of s(t)
     c = s.c[:, :, None] * delta[None, None, :]
     c[-1] += q_a  # constant term: q_a + s_0 Δ
-    return PPoly(c, s.x)
+    return PPoly.construct_fast(c, s.x)
 
 
 def _ruckig_path(W, robot, factors, limits: dict) -> Trajectory:
     """Rest-to-rest straight segments through every waypoint (:func:`_ruckig_line`) under
     ``limits`` (``{"velocity", "acceleration", "jerk"}`` -> ``(nq,)``), concatenated in time."""
-    pieces = []
+    xs, cs = [], []
     t = 0.0
     for k in range(len(W) - 1):
         pp = _ruckig_line(limits, W[k], W[k + 1], factors)
-        pieces.append(PPoly(pp.c, pp.x + t))
+        xs.append(pp.x + t)
+        cs.append(pp.c)
         t += pp.x[-1] - pp.x[0]
-    x = np.concatenate([pieces[0].x] + [p.x[1:] for p in pieces[1:]])
-    c = np.concatenate([p.c for p in pieces], axis=1)
-    times = np.cumsum([0.0] + [p.x[-1] - p.x[0] for p in pieces])
+    x = np.concatenate([xs[0]] + [x_k[1:] for x_k in xs[1:]])
+    c = np.concatenate(cs, axis=1)
+    times = np.array([0.0] + [x_k[-1] for x_k in xs])
     return Trajectory(PPoly(c, x), None, tuple(robot.joint_names), "ruckig",
-                      {"segments": len(pieces), "on_path": np.array(W, dtype=float), "waypoint_times": times})
+                      {"segments": len(xs), "on_path": np.array(W, dtype=float), "waypoint_times": times})
