@@ -34,8 +34,9 @@ class MotionResult:
             a stationary one of zero duration, ``method == "stationary"``, when the start is the
             goal).
         duration: its duration [s] (NaN if none).
-        max_jerk: largest joint jerk along it [rad/s³] (sampled; ``inf`` for toppra's
-            acceleration steps on a robot with jerk limits; NaN if no trajectory).
+        max_jerk: largest joint jerk along it [rad/s³] (the certificate's bound, exact for
+            ruckig's piecewise-constant jerk; ``inf`` at toppra's acceleration steps; NaN if no
+            trajectory).
         jerk_limited: whether the trajectory is certified within the robot's declared jerk
             limits (``None``: no trajectory, or the robot declares none). toppra's are not;
             ``retime="ruckig"`` gives jerk-limited ones.

@@ -102,11 +102,12 @@ def _jerk_limited(trajectory) -> bool | None:
 
 
 def _max_jerk(trajectory) -> float:
-    """Largest joint jerk [rad/s³]: ``inf`` where the certificate found acceleration steps (toppra
-    on a jerk-limited robot), else the largest of 2,001 samples."""
+    """Largest joint jerk [rad/s³]: the certificate's bound (Bernstein coefficients of every piece:
+    no point exceeds it, exact for piecewise-constant jerk; ``inf`` at acceleration steps, as
+    toppra's), else, for a trajectory certified without jerk, the largest of 2,001 samples."""
     cert = trajectory.info.get("certificate")
-    if cert is not None and "jerk" in cert.ratios and not np.all(np.isfinite(cert.ratios["jerk"])):
-        return float("inf")
+    if cert is not None and "jerk" in cert.bounds:
+        return float(np.max(cert.bounds["jerk"], initial=0.0))
     t = np.linspace(trajectory.start_time, trajectory.end_time, 2001)
     try:
         return float(np.max(np.abs(trajectory.jerk(t))))

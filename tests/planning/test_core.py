@@ -47,6 +47,9 @@ def test_jerk_is_reported_honestly_and_ruckig_limits_it():
     ruckig = solve_motion(problem, "straight", retime="ruckig")
     assert ruckig.success and ruckig.jerk_limited is True and "ruckig" in ruckig.message
     assert 0 < ruckig.max_jerk <= np.max(PANDA.jerk_limits) * (1 + 1e-6)
+    traj = ruckig.trajectory  # the reported jerk is a bound: no dense sample exceeds it
+    dense = np.max(np.abs(traj.jerk(np.linspace(traj.start_time, traj.end_time, 20_001))))
+    assert dense <= ruckig.max_jerk * (1 + 1e-9) and ruckig.max_jerk <= dense * (1 + 1e-6)  # exact: constant per piece
     with pytest.raises(InvalidArgument, match="retime"):
         solve_motion(problem, "straight", retime="spline")
 
