@@ -22,6 +22,7 @@
 #include "ppoly.hpp"
 #include "refine.hpp"
 #include "topp.hpp"
+#include "topp_rows.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -511,6 +512,62 @@ NB_MODULE(_native, m) {
     "A[i] u + B[i] x + C[i] <= 0 (N+1, R) in u = s'' on [s_i, s_{i+1}] and x = s'^2 at s_i, bounds\n"
     "x_lo[i] <= x_i <= x_hi[i]. (stage, xs (N+1,), us (N,), K (N+1, 2)): stage -1 solved, else the\n"
     "stage where it failed (xs then NaN from there on).");
+
+    m.def("spline_gridpoints", [](Array c, Floats x, double max_err, int64_t max_iteration, double max_seg,
+                                  int64_t min_nb) {
+        const dmh::PPoly sp = timed_of(c, x, std::nullopt, std::nullopt).path;
+        std::vector<double> gp;
+        bool settled;
+        {
+            nb::gil_scoped_release unlocked;
+            settled = dmh::spline_gridpoints(sp, max_err, max_iteration, max_seg, min_nb, gp);
+        }
+        if (!settled) throw nb::value_error("Unable to find a good gridpoint for this path.");
+        double* out = new double[gp.size()];
+        std::copy(gp.begin(), gp.end(), out);
+        return owned(out, {gp.size()});
+    }, "c"_a, "x"_a, "max_err"_a, "max_iteration"_a, "max_seg"_a, "min_nb"_a,
+    "toppra's gridpoints on a joint spline (scipy PPoly c (k + 1, m, nq), x (m + 1,) from 0), its knots added:\n"
+    "drake_mh.trajectories.toppra_time._gridpoints with gridpoints=None.");
+
+    m.def("spline_topp_ra", [](Array c, Floats x, Floats gp, Floats vmax, Floats amax, Floats tmax, Floats phi,
+                               bool velocity_bound, std::optional<IntArray> dyn_ints, std::optional<Floats> dyn_floats) {
+        const dmh::PPoly sp = timed_of(c, x, std::nullopt, std::nullopt).path;
+        const size_t N1 = gp.shape(0), nq = (size_t)sp.d;
+        if (N1 < 2 || vmax.shape(0) != nq || amax.shape(0) != nq || tmax.shape(0) != nq || phi.shape(0) < 1)
+            throw nb::value_error("spline_topp_ra: gridpoints (N+1 >= 2,), vmax, amax, tmax (nq,), fractions (F >= 1,)");
+        for (size_t i = 0; i + 1 < N1; ++i)
+            if (!(gp.data()[i + 1] > gp.data()[i]) || !std::isfinite(gp.data()[i + 1]) || !std::isfinite(gp.data()[i]))
+                throw nb::value_error("spline_topp_ra: the gridpoints must be finite and strictly increasing");
+        dmh::ChainDynamics dyn;
+        bool torque = false;
+        for (size_t j = 0; j < nq; ++j) torque |= std::isfinite(tmax.data()[j]);
+        const int64_t kind = dmh::TORQUE;
+        if (torque) kinds_need_dynamics(&kind, 1, (int64_t)nq, dyn_ints, dyn_floats, dyn);
+        double* xs = new double[N1];
+        int64_t stage;
+        bool finite;
+        {
+            nb::gil_scoped_release unlocked;
+            dmh::StageRowsOut rows;
+            dmh::spline_stage_rows(sp, gp.data(), (int64_t)N1, vmax.data(), amax.data(), tmax.data(), phi.data(),
+                                   (int64_t)phi.shape(0), velocity_bound, torque ? &dyn : nullptr, rows);
+            finite = all_finite(rows.A.data(), rows.A.size()) && all_finite(rows.B.data(), rows.B.size()) &&
+                     all_finite(rows.C.data(), rows.C.size());
+            std::vector<double> K(2 * N1, NAN), us(N1, NAN);
+            for (size_t i = 0; i < N1; ++i) xs[i] = NAN;
+            if (finite)
+                stage = dmh::topp_ra(gp.data(), (int64_t)N1, rows.A.data(), rows.B.data(), rows.C.data(), rows.R,
+                                     rows.x_lo.data(), rows.x_hi.data(), K.data(), xs, us.data());
+        }
+        auto xs_out = owned(xs, {N1});
+        if (!finite) throw nb::value_error("spline_topp_ra: the rows must be finite");
+        return nb::make_tuple(stage, xs_out);
+    }, "c"_a, "x"_a, "gridpoints"_a, "vmax"_a, "amax"_a, "tmax"_a, "fractions"_a, "velocity_bound"_a,
+    "dyn_ints"_a.none() = nb::none(), "dyn_floats"_a.none() = nb::none(),
+    "topp_ra on the rows of drake_mh.trajectories.toppra_solve.stage_rows(...).canonical() for a joint spline\n"
+    "(scipy PPoly c, x) at the gridpoints and fractions (velocity, acceleration and torque rows where a limit is\n"
+    "finite; torque by the packed dynamics): (stage, xs (N+1,)) as topp_ra's.");
 
     // the (entry, buffer) pair of drake_mh.scene.batch.CollisionModel.free_function's make_one:
     // entry(q, clearance, self_clearance, buffer), the checker as the buffer

@@ -21,7 +21,7 @@ from drake_mh._support.native import compiled_core
 from drake_mh.errors import InvalidArgument
 from drake_mh.trajectories.dynamics import batch_dynamics
 
-__all__ = ["StageRows", "stage_rows", "solve_sd", "BACKENDS"]
+__all__ = ["StageRows", "stage_rows", "solve_sd", "solve_spline", "BACKENDS"]
 
 BACKENDS = ("auto", "compiled", "toppra")
 """``"compiled"``: the core's ``topp_ra``; ``"toppra"``: the package; ``"auto"``: the core where built."""
@@ -157,6 +157,26 @@ def solve_sd(rows: StageRows, spline, backend: str = "auto") -> tuple[np.ndarray
         return (np.sqrt(xs) if stage < 0 else None), "compiled"
     sd = _package_sd(rows, spline)
     return (None if sd is None or np.isnan(sd).any() else sd), "toppra"
+
+
+def solve_spline(robot, spline, gridpoints: np.ndarray, vmax, amax, tmax, fractions, *,
+                 velocity_bound: bool = True, backend: str = "auto") -> tuple[np.ndarray | None, str]:
+    """:func:`solve_sd` of :func:`stage_rows` (same arguments): with the compiled core (``"auto"``
+    where it is built, ``"compiled"``) the rows are built and solved in one call
+    (``spline_topp_ra``: the same rows, evaluated once per point, the torques by its inverse
+    dynamics), else built here and solved by the ``toppra`` package. ``(sd, solver)`` as
+    :func:`solve_sd`."""
+    if backend not in BACKENDS:
+        raise InvalidArgument(f"backend must be one of {BACKENDS}, got {backend!r}")
+    core = compiled_core() if backend != "toppra" else None
+    if core is None:
+        rows = stage_rows(robot, spline, gridpoints, vmax, amax, tmax, fractions, velocity_bound=velocity_bound)
+        return solve_sd(rows, spline, backend)
+    tmax = np.asarray(tmax, dtype=float)
+    ints, floats = batch_dynamics(robot).packed if np.any(np.isfinite(tmax)) else (None, None)
+    arrays = (np.ascontiguousarray(x, dtype=float) for x in (spline.c, spline.x, gridpoints, vmax, amax, tmax, fractions))
+    stage, xs = core.spline_topp_ra(*arrays, bool(velocity_bound), ints, floats)
+    return (np.sqrt(xs) if stage < 0 else None), "compiled"
 
 
 class _ToppraPath:

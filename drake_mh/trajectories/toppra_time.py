@@ -20,10 +20,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.interpolate import PPoly
 
+from drake_mh._support.native import compiled_core
 from drake_mh.errors import InfeasibleTrajectory, InvalidArgument
 from drake_mh.trajectories.dynamics import batch_dynamics
 from drake_mh.trajectories.paths import joint_path
-from drake_mh.trajectories.toppra_solve import solve_sd, stage_rows
+from drake_mh.trajectories.toppra_solve import solve_spline
 from drake_mh.trajectories.trajectory import Trajectory
 
 __all__ = ["toppra_like", "timing_from_gridpoints", "gravity_torques"]
@@ -98,6 +99,10 @@ def propose_gridpoints(spline, max_err_threshold: float = 1e-3, max_iteration: i
 
 def _gridpoints(spline, knots: np.ndarray, gridpoints: int | None) -> np.ndarray:
     s_end = float(spline.x[-1])
+    core = compiled_core()
+    if gridpoints is None and core is not None:  # the same passes, knots and ends in one call
+        return core.spline_gridpoints(np.ascontiguousarray(spline.c, dtype=float),
+                                      np.ascontiguousarray(spline.x, dtype=float), 1e-3, 100, 0.05, 100)
     if gridpoints is None:
         gp = propose_gridpoints(spline, max_err_threshold=1e-3, min_nb_points=100)
     else:
@@ -151,9 +156,9 @@ def toppra_like(W, robot, limits: dict, method: str, factors: dict, gridpoints, 
     tmax = limits["torque"] * factors.get("torque", np.inf)
     info = {"gridpoints": len(gp), "path_knots": len(spline.x)}
     if method == "toppra":
-        rows = stage_rows(robot, spline, gp, vmax, amax, tmax, np.linspace(0.0, 1.0, int(check_points) + 2),
-                          velocity_bound="velocity" in factors)
-        sd, info["solver"] = solve_sd(rows, spline, backend)
+        sd, info["solver"] = solve_spline(robot, spline, gp, vmax, amax, tmax,
+                                          np.linspace(0.0, 1.0, int(check_points) + 2),
+                                          velocity_bound="velocity" in factors, backend=backend)
         if sd is None:
             raise _diagnose(robot, method, spline, gp, factors, limits["torque"])
         timing = timing_from_gridpoints(gp, sd)

@@ -167,3 +167,57 @@ def test_rows_need_no_robot_without_torque():
     np.testing.assert_array_equal(A[:, :2], rows.a[:, 0])
     np.testing.assert_array_equal(A[:, 2:4], -rows.a[:, 0])
     np.testing.assert_array_equal(C[:, 2:4], -rows.c[:, 0] - rows.lims)
+
+
+@pytest.mark.parametrize("acceleration", [False, True], ids=["vendor-velocity-torque", "velocity-acc-torque"])
+@pytest.mark.parametrize("seed", range(4))
+def test_rows_built_in_the_core_solve_as_the_python_rows(panda, seed, acceleration):
+    """``solve_spline`` builds the rows and solves them in one compiled call: the same ``ṡ`` as
+    ``stage_rows`` solved by the compiled TOPP-RA (and so as the package's, above)."""
+    from drake_mh.trajectories.toppra_solve import solve_spline
+
+    _needs_core()
+    rows, spline = _panda_rows(panda, seed, acceleration, check_points=1 + seed % 2)
+    amax = panda.acceleration_limits * 0.99 if acceleration else np.full(panda.nq, np.inf)
+    fractions = np.linspace(0.0, 1.0, 1 + seed % 2 + 2)
+    one_call, by = solve_spline(panda, spline, rows.gridpoints, panda.velocity_limits * 0.99, amax,
+                                panda.effort_limits, fractions)
+    reference, _ = solve_sd(rows, spline, "compiled")
+    assert by == "compiled" and one_call.shape == reference.shape
+    np.testing.assert_allclose(one_call, reference, rtol=1e-9, atol=1e-12)
+    package, by = solve_spline(panda, spline, rows.gridpoints, panda.velocity_limits * 0.99, amax,
+                               panda.effort_limits, fractions, backend="toppra")
+    assert by == "toppra"
+    np.testing.assert_allclose(one_call, package, rtol=RTOL, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_gridpoints_from_the_core_are_the_python_ones(panda, seed, monkeypatch):
+    """The core's gridpoints (toppra's passes, the knots added, near-duplicates dropped) are
+    those of the Python passes on the same spline; a spline whose passes never settle raises
+    the same error."""
+    from drake_mh.trajectories import toppra_time
+
+    _needs_core()
+    rng = np.random.default_rng(seed)
+    W = random_waypoints(panda, rng, k=int(rng.integers(2, 12)), spread=float(rng.uniform(0.05, 1.0)))
+    spline, s_way = joint_path(W, panda, "toppra", bc_type="not-a-knot")
+    core = _gridpoints(spline, s_way, None)
+    monkeypatch.setattr(toppra_time, "compiled_core", lambda: None)
+    python = _gridpoints(spline, s_way, None)
+    assert core.shape == python.shape
+    np.testing.assert_allclose(core, python, rtol=0, atol=1e-12 * spline.x[-1])
+    with pytest.raises(ValueError, match="gridpoint"):
+        compiled_core().spline_gridpoints(spline.c, spline.x, 1e-300, 3, 0.05, 100)
+
+
+def test_solve_spline_refuses_bad_gridpoints_and_backends(panda):
+    from drake_mh.trajectories.toppra_solve import solve_spline
+
+    _needs_core()
+    rows, spline = _panda_rows(panda, 1, True)
+    limits = (panda.velocity_limits, panda.acceleration_limits, panda.effort_limits)
+    with pytest.raises(ValueError, match="increasing"):
+        solve_spline(panda, spline, rows.gridpoints[::-1], *limits, np.linspace(0, 1, 3))
+    with pytest.raises(InvalidArgument, match="backend"):
+        solve_spline(panda, spline, rows.gridpoints, *limits, np.linspace(0, 1, 3), backend="fast")
