@@ -434,7 +434,9 @@ NB_MODULE(_native, m) {
     m.def("certify_samples", [](Array path_c, Floats path_x, std::optional<Array> timing_c,
                                 std::optional<Floats> timing_x, Floats breaks, Floats tau, IntArray kinds,
                                 Batch centre, Batch half, double threshold, int64_t per_joint, int64_t iterations,
-                                std::optional<IntArray> dyn_ints, std::optional<Floats> dyn_floats) {
+                                std::optional<IntArray> dyn_ints, std::optional<Floats> dyn_floats,
+                                std::optional<IntArray> bound_n1, std::optional<IntArray> bound_picks,
+                                std::optional<Floats> bound_mats, double slack, int64_t max_levels) {
         const Timed q = timed_of(path_c, path_x, timing_c, timing_x);
         const size_t nQ = kinds.shape(0), nq = (size_t)q.path.d, P = breaks.shape(0) - 1, K = tau.shape(0);
         if (breaks.shape(0) < 2 || K < 2 || centre.shape(0) != nQ || centre.shape(1) != nq ||
@@ -445,6 +447,20 @@ NB_MODULE(_native, m) {
         int order = 0;
         for (size_t i = 0; i < nQ; ++i) order = std::max(order, kinds.data()[i] == dmh::TORQUE ? 2 : (int)kinds.data()[i]);
         const size_t M = P * K;
+        if (bound_n1) {  // the Bernstein bounds' nodes: n1 per quantity, picks and matrices of those with n1 > 0
+            size_t picks = 0, mats = 0;
+            bool ok = bound_n1->shape(0) == nQ && bound_picks && bound_mats && max_levels >= 0;
+            for (size_t i = 0; ok && i < nQ; ++i) {
+                const int64_t n1 = bound_n1->data()[i];
+                ok = n1 >= 0 && n1 <= (int64_t)K && (n1 == 0 || kinds.data()[i] < dmh::TORQUE);
+                picks += (size_t)std::max<int64_t>(n1, 0), mats += 3 * (size_t)(n1 * n1);
+            }
+            ok = ok && bound_picks->shape(0) == picks && bound_mats->shape(0) == mats;
+            for (size_t i = 0; ok && i < picks; ++i) ok = bound_picks->data()[i] >= 0 && bound_picks->data()[i] < (int64_t)K;
+            if (!ok)
+                throw nb::value_error("certify_samples: bound_n1 (nQ,) in [0, K] (0 for torque), bound_picks (sum n1,) "
+                                      "in [0, K), bound_mats (sum 3 n1^2,)");
+        }
         double* D = new double[((size_t)order + 1) * M * nq + 1];
         double* worst = new double[nQ * nq + 1];
         double* when = new double[nQ * nq + 1];
@@ -453,14 +469,20 @@ NB_MODULE(_native, m) {
             dmh::certify_samples(q.path, q.timing, torque ? &dyn : nullptr, breaks.data(), (int64_t)P, tau.data(),
                                  (int64_t)K, kinds.data(), centre.data(), half.data(), (int64_t)nQ, order, threshold,
                                  per_joint, iterations, D, worst, when);
+            if (bound_n1)
+                dmh::sample_bounds(D, (int64_t)P, (int64_t)K, (int64_t)nq, kinds.data(), (int64_t)nQ, bound_n1->data(),
+                                   bound_picks->data(), bound_mats->data(), centre.data(), half.data(), slack, max_levels,
+                                   worst);
         }
         return nb::make_tuple(owned(worst, {nQ, nq}), owned(when, {nQ, nq}), owned(D, {(size_t)order + 1, M, nq}));
     }, "path_c"_a, "path_x"_a, "timing_c"_a.none(), "timing_x"_a.none(), "breaks"_a, "tau"_a, "kinds"_a, "centre"_a,
     "half"_a, "threshold"_a, "per_joint"_a, "iterations"_a, "dyn_ints"_a.none() = nb::none(),
-    "dyn_floats"_a.none() = nb::none(),
+    "dyn_floats"_a.none() = nb::none(), "bound_n1"_a.none() = nb::none(), "bound_picks"_a.none() = nb::none(),
+    "bound_mats"_a.none() = nb::none(), "slack"_a = 1e-8, "max_levels"_a = 30,
     "The sampled and refined ratios of drake_mh.trajectories.certify.certify for nQ quantities (kinds 0..3:\n"
     "the derivative of that order, 4: torque; |x - centre| / half per joint) at fractions tau of every piece between breaks:\n"
-    "(worst (nQ, nq), when (nQ, nq) [s], D (order + 1, P K, nq) the derivatives at the samples).");
+    "(worst (nQ, nq), when (nQ, nq) [s], D (order + 1, P K, nq) the derivatives at the samples). With bound_n1:\n"
+    "worst also at least kinematic_bound's Bernstein bound from the samples (sample_bounds in refine.hpp).");
 
     m.def("bernstein_bound", [](Array B, Array V, Array centre, Array half, Array best, double slack,
                                 int64_t max_levels, Array left, Array right) {

@@ -170,4 +170,38 @@ inline void certify_samples(const PPoly& path, const PPoly& timing, const ChainD
         }
 }
 
+// The Bernstein bounds of drake_mh/trajectories/bound.py kinematic_bound from certify_samples'
+// samples D (order + 1, P K, nq): for each quantity iq with n1[iq] > 0 nodes, the values V
+// (P, n1, nq) of D[kinds[iq]] at the samples picks (n1,) of every piece, their coefficients
+// B = M0 V, and the halving loop (bernstein_bound, from the ratios in worst); worst[iq] becomes
+// the larger. mats: per such quantity M0, left, right (n1, n1) each, in order.
+inline void sample_bounds(const double* D, int64_t P, int64_t K, int64_t nq, const int64_t* kinds, int64_t nQ,
+                          const int64_t* n1s, const int64_t* picks, const double* mats, const double* centre,
+                          const double* half, double slack, int64_t max_levels, double* worst) {
+    const int64_t M = P * K;
+    std::vector<double> V, B, certified((size_t)nq);
+    for (int64_t iq = 0; iq < nQ; ++iq) {
+        const int64_t n1 = n1s[iq];
+        if (n1 <= 0) continue;
+        const double *M0 = mats, *left = M0 + n1 * n1, *right = left + n1 * n1;
+        const double* X = D + kinds[iq] * M * nq;
+        V.resize((size_t)(P * n1 * nq)), B.assign((size_t)(P * n1 * nq), 0.0);
+        for (int64_t p = 0; p < P; ++p)
+            for (int64_t i = 0; i < n1; ++i) std::copy_n(&X[(p * K + picks[i]) * nq], nq, &V[(p * n1 + i) * nq]);
+        for (int64_t p = 0; p < P; ++p)
+            for (int64_t a = 0; a < n1; ++a) {
+                double* Ba = &B[(p * n1 + a) * nq];
+                for (int64_t b = 0; b < n1; ++b) {
+                    const double w = M0[a * n1 + b], *Vb = &V[(p * n1 + b) * nq];
+                    for (int64_t j = 0; j < nq; ++j) Ba[j] += w * Vb[j];
+                }
+            }
+        double* w = worst + iq * nq;
+        bernstein_bound(B.data(), P, n1, nq, V.data(), P, n1, centre + iq * nq, half + iq * nq, w, slack, max_levels,
+                        left, right, certified.data());
+        for (int64_t j = 0; j < nq; ++j) w[j] = std::max(w[j], certified[j]);
+        picks += n1, mats += 3 * n1 * n1;
+    }
+}
+
 }  // namespace dmh

@@ -28,13 +28,20 @@ import numpy as np
 
 from drake_mh._support.native import compiled_core
 
-__all__ = ["ONE_SIDED", "kinematic_bound", "piece_degree"]
+__all__ = ["MAX_LEVELS", "ONE_SIDED", "SLACK", "kinematic_bound", "piece_degree", "sample_bound_nodes"]
 
 
 ONE_SIDED = 1e-9
 """[fraction of a piece] values at a piece's ends are taken this far inside it (its own
 polynomial, not the next piece's): :func:`kinematic_bound` interpolates at those fractions, so the
 polynomial it bounds is the piece's, exactly."""
+
+
+SLACK = 1e-8
+"""[ratio] :func:`kinematic_bound` halves a piece while its bound exceeds the largest value seen by more."""
+
+MAX_LEVELS = 30
+"""Halvings :func:`kinematic_bound` makes at most (a piece still open keeps its valid bound)."""
 
 
 def piece_degree(trajectory) -> int:
@@ -87,6 +94,35 @@ def _halves(n: int) -> tuple[np.ndarray, np.ndarray]:
         for j in range(i, n + 1):
             right[i, j] = comb(n - i, j - i) / 2.0 ** (n - i)
     return left, right
+
+
+def sample_bound_nodes(tau: np.ndarray, degree: int, orders: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What :func:`kinematic_bound` with ``samples=(tau, ...)`` uses, for the compiled core's
+    ``certify_samples`` (``bound_n1``, ``bound_picks``, ``bound_mats``): per order (``-1``: none,
+    e.g. torque) the number of nodes ``n + 1`` (``n = max(degree - order, 0)``; 0 where there
+    are not more samples than ``n``: the bound then evaluates nodes of its own), their sample
+    indices, and ``M, S_L, S_R`` (:func:`_sample_nodes`, :func:`_halves`) flattened, in order.
+    Cached per ``(tau, degree, orders)``."""
+    return _nodes_spec(np.ascontiguousarray(tau, dtype=float).tobytes(), int(degree), tuple(orders))
+
+
+@functools.lru_cache(maxsize=64)
+def _nodes_spec(tau_bytes: bytes, degree: int, orders: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    tau = np.frombuffer(tau_bytes, dtype=float)
+    n1s, picks, mats = [], [], []
+    for order in orders:
+        n = max(degree - order, 0)
+        if order < 0 or len(tau) <= n:
+            n1s.append(0)
+            continue
+        pick, M0 = _sample_nodes(tau, n)
+        left, right = _halves(n)
+        n1s.append(len(pick))
+        picks.append(pick)
+        mats += [M0.ravel(), left.ravel(), right.ravel()]
+    as_ints = np.concatenate(picks).astype(np.int64) if picks else np.zeros(0, np.int64)
+    as_floats = np.concatenate(mats) if mats else np.zeros(0)
+    return np.array(n1s, dtype=np.int64), np.ascontiguousarray(as_ints), np.ascontiguousarray(as_floats, dtype=float)
 
 
 @numba.njit(cache=True, error_model="numpy")  # x / 0 -> inf, as numpy (a joint without range)
@@ -148,7 +184,7 @@ def _subdivide(B, V, centre, half, best, slack, max_levels, left, right):
 
 
 def kinematic_bound(trajectory, order: int, ratio: tuple, t0: np.ndarray, t1: np.ndarray, best: np.ndarray,
-                    samples=None, slack: float = 1e-8, max_levels: int = 30) -> np.ndarray:
+                    samples=None, slack: float = SLACK, max_levels: int = MAX_LEVELS) -> np.ndarray:
     """Per joint, an upper bound of the ratio of ``q^(order)(t)`` over the pieces ``[t0, t1]``.
 
     Args:

@@ -39,7 +39,7 @@ import numpy as np
 
 from drake_mh.errors import InvalidArgument, LimitViolation
 from drake_mh.robot.limits import limits_of
-from drake_mh.trajectories.bound import kinematic_bound
+from drake_mh.trajectories.bound import MAX_LEVELS, SLACK, kinematic_bound, piece_degree, sample_bound_nodes
 
 __all__ = ["Certificate", "certify", "QUANTITIES"]
 
@@ -235,12 +235,12 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
     norms = [_normal(robot, limits, quantity, scale) for quantity in quantities]
     core = trajectory._compiled if torque_backend == "rnea" and quantities else None
     if core is not None:  # the compiled core: the same samples and refinement in one call
-        worst, when, D = _compiled_samples(core, trajectory, robot, quantities, norms, tau)
+        worst, when, D, bounded = _compiled_samples(core, trajectory, robot, quantities, norms, tau)
         jobs = [(q, None, norm, worst[i], when[i]) for i, (q, norm) in enumerate(zip(quantities, norms))]
         times = {q: when[i] for i, q in enumerate(quantities)}
     else:
         D = trajectory.derivatives(T.ravel(), max(_ORDER[q] for q in quantities))  # once for every quantity
-        jobs = []
+        jobs, bounded = [], ()
         for quantity, norm in zip(quantities, norms):
             r = _normalized(D, robot, quantity, norm, torque_backend).reshape(P, K, nq)
             flat = r.reshape(P * K, nq)
@@ -249,7 +249,7 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
             jobs.append((quantity, r, norm, flat[idx, np.arange(nq)].copy(), times[quantity]))
         _refine(trajectory, robot, jobs, T, lo, hi, torque_backend)
     for quantity, _, norm, worst, _ in jobs:
-        if quantity != "torque":  # polynomial between breaks: a bound, not a sample (bound.py)
+        if quantity != "torque" and quantity not in bounded:  # polynomial between breaks: a bound (bound.py)
             worst = np.maximum(worst, kinematic_bound(trajectory, _ORDER[quantity], norm, breaks[:-1], breaks[1:],
                                                       worst, samples=(tau, D[_ORDER[quantity]].reshape(P, K, nq))))
         if quantity == "position":
@@ -309,17 +309,22 @@ _KIND = {"position": 0, "velocity": 1, "acceleration": 2, "jerk": 3, "torque": 4
 
 def _compiled_samples(core, trajectory, robot, quantities, norms, tau):
     """The samples and :func:`_refine` of :func:`certify` in the compiled core
-    (``certify_samples``, the same threshold, ranking and search): ``(worst (nQ, nq),
-    when (nQ, nq), D)``."""
+    (``certify_samples``, the same threshold, ranking and search), and in the same call the
+    :func:`~drake_mh.trajectories.bound.kinematic_bound` of every position, velocity, acceleration
+    and jerk whose Bernstein nodes are among the samples: ``(worst (nQ, nq), when (nQ, nq), D,
+    the quantities bounded)``."""
     nq = robot.nq
     kinds = np.array([_KIND[q] for q in quantities], dtype=np.int64)
     centre = np.array([c for c, _ in norms], dtype=float).reshape(len(norms), nq)  # each (nq,)
     half = np.array([h for _, h in norms], dtype=float).reshape(len(norms), nq)
     ints, floats = _batch_dynamics(robot).packed if "torque" in quantities else (None, None)
+    orders = tuple(-1 if q == "torque" else _ORDER[q] for q in quantities)
+    n1, picks, mats = sample_bound_nodes(tau, piece_degree(trajectory), orders)
     worst, when, D = core[0].certify_samples(*core[1:], np.ascontiguousarray(trajectory.breaks, dtype=float),
                                              np.ascontiguousarray(tau, dtype=float), kinds, centre, half,
-                                             _THRESHOLD, _PER_JOINT, _ITERATIONS, ints, floats)
-    return worst, when, list(D)
+                                             _THRESHOLD, _PER_JOINT, _ITERATIONS, ints, floats, n1, picks, mats,
+                                             SLACK, MAX_LEVELS)
+    return worst, when, list(D), {q for q, n in zip(quantities, n1) if n > 0}
 
 
 _THRESHOLD, _PER_JOINT, _ITERATIONS = 0.9, 8, 8
