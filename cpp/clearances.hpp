@@ -98,8 +98,7 @@ public:
     std::mutex busy;  // held by a call: the workspace is the object's own
     static constexpr int64_t LANES = 128;
 
-    Clearances(std::vector<int64_t> ints, std::vector<double> floats)
-        : PackedModel(std::move(ints), std::move(floats)) {
+    explicit Clearances(Buffers buffers) : PackedModel(std::move(buffers)) {
         if (!ok_) return;
         const int64_t F = std::max<int64_t>(s_.chain.F, 1), G = std::max<int64_t>(s_.G, 1),
                       K = std::max<int64_t>(s_.K, 1), L = LANES;

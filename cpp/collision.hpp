@@ -27,9 +27,8 @@ struct Buffer {
 // hold a model (sizes matching the header, known obstacle kinds).
 class PackedModel {
 public:
-    PackedModel(std::vector<int64_t> ints, std::vector<double> floats)
-        : ints_(std::move(ints)), floats_(std::move(floats)) {
-        ok_ = unpack(ints_.data(), (int64_t)ints_.size(), floats_.data(), (int64_t)floats_.size(), s_);
+    explicit PackedModel(Buffers buffers) : buffers_(std::move(buffers)) {
+        ok_ = unpack(buffers_.ints, buffers_.n_ints, buffers_.floats, buffers_.n_floats, s_);
         if (!ok_) return;
         for (int64_t k = 0; k < s_.K; ++k) ok_ = ok_ && s_.kinds[k] >= SPHERE && s_.kinds[k] <= CLOUD;
         for (int64_t k = 0; k < s_.chain.F; ++k) nq_ = std::max(nq_, s_.chain.qidx[k] + 1);
@@ -40,8 +39,7 @@ public:
     const Packed& packed() const { return s_; }
 
 protected:
-    std::vector<int64_t> ints_;
-    std::vector<double> floats_;
+    Buffers buffers_;
     Packed s_;
     bool ok_ = false;
     int64_t nq_ = 0;
@@ -52,8 +50,7 @@ public:
     std::mutex busy;  // held by a call: the workspace is the object's own
     static constexpr int64_t LANES = 128;  // configurations per block (a multiple of W)
 
-    CollisionChecker(std::vector<int64_t> ints, std::vector<double> floats)
-        : PackedModel(std::move(ints), std::move(floats)) {
+    explicit CollisionChecker(Buffers buffers) : PackedModel(std::move(buffers)) {
         if (!ok_) return;
         const int64_t F = s_.chain.F, L = LANES;
         q_.resize(std::max<int64_t>(nq_, 1) * L);

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "borrow.hpp"
 #include "collision.hpp"
 #include "dynamics.hpp"
 #include "exact_bind.hpp"
@@ -33,11 +34,10 @@ using Batch = nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::c
 using One = nb::ndarray<const double, nb::ndim<1>, nb::device::cpu>;
 using BoolOut = nb::ndarray<nb::numpy, bool, nb::ndim<1>>;
 
-// A CollisionChecker or Clearances (a dmh::PackedModel) built in place from copies of the buffers.
+// A CollisionChecker or Clearances (a dmh::PackedModel) built in place on the buffers, borrowed.
 template <class Model>
 static void init_model(Model* self, Ints ints, Floats floats) {
-    new (self) Model(std::vector<int64_t>(ints.data(), ints.data() + ints.shape(0)),
-                     std::vector<double>(floats.data(), floats.data() + floats.shape(0)));
+    new (self) Model(dmh::borrow(ints, floats));
     if (!self->ok()) {
         self->~Model();
         throw nb::value_error("the packed buffers do not hold a collision model (drake_mh.scene.kernels.packing.pack)");

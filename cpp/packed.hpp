@@ -4,10 +4,23 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 
 #include "kinematics.hpp"
 
 namespace dmh {
+
+// The two buffers of pack, borrowed: their owner (the arrays they live in) is kept alive by
+// `owner` as long as a model holds them; nothing writes them (a new scene packs new buffers). A
+// new scene's models then share one copy (of the robot's pair tables too, about 1.2 MB for the
+// Panda with its hand) instead of each copying it into fresh memory.
+struct Buffers {
+    const int64_t* ints = nullptr;
+    int64_t n_ints = 0;
+    const double* floats = nullptr;
+    int64_t n_floats = 0;
+    std::shared_ptr<const void> owner;
+};
 
 constexpr int64_t GRID_COLUMNS = 5;  // drake_mh.scene.pair_table.GRID_COLUMNS
 

@@ -14,6 +14,7 @@
 #include <mutex>
 #include <vector>
 
+#include "borrow.hpp"
 #include "lazy_prm.hpp"
 
 namespace dmh {
@@ -22,9 +23,9 @@ class MotionPlanner {
 public:
     std::mutex busy;  // held by a call: the workspaces are the object's own
 
-    MotionPlanner(std::vector<int64_t> ints, std::vector<double> floats, std::vector<double> reach, int64_t nq)
-        : ints_(std::move(ints)), floats_(std::move(floats)), reach_(std::move(reach)) {
-        ok_ = unpack(ints_.data(), (int64_t)ints_.size(), floats_.data(), (int64_t)floats_.size(), s_);
+    MotionPlanner(Buffers buffers, std::vector<double> reach, int64_t nq)
+        : buffers_(std::move(buffers)), reach_(std::move(reach)) {
+        ok_ = unpack(buffers_.ints, buffers_.n_ints, buffers_.floats, buffers_.n_floats, s_);
         if (!ok_) return;
         for (int64_t k = 0; k < s_.K; ++k) ok_ = ok_ && s_.kinds[k] >= SPHERE && s_.kinds[k] <= CLOUD;
         int64_t need = 0;
@@ -60,7 +61,7 @@ public:
     int prm(const PrmOptions& po, const double* q_start, const double* goals, int64_t G, const double* init_path,
             int64_t M0, int64_t init_goal, const double* lower, const double* upper, uint64_t seed,
             int64_t max_samples, double time_limit, std::vector<double>& path, int64_t& goal) {
-        if (!checker_) checker_ = std::make_unique<CollisionChecker>(ints_, floats_);
+        if (!checker_) checker_ = std::make_unique<CollisionChecker>(buffers_);
         double* stats = mc_->stats;
         for (int64_t i = 0; i < PRM_N_STATS; ++i) stats[i] = 0.0;
         SplitMix64 rng{seed};
@@ -75,8 +76,8 @@ public:
     }
 
 private:
-    std::vector<int64_t> ints_;
-    std::vector<double> floats_, reach_;
+    Buffers buffers_;
+    std::vector<double> reach_;
     Packed s_;
     bool ok_ = false, configured_ = false;
     std::unique_ptr<MotionChecker> mc_;
@@ -116,8 +117,7 @@ inline dmh::MotionOptions motion_options(double clearance, double self_clearance
 }
 
 inline void init(dmh::MotionPlanner* self, CInts ints, CVec floats, CMat reach) {
-    new (self) dmh::MotionPlanner(std::vector<int64_t>(ints.data(), ints.data() + ints.shape(0)),
-                                  std::vector<double>(floats.data(), floats.data() + floats.shape(0)),
+    new (self) dmh::MotionPlanner(dmh::borrow(ints, floats),
                                   std::vector<double>(reach.data(), reach.data() + reach.shape(0) * reach.shape(1)),
                                   (int64_t)reach.shape(1));
     if (!self->ok()) {

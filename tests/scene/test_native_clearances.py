@@ -254,3 +254,31 @@ def test_clearances_reject_bad_buffers_and_shapes():
     assert compiled.values(Q, np.zeros(3), 0.05, pair_fine, K.PER_LINK, v_WO) is None
     with pytest.raises(ValueError, match="finite QA"):
         compiled.certify_segments(Q, Q, model.reach, v_WO, 0.0, 0.0, 0.0, np.inf, MIN_PIECE, 100)
+
+
+def test_models_keep_the_buffers_they_borrow_alive():
+    """The compiled models read the packed buffers in place (no copy): built from arrays whose
+    only other references are then dropped, they answer as a model on the live arrays does."""
+    import gc
+
+    from drake_mh import _native
+    from drake_mh.planning.rrt_connect.planner import compiled_planner
+
+    scene = every_kind(PANDA, 1)
+    model, obstacles = scene.collision_model, scene.obstacle_arrays
+    ints, floats = model.packed(obstacles, model.pair_arrays)
+    v_WO, Q = np.zeros((len(obstacles[0]), 3)), PANDA.random_configurations(64, np.random.default_rng(5))
+    pair_fine = np.zeros(model.num_pairs)
+    expected = _native.Clearances(ints, floats).values(Q, np.zeros(64), 0.05, pair_fine, K.PER_LINK, v_WO)
+    expected_free = _native.CollisionChecker(ints, floats).free(Q, 1e-12, 1e-12)
+    copies = (ints.copy(), floats.copy())
+    borrowed = _native.Clearances(*copies)
+    checker = _native.CollisionChecker(*copies)
+    planner = _native.MotionPlanner(*copies, model.reach)
+    del copies
+    gc.collect()
+    np.testing.assert_array_equal(borrowed.values(Q, np.zeros(64), 0.05, pair_fine, K.PER_LINK, v_WO), expected)
+    np.testing.assert_array_equal(checker.free(Q, 1e-12, 1e-12), expected_free)
+    del borrowed, checker, planner
+    gc.collect()
+    assert compiled_planner(scene) is not None
