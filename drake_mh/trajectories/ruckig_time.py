@@ -131,23 +131,26 @@ _BIG = {"velocity": 1e3, "acceleration": 1e4, "jerk": 1e6}
 """stand-ins for an undeclared (infinite) limit, as :func:`ruckig_state_to_state` uses them."""
 
 
-def _line_limits(limits: dict, delta: np.ndarray, factors) -> tuple[float, float, float]:
-    """Limits of the segment parameter ``s`` for ``q = q_a + s·Δ``: ``|q̇_j| = |ṡ||Δ_j| <= v_j``
-    for every j  ⇔  ``|ṡ| <= min_j v_j / |Δ_j|`` (the same for ``s̈`` and the jerk).
+def _line_limits(limits: dict, deltas: np.ndarray, factors) -> np.ndarray:
+    """Limits ``(M, 3)`` of the segment parameter ``s`` for ``q = q_a + s·Δ`` per row of
+    ``deltas (M, nq)``: ``|q̇_j| = |ṡ||Δ_j| <= v_j`` for every j  ⇔  ``|ṡ| <= min_j v_j / |Δ_j|``
+    (the same for ``s̈`` and the jerk), columns velocity, acceleration, jerk.
     ``limits``: ``{"velocity", "acceleration", "jerk"}`` -> ``(nq,)``."""
-    moving = np.abs(delta) > 0.0
-    out = []
-    for q in ("velocity", "acceleration", "jerk"):
-        arr = np.asarray(limits[q], dtype=float)
-        lim = np.where(np.isfinite(arr), arr, _BIG[q]) * factors.get(q, 1.0)
-        out.append(float(np.min(lim[moving] / np.abs(delta[moving]))))
-    return out[0], out[1], out[2]
+    size = np.abs(deltas)
+    out = np.empty((len(deltas), 3))
+    with np.errstate(divide="ignore"):
+        for k, q in enumerate(("velocity", "acceleration", "jerk")):
+            arr = np.asarray(limits[q], dtype=float)
+            lim = np.where(np.isfinite(arr), arr, _BIG[q]) * factors.get(q, 1.0)
+            out[:, k] = np.min(np.where(size > 0.0, lim / size, np.inf), axis=1)
+    return out
 
 
-def _ruckig_line(limits: dict, q_a: np.ndarray, q_b: np.ndarray, factors) -> PPoly:
+def _ruckig_line(line_limits: np.ndarray, q_a: np.ndarray, q_b: np.ndarray) -> PPoly:
     """Rest-to-rest, jerk-limited, time-optimal motion along the straight segment ``q_a -> q_b``.
 
-    A one-dimensional ruckig profile of ``s: 0 -> 1`` under :func:`_line_limits`, composed with
+    A one-dimensional ruckig profile of ``s: 0 -> 1`` under ``line_limits`` (the velocity,
+    acceleration and jerk limits of ``s``, :func:`_line_limits`), composed with
     ``q(t) = q_a + s(t) (q_b - q_a)``: every configuration lies on the segment (exactly, up to
     rounding), and no motion along the segment is faster under the joints' box limits (they
     become exactly the limits of ``s``). Rest to rest, the profile is monotone, so ``s`` stays
@@ -160,7 +163,7 @@ def _ruckig_line(limits: dict, q_a: np.ndarray, q_b: np.ndarray, factors) -> PPo
     inp = InputParameter(1)
     inp.current_position, inp.target_position = [0.0], [1.0]
     inp.current_velocity = inp.current_acceleration = inp.target_velocity = inp.target_acceleration = [0.0]
-    vs, as_, js = _line_limits(limits, delta, factors)
+    vs, as_, js = (float(x) for x in line_limits)
     inp.max_velocity, inp.max_acceleration, inp.max_jerk = [vs], [as_], [js]
     out = RTrajectory(1)
     try:
@@ -180,8 +183,9 @@ def _ruckig_path(W, robot, factors, limits: dict) -> Trajectory:
     ``limits`` (``{"velocity", "acceleration", "jerk"}`` -> ``(nq,)``), concatenated in time."""
     xs, cs = [], []
     t = 0.0
+    line_limits = _line_limits(limits, np.diff(W, axis=0), factors)
     for k in range(len(W) - 1):
-        pp = _ruckig_line(limits, W[k], W[k + 1], factors)
+        pp = _ruckig_line(line_limits[k], W[k], W[k + 1])
         xs.append(pp.x + t)
         cs.append(pp.c)
         t += pp.x[-1] - pp.x[0]
