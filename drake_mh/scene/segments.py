@@ -225,6 +225,29 @@ clearance first: the smaller the smallest value seen, the fewer raised certifica
 and tried again."""
 
 
+SMALLEST_BATCH = 16
+"""Rows :func:`_smallest_at_rows` evaluates per batch, those that can hold the minimum down first."""
+
+
+def _smallest_at_rows(scene, Q: np.ndarray, lower: np.ndarray) -> float:
+    """``min(scene.batch_min_distance(Q))`` for a path's rows ``Q (M, nq)`` whose ``M - 1``
+    segments are certified with obstacle clearance at least ``lower``, evaluating only the rows
+    that can hold it down: a row ends one or two segments, so its clearance is at least the larger
+    of their bounds; rows go in batches of :data:`SMALLEST_BATCH` by that floor, lowest first,
+    until the next floor is not below the smallest value found (no later row can go below it)."""
+    floor = np.full(len(Q), -np.inf)
+    floor[:-1] = lower
+    floor[1:] = np.maximum(floor[1:], lower)
+    order = np.argsort(floor, kind="stable")
+    best = np.inf
+    for start in range(0, len(order), SMALLEST_BATCH):
+        rows = order[start:start + SMALLEST_BATCH]
+        if not floor[rows[0]] < best:
+            break
+        best = min(best, float(np.min(scene.batch_min_distance(Q[rows]))))
+    return best
+
+
 def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, self_clearance: float,
              tolerance: float, max_evaluations: int) -> SegmentCertificate:
     """Refine only the segments whose bound could hold the path's minimum down by more than
@@ -250,7 +273,7 @@ def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, s
     """
     if not cert.all_certified or not len(cert.lower) or not np.all(np.isfinite(cert.lower)):
         return cert
-    upper = float(np.min(scene.batch_min_distance(Q)))
+    upper = _smallest_at_rows(scene, Q, cert.lower)
     refine = np.flatnonzero(cert.lower < upper - tolerance)
     if len(refine):  # only a segment that may need refining is probed: ``upper`` only falls
         QA, dQ = Q[:-1][refine], Q[1:][refine] - Q[:-1][refine]

@@ -287,3 +287,29 @@ def test_refining_a_path_certificate_gives_the_refined_certificate():
         refine_path(scene, Q[:3], loose, 1e-3)
     with pytest.raises(SceneError, match="tolerance"):
         refine_path(scene, Q, loose, 0.0)
+
+
+def test_smallest_clearance_at_rows_reads_only_rows_that_can_hold_it_down(monkeypatch):
+    """The smallest sphere-model clearance over a path's rows, from the rows whose segments'
+    certified bounds leave them below the smallest found: the same value as every row's, from
+    fewer rows on a path of many short segments."""
+    from drake_mh.scene import segments
+
+    scene = cluttered(2)
+    QA, QB = free_pairs(scene, 5, 40, 0.3)
+    checked = fewer = 0
+    for i in range(12):
+        Q = dense(QA[i], QB[i], 121)
+        cert = scene.certify_path(Q)
+        if not cert.certified:
+            continue
+        read = []
+        original = type(scene).batch_min_distance
+        monkeypatch.setattr(type(scene), "batch_min_distance", lambda self, X: read.append(len(X)) or original(self, X))
+        smallest = segments._smallest_at_rows(scene, Q, cert.segments.lower)
+        monkeypatch.undo()
+        assert smallest == float(np.min(scene.batch_min_distance(Q)))
+        assert sum(read) <= len(Q)
+        fewer += sum(read) < len(Q)
+        checked += 1
+    assert checked >= 3 and fewer >= 1
