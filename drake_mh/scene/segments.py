@@ -226,26 +226,31 @@ and tried again."""
 
 
 SMALLEST_BATCH = 16
-"""Rows :func:`_smallest_at_rows` evaluates per batch, those that can hold the minimum down first."""
+"""Configurations :func:`_smallest_above` evaluates per batch, those that can hold the minimum down first."""
 
 
-def _smallest_at_rows(scene, Q: np.ndarray, lower: np.ndarray) -> float:
-    """``min(scene.batch_min_distance(Q))`` for a path's rows ``Q (M, nq)`` whose ``M - 1``
-    segments are certified with obstacle clearance at least ``lower``, evaluating only the rows
-    that can hold it down: a row ends one or two segments, so its clearance is at least the larger
-    of their bounds; rows go in batches of :data:`SMALLEST_BATCH` by that floor, lowest first,
-    until the next floor is not below the smallest value found (no later row can go below it)."""
-    floor = np.full(len(Q), -np.inf)
-    floor[:-1] = lower
-    floor[1:] = np.maximum(floor[1:], lower)
-    order = np.argsort(floor, kind="stable")
-    best = np.inf
+def _smallest_above(scene, X: np.ndarray, floor: np.ndarray) -> float:
+    """``min(scene.batch_min_distance(X))`` for configurations ``X (N, nq)`` whose
+    sphere-model clearances are known to be at least ``floor (N,)`` (certified bounds of segments
+    they lie on), evaluating only those that can hold it down: in batches of
+    :data:`SMALLEST_BATCH` by floor, lowest first, until the next floor is not below the
+    smallest value found (no later one can go below it). The same value as evaluating all."""
+    order, best = np.argsort(floor, kind="stable"), np.inf
     for start in range(0, len(order), SMALLEST_BATCH):
         rows = order[start:start + SMALLEST_BATCH]
         if not floor[rows[0]] < best:
             break
-        best = min(best, float(np.min(scene.batch_min_distance(Q[rows]))))
+        best = min(best, float(np.min(scene.batch_min_distance(X[rows]))))
     return best
+
+
+def _row_floors(lower: np.ndarray) -> np.ndarray:
+    """``(M,)`` for a path of ``M - 1`` segments certified with bounds ``lower``: a row ends one
+    or two segments, so its clearance is at least the larger of their bounds."""
+    floor = np.full(len(lower) + 1, -np.inf)
+    floor[:-1] = lower
+    floor[1:] = np.maximum(floor[1:], lower)
+    return floor
 
 
 def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, self_clearance: float,
@@ -273,12 +278,12 @@ def _tighten(scene, Q: np.ndarray, cert: SegmentCertificate, clearance: float, s
     """
     if not cert.all_certified or not len(cert.lower) or not np.all(np.isfinite(cert.lower)):
         return cert
-    upper = _smallest_at_rows(scene, Q, cert.lower)
+    upper = _smallest_above(scene, Q, _row_floors(cert.lower))
     refine = np.flatnonzero(cert.lower < upper - tolerance)
     if len(refine):  # only a segment that may need refining is probed: ``upper`` only falls
         QA, dQ = Q[:-1][refine], Q[1:][refine] - Q[:-1][refine]
         probes = np.vstack([QA + f * dQ for f in TIGHTEN_PROBES])
-        upper = min(upper, float(np.min(scene.batch_min_distance(probes))))
+        upper = min(upper, float(np.min(scene.batch_min_distance(probes))))  # all: their segments are low
         refine = refine[cert.lower[refine] < upper - tolerance]
     if not len(refine):
         return cert

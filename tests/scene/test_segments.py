@@ -306,7 +306,7 @@ def test_smallest_clearance_at_rows_reads_only_rows_that_can_hold_it_down(monkey
         read = []
         original = type(scene).batch_min_distance
         monkeypatch.setattr(type(scene), "batch_min_distance", lambda self, X: read.append(len(X)) or original(self, X))
-        smallest = segments._smallest_at_rows(scene, Q, cert.segments.lower)
+        smallest = segments._smallest_above(scene, Q, segments._row_floors(cert.segments.lower))
         monkeypatch.undo()
         assert smallest == float(np.min(scene.batch_min_distance(Q)))
         assert sum(read) <= len(Q)
