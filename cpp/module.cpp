@@ -123,6 +123,14 @@ static bool all_finite(const double* x, size_t n) {
 }
 
 // v_WO (K, 3) of the checker's K obstacles, finite, or a ValueError
+// TOPP-RA's gridpoints (N + 1,): finite and strictly increasing, else a ValueError naming the call.
+static void check_gridpoints(const Floats& gp, const char* call) {
+    const double* x = gp.data();
+    for (size_t i = 0; i + 1 < gp.shape(0); ++i)
+        if (!(x[i + 1] > x[i]) || !std::isfinite(x[i + 1]) || !std::isfinite(x[i]))
+            throw nb::value_error((std::string(call) + ": the gridpoints must be finite and strictly increasing").c_str());
+}
+
 static void check_v_WO(const dmh::Clearances& self, Batch v_WO) {
     if ((int64_t)v_WO.shape(0) != self.packed().K || v_WO.shape(1) != 3 || !all_finite(v_WO.data(), v_WO.size()))
         throw nb::value_error("v_WO must be finite (K, 3) float64, K the packed obstacles");
@@ -510,9 +518,7 @@ NB_MODULE(_native, m) {
         if (N1 < 2 || A.shape(0) != N1 || B.shape(0) != N1 || C.shape(0) != N1 || B.shape(1) != R ||
             C.shape(1) != R || x_lo.shape(0) != N1 || x_hi.shape(0) != N1)
             throw nb::value_error("topp_ra: gridpoints (N+1,) with N >= 1; rows A, B, C (N+1, R); x_lo, x_hi (N+1,)");
-        for (size_t i = 0; i + 1 < N1; ++i)
-            if (!(gp.data()[i + 1] > gp.data()[i]) || !std::isfinite(gp.data()[i + 1]) || !std::isfinite(gp.data()[i]))
-                throw nb::value_error("topp_ra: the gridpoints must be finite and strictly increasing");
+        check_gridpoints(gp, "topp_ra");
         if (!all_finite(A.data(), A.size()) || !all_finite(B.data(), B.size()) || !all_finite(C.data(), C.size()))
             throw nb::value_error("topp_ra: the rows A, B, C must be finite");
         for (size_t i = 0; i < N1; ++i)
@@ -558,9 +564,7 @@ NB_MODULE(_native, m) {
         const size_t N1 = gp.shape(0), nq = (size_t)sp.d;
         if (N1 < 2 || vmax.shape(0) != nq || amax.shape(0) != nq || tmax.shape(0) != nq || phi.shape(0) < 1)
             throw nb::value_error("spline_topp_ra: gridpoints (N+1 >= 2,), vmax, amax, tmax (nq,), fractions (F >= 1,)");
-        for (size_t i = 0; i + 1 < N1; ++i)
-            if (!(gp.data()[i + 1] > gp.data()[i]) || !std::isfinite(gp.data()[i + 1]) || !std::isfinite(gp.data()[i]))
-                throw nb::value_error("spline_topp_ra: the gridpoints must be finite and strictly increasing");
+        check_gridpoints(gp, "spline_topp_ra");
         dmh::ChainDynamics dyn;
         bool torque = false;
         for (size_t j = 0; j < nq; ++j) torque |= std::isfinite(tmax.data()[j]);
