@@ -25,7 +25,7 @@ inline bool spline_gridpoints(const PPoly& sp, double max_err, int64_t max_itera
     const double s_end = sp.x[sp.m];
     gp.assign({sp.x[0], s_end});
     std::vector<double> p((size_t)(3 * nq)), next;
-    int64_t last = max_iteration - 1;
+    int64_t last = max_iteration > 0 ? max_iteration - 1 : 0;  // the reference's pass index when none ran: 0
     for (int64_t iteration = 0; iteration < max_iteration; ++iteration) {
         next.clear();
         bool split_any = false;

@@ -209,9 +209,7 @@ def kinematic_bound(trajectory, order: int, ratio: tuple, t0: np.ndarray, t1: np
     u, M = _interpolation(n)
     left, right = _halves(n)
     best = np.array(best, dtype=float)
-    centre, half = (x if isinstance(x, np.ndarray) and x.shape == best.shape and x.dtype == float
-                    and x.flags.c_contiguous else np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), best.shape))
-                    for x in ratio)
+    centre, half = (np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), best.shape)) for x in ratio)
     a, b = np.asarray(t0, float), np.asarray(t1, float)
     # the values are taken one-sided (each piece's own polynomial at its ends: pulled inside by
     # ONE_SIDED of the piece, as certify samples), so they interpolate at those fractions
@@ -224,8 +222,7 @@ def kinematic_bound(trajectory, order: int, ratio: tuple, t0: np.ndarray, t1: np
         T = np.clip(a[:, None] + u[None, :] * h[:, None], (a + ONE_SIDED * h)[:, None], (b - ONE_SIDED * h)[:, None])
         V = trajectory.derivatives(T.ravel(), order)[order].reshape(len(a), n + 1, -1)  # (P, n+1, nq)
         M0 = _to_bernstein(tuple(np.clip(u, ONE_SIDED, 1.0 - ONE_SIDED))) if n > 0 else M
-    P, n1, nq = V.shape  # B (P, n+1, nq): the Bernstein coefficients per piece, as one product
-    B = (M0 @ V.transpose(1, 0, 2).reshape(n1, P * nq)).reshape(n1, P, nq).transpose(1, 0, 2)
+    B = np.matmul(M0, V)  # (P, n+1, nq) Bernstein coefficients per piece
     arguments = (np.ascontiguousarray(B), np.ascontiguousarray(V), centre, half, best, float(slack), int(max_levels),
                  left, right)
     core = compiled_core()

@@ -277,8 +277,9 @@ def test_models_keep_the_buffers_they_borrow_alive():
     planner = _native.MotionPlanner(*copies, model.reach)
     del copies
     gc.collect()
+    junk = [np.full_like(a, -1) for a in (ints, floats) for _ in range(4)]  # reuse freed memory, if any was freed
     np.testing.assert_array_equal(borrowed.values(Q, np.zeros(64), 0.05, pair_fine, K.PER_LINK, v_WO), expected)
     np.testing.assert_array_equal(checker.free(Q, 1e-12, 1e-12), expected_free)
-    del borrowed, checker, planner
+    del borrowed, checker, planner, junk
     gc.collect()
     assert compiled_planner(scene) is not None
