@@ -109,6 +109,7 @@ public:
         best_.resize(std::max(G, K) * L), lanes_.resize(12 * L), glb_.resize(U_ * L), Rc_.resize(9 * L);
         pbuf_.resize(4 * std::max<int64_t>(s_.S, 1));
         idx_.resize(L), key_.resize(U_), order_.resize(U_);
+        bound_.resize(5 * G * L), pack_.resize(5 * PACKED);
     }
 
     // out (N, width) row-major, width = G + P (PER_LINK), K (PER_OBSTACLE) or 1 (OVERALL): the
@@ -125,7 +126,8 @@ public:
 
 private:
     int64_t U_ = 1;  // most sphere groups of a link
-    Buffer q_, R_, p_, Gc_, lb_, best_, lanes_, glb_, pbuf_, Rc_;
+    static constexpr int64_t PACKED = 512;  // points per packed obstacle_sd call of spheres_sd
+    Buffer q_, R_, p_, Gc_, lb_, best_, lanes_, glb_, pbuf_, Rc_, bound_, pack_;
     std::vector<int64_t> idx_, order_;
     std::vector<double> key_;
 
@@ -158,8 +160,27 @@ private:
     // sc[i] = min(sc[i], sd_k(c_s) - r_s) over spheres s0 .. s1-1 of the compacted lanes (_spheres_sd).
     void spheres_sd(int64_t c, int64_t s0, int64_t s1, int64_t k, const double* v_WO, const double* tc,
                     const double* Rc, const double* pc, double* ccx, double* ccy, double* ccz, double* sd, double* sc,
-                    const double* lim) const {
+                    const double* lim) {
         const bool cloud = s_.kinds[k] == CLOUD;
+        if (!cloud) {  // several spheres' centres packed per call (a small block pays per call, not per point)
+            const int64_t chunk = std::max<int64_t>(1, PACKED / std::max<int64_t>(c, 1));
+            double *X = pack_.ptr, *Y = X + PACKED, *Z = Y + PACKED, *T = Z + PACKED, *S = T + PACKED;
+            for (int64_t a = s0; a < s1; a += chunk) {
+                const int64_t b = std::min(s1, a + chunk), n = (b - a) * c;
+                for (int64_t si = a; si < b; ++si) {
+                    const int64_t o = (si - a) * c;
+                    compact_centres(c, s_.s_offset + 3 * si, Rc, pc, X + o, Y + o, Z + o);
+                    std::copy_n(tc, c, T + o);
+                }
+                obstacle_sd(s_, n, k, v_WO, T, X, Y, Z, S);
+                for (int64_t si = a; si < b; ++si) {
+                    const double r = s_.s_radius[si];
+                    const double* Si = S + (si - a) * c;
+                    for (int64_t i = 0; i < c; ++i) sc[i] = smin(sc[i], Si[i] - r);
+                }
+            }
+            return;
+        }
         for (int64_t si = s0; si < s1; ++si) {
             compact_centres(c, s_.s_offset + 3 * si, Rc, pc, ccx, ccy, ccz);
             if (cloud) {
@@ -182,19 +203,34 @@ private:
         double* glb = glb_.ptr;
         double* key = key_.data();
         int64_t* order = order_.data();
-        for (int64_t j = 0; j < nu; ++j) {
-            compact_centres(c, s_.u_offset + 3 * (u0 + j), Rc, pc, ccx, ccy, ccz);
-            if (s_.kinds[k] == CLOUD)
-                cloud_sd(s_, c, k, v_WO, tc, ccx, ccy, ccz, lim, s_.u_radius[u0 + j], sd);
-            else
-                obstacle_sd(s_, c, k, v_WO, tc, ccx, ccy, ccz, sd);
-            double lowest = INF;
-            const double r = s_.u_radius[u0 + j];
-            for (int64_t i = 0; i < c; ++i) {
-                glb[j * L + i] = sd[i] - r;
-                lowest = smin(lowest, glb[j * L + i]);
+        const bool cloud = s_.kinds[k] == CLOUD;
+        const int64_t chunk = cloud ? 1 : std::max<int64_t>(1, PACKED / std::max<int64_t>(c, 1));
+        double *X = pack_.ptr, *Y = X + PACKED, *Z = Y + PACKED, *T = Z + PACKED, *S = T + PACKED;
+        for (int64_t j0 = 0; j0 < nu; j0 += chunk) {  // the groups' centres packed per call (spheres_sd)
+            const int64_t j1 = std::min(nu, j0 + chunk);
+            if (!cloud) {
+                for (int64_t j = j0; j < j1; ++j) {
+                    const int64_t o = (j - j0) * c;
+                    compact_centres(c, s_.u_offset + 3 * (u0 + j), Rc, pc, X + o, Y + o, Z + o);
+                    std::copy_n(tc, c, T + o);
+                }
+                obstacle_sd(s_, (j1 - j0) * c, k, v_WO, T, X, Y, Z, S);
             }
-            key[j] = lowest;
+            for (int64_t j = j0; j < j1; ++j) {
+                const double* sj = S + (j - j0) * c;
+                if (cloud) {
+                    compact_centres(c, s_.u_offset + 3 * (u0 + j), Rc, pc, ccx, ccy, ccz);
+                    cloud_sd(s_, c, k, v_WO, tc, ccx, ccy, ccz, lim, s_.u_radius[u0 + j], sd);
+                    sj = sd;
+                }
+                double lowest = INF;
+                const double r = s_.u_radius[u0 + j];
+                for (int64_t i = 0; i < c; ++i) {
+                    glb[j * L + i] = sj[i] - r;
+                    lowest = smin(lowest, glb[j * L + i]);
+                }
+                key[j] = lowest;
+            }
         }
         for (int64_t j = 0; j < nu; ++j) {  // insertion sort, stable: numba's argsort of so few keys
             int64_t i = j;
@@ -239,24 +275,37 @@ private:
         int64_t* idx = idx_.data();
         for (int64_t b = 0; b < m; ++b) tb[b] = tau[n0 + b];
         frames_block(s_.chain, q, L, nv, R, p);
-        for (int64_t g = 0; g < G; ++g) {  // bounding spheres: a lower bound per link and obstacle
+        // bounding spheres: a lower bound per link and obstacle; every link's centres of the m lanes
+        // packed (G m) for one call per obstacle (a small block pays per call, not per point)
+        const int64_t Gm = G * m;
+        double *bx = bound_.ptr, *by = bx + Gm, *bz = by + Gm, *bt = bz + Gm, *bs = bt + Gm;
+        for (int64_t g = 0; g < G; ++g) {
             double *cx = Gx + g * L, *cy = Gy + g * L, *cz = Gz + g * L;
-            for (int64_t b = 0; b < m; ++b)
+            for (int64_t b = 0; b < m; ++b) {
                 lane_point(s_.g_anchor[g], s_.g_offset + 3 * g, R, p, L, b, cx[b], cy[b], cz[b]);
-            const double rg = s_.g_radius[g];
-            for (int64_t k = 0; k < K; ++k) {
-                if (s_.kinds[k] == CLOUD && !per_obstacle) {  // per link, exact below fine_below only
-                    for (int64_t b = 0; b < m; ++b) lim[b] = fine_below;
-                    cloud_sd(s_, m, k, v_WO, tb, cx, cy, cz, lim, rg, sd);
-                } else {  // per obstacle, exact: lb + 2 radius bounds the minimum from above
-                    obstacle_sd(s_, m, k, v_WO, tb, cx, cy, cz, sd);
+                bx[g * m + b] = cx[b], by[g * m + b] = cy[b], bz[g * m + b] = cz[b], bt[g * m + b] = tb[b];
+            }
+        }
+        for (int64_t k = 0; k < K; ++k) {
+            if (s_.kinds[k] == CLOUD && !per_obstacle) {  // per link, exact below fine_below only
+                for (int64_t b = 0; b < m; ++b) lim[b] = fine_below;
+                for (int64_t g = 0; g < G; ++g) {
+                    cloud_sd(s_, m, k, v_WO, tb, Gx + g * L, Gy + g * L, Gz + g * L, lim, s_.g_radius[g], sd);
+                    double* l = lb + (g * K + k) * L;
+                    for (int64_t b = 0; b < m; ++b) l[b] = sd[b] - s_.g_radius[g];
                 }
+                continue;
+            }
+            obstacle_sd(s_, Gm, k, v_WO, bt, bx, by, bz, bs);  // per obstacle, exact: lb + 2 radius bounds the minimum from above
+            for (int64_t g = 0; g < G; ++g) {
                 double* l = lb + (g * K + k) * L;
-                for (int64_t b = 0; b < m; ++b) l[b] = sd[b] - rg;
+                const double rg = s_.g_radius[g];
+                for (int64_t b = 0; b < m; ++b) l[b] = bs[g * m + b] - rg;
             }
         }
         const int64_t rows_best = std::max<int64_t>(std::max(K, G), 1);
-        for (int64_t i = 0; i < rows_best * L; ++i) best[i] = INF;
+        for (int64_t r = 0; r < rows_best; ++r)
+            for (int64_t b = 0; b < m; ++b) best[r * L + b] = INF;
         if (per_obstacle) {
             for (int64_t k = 0; k < K; ++k) {
                 double* bk = best + (overall ? 0 : k) * L;

@@ -78,6 +78,8 @@ inline void certify_segments(Clearances& cl, const double* QA, const double* QB,
     // parameters and values it evaluated (ts[i], vals[i] (n, C)), its open pieces, its bounds
     std::vector<double> lam(M * C), floors(M * P), fines(M * P), low(M, INF), low_self(M, INF);
     std::vector<char> tabled(M * P);
+    std::vector<double> tabled_low(M, INF);  // per segment the smallest floor of its tabled pairs
+    std::vector<std::vector<int64_t>> open_pairs(M);  // per segment the rows (G + r) of its other pairs
     std::vector<std::vector<double>> ts(M), vals(M);
     std::vector<std::vector<int64_t>> pieces(M);
     for (int64_t i = 0; i < M; ++i) {
@@ -86,6 +88,10 @@ inline void certify_segments(Clearances& cl, const double* QA, const double* QB,
             floors[i * P + r] = s.t_meta[6 * r] != 0 ? segment_floor(s, r, qa, qb) : -INF;
             tabled[i * P + r] = floors[i * P + r] >= self_clearance;
             fines[i * P + r] = tabled[i * P + r] ? -INF : pair_fine;
+            if (tabled[i * P + r])
+                tabled_low[i] = smin(tabled_low[i], floors[i * P + r]);
+            else
+                open_pairs[i].push_back(G + r);
         }
         for (int64_t c = 0; c < C; ++c) {
             double sum = 0.0;
@@ -102,8 +108,12 @@ inline void certify_segments(Clearances& cl, const double* QA, const double* QB,
         }
         status[i] = CERTIFIED, t_stop[i] = NaN;
     }
-    auto below = [&](int64_t i, const double* row, int64_t c) {
-        return row[c] < (c < G ? clearance : self_clearance) && !(c >= G && tabled[i * P + c - G]);
+    auto below = [&](int64_t i, const double* row) {  // a value of the row below its requirement (tabled pairs clear)
+        for (int64_t c = 0; c < G; ++c)
+            if (row[c] < clearance) return true;
+        for (const int64_t c : open_pairs[i])
+            if (row[c] < self_clearance) return true;
+        return false;
     };
     // one batch: configurations Qb (n, nq) at parameters tb (n,), pair fines fb (n, P); where each
     // value row goes: segment own[b] (its row slot[b])
@@ -139,11 +149,7 @@ inline void certify_segments(Clearances& cl, const double* QA, const double* QB,
     for (int64_t i = 0; i < M; ++i) {
         if (reuse[i]) std::copy(vals[i - 1].begin() + C, vals[i - 1].begin() + 2 * C, vals[i].begin());
         for (int64_t e = 0; e < 2 && status[i] == CERTIFIED; ++e)
-            for (int64_t c = 0; c < C; ++c)
-                if (below(i, vals[i].data() + e * C, c)) {
-                    status[i] = BLOCKED, t_stop[i] = ts[i][e];
-                    break;
-                }
+            if (below(i, vals[i].data() + e * C)) status[i] = BLOCKED, t_stop[i] = ts[i][e];
         if (status[i] == CERTIFIED) pieces[i] = {0, 1};
     }
     std::vector<int64_t> fresh, first_new(M);
@@ -163,21 +169,19 @@ inline void certify_segments(Clearances& cl, const double* QA, const double* QB,
                 const int64_t e0 = pc[2 * r], e1 = pc[2 * r + 1];
                 const double h = ts[i][e1] - ts[i][e0];
                 bool ok = true;
-                double lo = INF, lo_self = INF, seen = INF;
-                for (int64_t c = 0; c < C; ++c) {
+                double lo = INF, lo_self = tabled_low[i], seen = INF;  // tabled pairs: their floors, >= self_clearance
+                for (int64_t c = 0; c < G; ++c) {
                     const double v0 = V[e0 * C + c], v1 = V[e1 * C + c];
-                    const double bound = c >= G ? (tabled[i * P + c - G] ? floors[i * P + c - G]
-                                                                         : piece_bound(v0, v1, lm[c], h))
-                                         : curved ? curved_bound(v0, v1, lm[c], acc[i * G + c], rmin[c], h)
-                                                  : piece_bound(v0, v1, lm[c], h);
-                    if (c < G) {
-                        ok &= bound >= clearance;
-                        lo = smin(lo, bound);
-                        seen = smin(seen, smin(v0, v1));
-                    } else {
-                        ok &= bound >= self_clearance;
-                        lo_self = smin(lo_self, bound);
-                    }
+                    const double bound = curved ? curved_bound(v0, v1, lm[c], acc[i * G + c], rmin[c], h)
+                                                : piece_bound(v0, v1, lm[c], h);
+                    ok &= bound >= clearance;
+                    lo = smin(lo, bound);
+                    seen = smin(seen, smin(v0, v1));
+                }
+                for (const int64_t c : open_pairs[i]) {
+                    const double bound = piece_bound(V[e0 * C + c], V[e1 * C + c], lm[c], h);
+                    ok &= bound >= self_clearance;
+                    lo_self = smin(lo_self, bound);
                 }
                 if (ok && !(lo < seen - tolerance)) {
                     low[i] = smin(low[i], lo), low_self[i] = smin(low_self[i], lo_self);
@@ -213,8 +217,7 @@ inline void certify_segments(Clearances& cl, const double* QA, const double* QB,
             if (status[i] != CERTIFIED || pieces[i].empty()) continue;
             double first = INF;
             for (int64_t e = first_new[i]; e < (int64_t)ts[i].size(); ++e)
-                for (int64_t c = 0; c < C; ++c)
-                    if (below(i, vals[i].data() + e * C, c)) first = smin(first, ts[i][e]);
+                if (below(i, vals[i].data() + e * C)) first = smin(first, ts[i][e]);
             if (first < INF) status[i] = BLOCKED, t_stop[i] = first, pieces[i].clear();
         }
     }
