@@ -15,6 +15,7 @@
 #include "collision.hpp"
 #include "dynamics.hpp"
 #include "exact_bind.hpp"
+#include "paths_bind.hpp"
 #include "segments.hpp"
 #include "fk.hpp"
 #include "cloud_build.hpp"
@@ -147,6 +148,7 @@ NB_MODULE(_native, m) {
     m.attr("simd_width") = dmh::W;
     m.attr("lanes") = dmh::CollisionChecker::LANES;
     dmh_bind::bind_exact(m);
+    dmh_bind::bind_paths(m);
 
     nb::class_<dmh::Kinematics>(m, "Kinematics",
         "Batched forward kinematics of a compiled chain (drake_mh.kinematics.BatchKinematics): ints =\n"

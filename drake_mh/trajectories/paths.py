@@ -20,6 +20,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline, PPoly
 from scipy.linalg.lapack import dgtsv
 
+from drake_mh._support.native import compiled_core
 from drake_mh.errors import InfeasibleTrajectory, InvalidArgument
 
 __all__ = ["joint_path", "piece_extrema", "check_waypoints"]
@@ -105,6 +106,19 @@ def not_a_knot(s: np.ndarray, P: np.ndarray) -> CubicSpline:
     return CubicSpline.construct_fast(np.stack([t / dxr, (slope - D[:-1]) / dxr - t, D[:-1], P[:-1]]), s)
 
 
+def _cubic(s: np.ndarray, P: np.ndarray, bc_type: str) -> tuple[CubicSpline, np.ndarray, np.ndarray]:
+    """``(spline, lo, hi)``: the cubic spline through ``P (K, nq)`` at the knots ``s (K,)`` and its
+    :func:`piece_extrema`; the not-a-knot spline from the compiled core's ``cubic_path`` where it is
+    built (:func:`not_a_knot`'s equations and solve, in one call), else from :func:`not_a_knot`."""
+    core = compiled_core() if bc_type == "not-a-knot" else None
+    fitted = None if core is None else core.cubic_path(s, P)
+    if fitted is not None:
+        c, lo, hi = fitted
+        return CubicSpline.construct_fast(c, s), lo, hi
+    spline = not_a_knot(s, P) if bc_type == "not-a-knot" else CubicSpline(s, P, bc_type=bc_type)
+    return (spline, *piece_extrema(spline))
+
+
 _LAST: dict = {}
 """The last :func:`joint_path` answer, by robot, waypoints and options: verification fits the
 spline to certify it, then the retiming fits the same one."""
@@ -150,8 +164,7 @@ def _fit(P: np.ndarray, robot, method: str, bc_type: str, max_refinements: int) 
     upper = np.where(robot.continuous, np.inf, robot.upper)
     for _ in range(max_refinements + 1):
         s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))]
-        spline = not_a_knot(s, P) if bc_type == "not-a-knot" else CubicSpline(s, P, bc_type=bc_type)
-        lo, hi = piece_extrema(spline)
+        spline, lo, hi = _cubic(s, P, bc_type)
         bad = np.any((lo < lower - 1e-12) | (hi > upper + 1e-12), axis=1)  # (pieces,)
         if not np.any(bad):
             return spline, s[orig]
