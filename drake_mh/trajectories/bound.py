@@ -56,9 +56,9 @@ def piece_degree(trajectory) -> int:
 def _to_bernstein(u: tuple) -> np.ndarray:
     """``M`` with ``b = M v``: values at the nodes ``u`` (``n + 1`` distinct points of [0, 1]) to
     the Bernstein coefficients of the degree-``n`` polynomial through them."""
-    n = len(u) - 1
-    basis = np.array([[comb(n, i) * uj**i * (1.0 - uj) ** (n - i) for i in range(n + 1)] for uj in u])
-    return np.linalg.inv(basis)
+    n = len(u) - 1  # Python floats: a handful of numbers, each numpy call would cost more
+    basis = [[comb(n, i) * uj**i * (1.0 - uj) ** (n - i) for i in range(n + 1)] for uj in map(float, u)]
+    return np.linalg.inv(np.array(basis))
 
 
 def _sample_nodes(tau: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -69,9 +69,12 @@ def _sample_nodes(tau: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 @functools.lru_cache(maxsize=64)
 def _nodes_of(tau_bytes: bytes, n: int) -> tuple[np.ndarray, np.ndarray]:
-    tau = np.frombuffer(tau_bytes, dtype=float)
-    pick = np.unique(np.round(np.linspace(0, len(tau) - 1, n + 1)).astype(int))
-    return pick, _to_bernstein(tuple(np.clip(tau[pick], ONE_SIDED, 1.0 - ONE_SIDED)))
+    tau = np.frombuffer(tau_bytes, dtype=float).tolist()
+    last = len(tau) - 1  # n + 1 indices spread over the samples (numpy's linspace and round, in Python)
+    step = last / n if n else 0.0
+    pick = sorted({round(k * step) if k < n else last for k in range(n + 1)} if n else {0})
+    nodes = tuple(min(max(tau[i], ONE_SIDED), 1.0 - ONE_SIDED) for i in pick)
+    return np.array(pick, dtype=np.int64), _to_bernstein(nodes)
 
 
 @functools.lru_cache(maxsize=16)
