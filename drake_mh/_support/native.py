@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import sys
 
 __all__ = ["ENVIRONMENT", "compiled_core"]
 
@@ -25,6 +26,9 @@ def compiled_core():
     ``ImportError``."""
     if os.environ.get(ENVIRONMENT, "1").strip() == "0":
         return None
+    loaded = sys.modules.get("drake_mh._native")
+    if loaded is not None:  # imported already (every call after the first)
+        return loaded
     try:
         return importlib.import_module("drake_mh._native")
     except ModuleNotFoundError as error:

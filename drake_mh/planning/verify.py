@@ -381,10 +381,21 @@ def timed_on_spline(trajectory, spline) -> np.ndarray | None:
     if beyond > 1e-9 * (x1 - x0):
         return None
     step = np.zeros(spline.c.shape[2])
-    for end in (x0, x1):
-        d1, d2, d3 = (np.abs(np.asarray(spline(end, nu=k), dtype=float)) for k in (1, 2, 3))
-        step = np.maximum(step, beyond * d1 + beyond ** 2 * d2 / 2.0 + beyond ** 3 * d3 / 6.0)
+    for d1, d2, d3 in end_derivatives(spline):
+        step = np.maximum(step, beyond * np.abs(d1) + beyond ** 2 * np.abs(d2) / 2.0 + beyond ** 3 * np.abs(d3) / 6.0)
     return step
+
+
+def end_derivatives(spline) -> tuple[np.ndarray, np.ndarray]:
+    """The first three derivatives ``(3, nq)`` of a cubic (or lower degree) vector ``PPoly`` at
+    the start of its domain and at its end, from the first and last pieces' coefficients."""
+    c = np.asarray(spline.c, dtype=float)  # (k + 1, pieces, nq), highest power first
+    c = np.concatenate([np.zeros((4 - c.shape[0],) + c.shape[1:]), c])  # as a cubic
+    h = float(spline.x[-1] - spline.x[-2])  # the last piece's length
+    first = c[:3, 0][::-1] * np.array([[1.0], [2.0], [6.0]])
+    last = np.array([(3.0 * c[0, -1] * h + 2.0 * c[1, -1]) * h + c[2, -1], 6.0 * c[0, -1] * h + 2.0 * c[1, -1],
+                     6.0 * c[0, -1]])
+    return first, last
 
 
 def check_scaling(velocity_scaling, acceleration_scaling) -> None:

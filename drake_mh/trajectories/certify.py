@@ -33,6 +33,7 @@ limit is declared) and of ``|τ|`` (a refined sample: torque is not a polynomial
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -83,8 +84,13 @@ class Certificate:
 
     def max_ratio(self, quantities=None) -> float:
         """Largest ratio over joints and the given quantities (default all certified ones)."""
-        qs = self._quantities(quantities)
-        return max((float(np.max(self.ratios[q])) for q in qs), default=0.0)
+        largest = self._largest
+        return max((largest[q] for q in self._quantities(quantities)), default=0.0)
+
+    @functools.cached_property
+    def _largest(self) -> dict:
+        """quantity -> its largest ratio over the joints (read by every :meth:`ok`)."""
+        return {q: float(np.max(r)) for q, r in self.ratios.items()}
 
     def worst(self, quantities=None) -> tuple[str, str, float, float]:
         """``(quantity, joint, time [s], ratio)`` of the largest ratio."""
@@ -224,11 +230,7 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
     if torque_backend not in ("rnea", "drake"):
         raise InvalidArgument(f"torque_backend must be 'rnea' or 'drake', got {torque_backend!r}")
     breaks, tau = sample_times(trajectory, samples_per_piece, min_samples)
-    h = np.diff(breaks)
-    eps = 1e-9 * h
-    lo, hi = breaks[:-1] + eps, breaks[1:] - eps  # one-sided: each piece's own polynomial
-    T = np.clip(breaks[:-1, None] + tau[None, :] * h[:, None], lo[:, None], hi[:, None])  # (P, K)
-    P, K = T.shape
+    P, K = len(breaks) - 1, len(tau)
     nq = robot.nq
     ratios, times, bounds = {}, {}, {}
     excess = np.zeros(nq)
@@ -239,6 +241,10 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
         jobs = [(q, None, norm, worst[i], when[i]) for i, (q, norm) in enumerate(zip(quantities, norms))]
         times = {q: when[i] for i, q in enumerate(quantities)}
     else:
+        h = np.diff(breaks)
+        eps = 1e-9 * h
+        lo, hi = breaks[:-1] + eps, breaks[1:] - eps  # one-sided: each piece's own polynomial
+        T = np.clip(breaks[:-1, None] + tau[None, :] * h[:, None], lo[:, None], hi[:, None])  # (P, K)
         D = trajectory.derivatives(T.ravel(), max(_ORDER[q] for q in quantities))  # once for every quantity
         jobs, bounded = [], ()
         for quantity, norm in zip(quantities, norms):
@@ -254,9 +260,10 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
                                                       worst, samples=(tau, D[_ORDER[quantity]].reshape(P, K, nq))))
         if quantity == "position":
             ratios[quantity] = worst
-            Q = np.vstack([D[0], trajectory.derivatives(times[quantity], 0)[0]])  # the samples and the peaks
-            excess = np.max(np.maximum(np.maximum(Q - robot.upper, robot.lower - Q), 0.0), axis=0)
-            excess = np.where(robot.continuous, 0.0, excess)
+            if np.max(np.where(robot.continuous, 0.0, worst)) > 1.0 - 1e-9:  # else the bound keeps it inside
+                Q = np.vstack([D[0], trajectory.derivatives(times[quantity], 0)[0]])  # the samples and the peaks
+                excess = np.max(np.maximum(np.maximum(Q - robot.upper, robot.lower - Q), 0.0), axis=0)
+                excess = np.where(robot.continuous, 0.0, excess)
             continue
         limited = np.isfinite(limits[quantity])
         ratios[quantity] = np.where(limited, worst, 0.0)  # where unlimited, `worst` is the value itself
@@ -271,7 +278,7 @@ def certify(trajectory, robot, quantities=QUANTITIES, samples_per_piece: int = 8
                     ratios[quantity][j] = np.inf
                     times[quantity][j] = tb[np.argmax(jumps[:, j])]
     limited = {q: ~robot.continuous if q == "position" else np.isfinite(limits[q]) for q in quantities}
-    return Certificate(tuple(robot.joint_names), ratios, times, excess, int(T.size), trajectory.duration,
+    return Certificate(tuple(robot.joint_names), ratios, times, excess, P * K, trajectory.duration,
                        float(scale), enforced, limited, limits, bounds)
 
 

@@ -107,3 +107,16 @@ def test_only_a_time_law_inside_the_splines_domain_keeps_its_certificate():
     other, _ = joint_path(W[::-1], PANDA)
     assert verify.timed_on_spline(Trajectory(other, timing), spline) is None
     assert verify.timed_on_spline(Trajectory(spline, None), spline) is None
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3])
+def test_end_derivatives_are_scipys(degree):
+    """The derivatives at a spline's ends that bound a time law's overshoot, from its first and
+    last pieces' coefficients: scipy's values (splines of degree 1 to 3, several pieces)."""
+    rng = np.random.default_rng(degree)
+    x = np.r_[0.0, np.cumsum(rng.uniform(0.2, 1.5, 4))]
+    spline = PPoly(rng.normal(size=(degree + 1, 4, 3)), x)
+    first, last = verify.end_derivatives(spline)
+    for k in (1, 2, 3):
+        np.testing.assert_allclose(first[k - 1], spline(x[0], nu=k), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(last[k - 1], spline(x[-1], nu=k), rtol=0, atol=1e-11)
