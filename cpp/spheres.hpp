@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "packed.hpp"
 #include "pieces.hpp"
@@ -408,6 +410,14 @@ inline int64_t near_groups(const Packed& s, int64_t b, int64_t a, int64_t u0, in
     return n;
 }
 
+constexpr int64_t PAIR_CHUNK = 8;  // spheres per run in pair_clearance's pruning
+
+// pair_clearance's runs' bounding spheres, one array per thread (no allocation once grown).
+inline std::vector<double>& pair_runs_scratch() {
+    thread_local std::vector<double> runs;
+    return runs;
+}
+
 // The clearance of links ga and gb in lane b where it is below bound (pairs.py pair_clearance):
 // the smallest |c_s - c_t| - r_s - r_t there, else bound (with lower: a lower bound >= bound);
 // returns at once below stop. (ca, cb): the links' bounding-sphere centres; buf (S, 4) scratch.
@@ -432,19 +442,60 @@ __attribute__((noinline)) inline double pair_clearance(const Packed& s, int64_t 
         n = near_spheres(s, b, s.g_anchor[gb], s.g_start[gb], s.g_start[gb + 1], R, p, L, cax, cay, caz,
                          s.g_radius[ga], bound, lower, buf, na, low_b);
     double best = lower ? smin(low_a, low_b) : bound;
+    // the smallest value over spheres i0 .. i1-1 of a and j0 .. j1-1 of b (in buf) below best
+    auto block = [&](int64_t i0, int64_t i1, int64_t j0, int64_t j1) {
+        for (int64_t i = i0; i < i1; ++i) {
+            const double x = buf[4 * i], y = buf[4 * i + 1], z = buf[4 * i + 2], r = buf[4 * i + 3];
+            for (int64_t j = j0; j < j1; ++j) {
+                const double* t = buf + 4 * j;
+                const double dx = x - t[0], dy = y - t[1], dz = z - t[2];
+                const double d2 = dx * dx + dy * dy + dz * dz;
+                const double lim = best + r + t[3];
+                if (lim > 0.0 && d2 >= lim * lim) continue;
+                const double value = std::sqrt(d2) - r - t[3];
+                if (value < best) {
+                    best = value;
+                    if (best < stop) return true;
+                }
+            }
+        }
+        return false;
+    };
+    const int64_t nb = n - na;
+    if (na * nb <= PAIR_CHUNK * PAIR_CHUNK * 4) {
+        block(0, na, na, n);
+        return best;
+    }
+    // Many sphere pairs: b's spheres in runs of PAIR_CHUNK (neighbours in their link's order),
+    // each bounded by a sphere; a sphere of a skips the runs whose bound keeps all their spheres
+    // above the smallest value so far (the same smallest value, fewer distances).
+    const int64_t kb = (nb + PAIR_CHUNK - 1) / PAIR_CHUNK;
+    std::vector<double>& run_spheres = pair_runs_scratch();
+    run_spheres.resize((size_t)(4 * kb));
+    double* runs = run_spheres.data();  // (kb, 4): centre and radius of each run
+    for (int64_t k = 0; k < kb; ++k) {
+        const int64_t j0 = na + k * PAIR_CHUNK, j1 = std::min(j0 + PAIR_CHUNK, n);
+        double lo[3] = {INF, INF, INF}, hi[3] = {-INF, -INF, -INF};
+        for (int64_t j = j0; j < j1; ++j)
+            for (int u = 0; u < 3; ++u) lo[u] = smin(lo[u], buf[4 * j + u]), hi[u] = smax(hi[u], buf[4 * j + u]);
+        double* c = runs + 4 * k;
+        for (int u = 0; u < 3; ++u) c[u] = 0.5 * (lo[u] + hi[u]);
+        double radius = 0.0;
+        for (int64_t j = j0; j < j1; ++j) {
+            const double dx = buf[4 * j] - c[0], dy = buf[4 * j + 1] - c[1], dz = buf[4 * j + 2] - c[2];
+            radius = smax(radius, std::sqrt(dx * dx + dy * dy + dz * dz) + buf[4 * j + 3]);
+        }
+        c[3] = radius * (1.0 + 1e-12) + 1e-12;  // rounding: the run's sphere holds its spheres
+    }
     for (int64_t i = 0; i < na; ++i) {
         const double x = buf[4 * i], y = buf[4 * i + 1], z = buf[4 * i + 2], r = buf[4 * i + 3];
-        for (int64_t j = na; j < n; ++j) {
-            const double* t = buf + 4 * j;
-            const double dx = x - t[0], dy = y - t[1], dz = z - t[2];
-            const double d2 = dx * dx + dy * dy + dz * dz;
-            const double lim = best + r + t[3];
-            if (lim > 0.0 && d2 >= lim * lim) continue;
-            const double value = std::sqrt(d2) - r - t[3];
-            if (value < best) {
-                best = value;
-                if (best < stop) return best;
-            }
+        for (int64_t k = 0; k < kb; ++k) {
+            const double* c = runs + 4 * k;
+            const double dx = x - c[0], dy = y - c[1], dz = z - c[2];
+            const double lim = best + r + c[3];
+            if (lim > 0.0 && dx * dx + dy * dy + dz * dz >= lim * lim * (1.0 + 1e-12)) continue;
+            const int64_t j0 = na + k * PAIR_CHUNK;
+            if (block(i, i + 1, j0, std::min(j0 + PAIR_CHUNK, n))) return best;
         }
     }
     return best;
