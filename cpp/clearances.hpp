@@ -296,7 +296,8 @@ private:
                 }
                 continue;
             }
-            obstacle_sd(s_, Gm, k, v_WO, bt, bx, by, bz, bs);  // per obstacle, exact: lb + 2 radius bounds the minimum from above
+            // per obstacle, exact: lb + 2 radius bounds the minimum from above
+            obstacle_sd(s_, Gm, k, v_WO, bt, bx, by, bz, bs);
             for (int64_t g = 0; g < G; ++g) {
                 double* l = lb + (g * K + k) * L;
                 const double rg = s_.g_radius[g];
