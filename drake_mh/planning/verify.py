@@ -327,7 +327,7 @@ def spline_clearance(problem, spline) -> tuple[float, str]:
     c = np.asarray(getattr(spline, "c", np.empty(0)), dtype=float)
     if c.ndim != 3 or c.shape[0] > 4 or c.shape[2] != problem.robot.nq:
         raise InvalidArgument(f"spline must be a cubic PPoly s -> q ({problem.robot.nq},), got coefficients {c.shape}")
-    c = np.concatenate([np.zeros((4 - c.shape[0],) + c.shape[1:]), c])  # c[0] y³ + c[1] y² + c[2] y + c[3]
+    c = _as_cubic(c)  # c[0] y³ + c[1] y² + c[2] y + c[3]
     h = np.diff(np.asarray(spline.x, dtype=float))[:, None]
     a_bound = np.maximum(np.abs(2.0 * c[1]), np.abs(6.0 * c[0] * h + 2.0 * c[1]))  # (pieces, nq)
     per_ds2 = np.max((a_bound / 8.0) @ scene.collision_model.reach.T, axis=1)  # sphere shift per Δs²
@@ -386,11 +386,16 @@ def timed_on_spline(trajectory, spline) -> np.ndarray | None:
     return step
 
 
+def _as_cubic(c: np.ndarray) -> np.ndarray:
+    """Coefficients ``(k + 1, pieces, nq)`` of a polynomial of degree ``k <= 3`` (highest power
+    first) as a cubic's ``(4, pieces, nq)``, the missing powers zero."""
+    return np.concatenate([np.zeros((4 - c.shape[0],) + c.shape[1:]), c])
+
+
 def end_derivatives(spline) -> tuple[np.ndarray, np.ndarray]:
     """The first three derivatives ``(3, nq)`` of a cubic (or lower degree) vector ``PPoly`` at
     the start of its domain and at its end, from the first and last pieces' coefficients."""
-    c = np.asarray(spline.c, dtype=float)  # (k + 1, pieces, nq), highest power first
-    c = np.concatenate([np.zeros((4 - c.shape[0],) + c.shape[1:]), c])  # as a cubic
+    c = _as_cubic(np.asarray(spline.c, dtype=float))
     h = float(spline.x[-1] - spline.x[-2])  # the last piece's length
     first = c[:3, 0][::-1] * np.array([[1.0], [2.0], [6.0]])
     last = np.array([(3.0 * c[0, -1] * h + 2.0 * c[1, -1]) * h + c[2, -1], 6.0 * c[0, -1] * h + 2.0 * c[1, -1],
